@@ -1,0 +1,54 @@
+"""emdm: effort-minimising, dexterity-maximising velocity control of planar manipulators.
+
+>>> import emdm
+>>> scenario = emdm.load_scenario("task1")
+>>> run = emdm.simulate(scenario, "C-EMDM")
+>>> run.reached, round(run.time_to_goal, 2)
+(True, 8.15)
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+from .analysis import metrics
+from .arm import Kinematics, PlanarArm
+from .controllers import CONTROLLERS, Controller, admissible, get_controller, joint_bounds, step_program
+from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
+from .feasibility import feasible_point, task_scale
+from .problem import QP, Objective
+from .scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
+from .simulate import Run, simulate
+from .solvers import available_solvers, get_solver, kkt_report, solve_chain
+
+__all__ = [
+    "CONTROLLERS",
+    "PRESETS",
+    "QP",
+    "Controller",
+    "EmdmError",
+    "Kinematics",
+    "NoSolution",
+    "Objective",
+    "PlanarArm",
+    "Run",
+    "Scenario",
+    "ScenarioError",
+    "ScenarioWarning",
+    "SolverNotFound",
+    "__version__",
+    "admissible",
+    "available_solvers",
+    "feasible_point",
+    "get_controller",
+    "get_solver",
+    "joint_bounds",
+    "kkt_report",
+    "load_scenario",
+    "metrics",
+    "scenario_from_dict",
+    "simulate",
+    "solve_chain",
+    "step_program",
+    "task_scale",
+]

@@ -1,0 +1,187 @@
+"""The ``emdm`` command line. Bad input: one line on stderr and exit status 2, nothing written."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from . import __version__
+from .analysis import metrics
+from .controllers import CONTROLLERS, get_controller
+from .errors import EmdmError, NoSolution
+from .output import (
+    atomic_output,
+    diagnostics_header,
+    diagnostics_rows,
+    trajectory_header,
+    trajectory_rows,
+    write_csv,
+    write_json,
+)
+from .scenario import PRESETS, Scenario, load_scenario, parse_override
+from .simulate import Run, simulate
+from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, registered_solvers
+
+
+class UsageError(EmdmError):
+    """A command-line argument that is wrong."""
+
+
+def _scenario(args: argparse.Namespace) -> Scenario:
+    overrides = dict(parse_override(text) for text in args.set or [])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scenario = load_scenario(args.scenario, overrides)
+    for message in scenario.warnings:
+        print(f"emdm: warning: {scenario.source}: {message}", file=sys.stderr)
+    return scenario
+
+
+def _add_scenario_args(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", help=f"a preset ({', '.join(PRESETS)}) or a scenario TOML file")
+    parser.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
+                        help="override one scenario value (repeatable), e.g. --set weights.effort=0.2")
+
+
+def _fallback(text: str | None) -> list[str]:
+    if text is None:
+        return list(DEFAULT_FALLBACK)
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
+def _table(rows: list[list[str]], header: list[str]) -> str:
+    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+    line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))
+    body = ["  ".join(str(c).rjust(w) if i else str(c).ljust(w) for i, (c, w) in
+                      enumerate(zip(r, widths, strict=True))) for r in rows]
+    return "\n".join([line, "-" * len(line), *body])
+
+
+def summary_table(results: dict[str, dict[str, Any]]) -> str:
+    """A readable table of the main metrics, one row per controller."""
+    rows = []
+    for name, mt in results.items():
+        ttg = mt["time_to_goal"]
+        rows.append([name, "yes" if mt["reached"] else "no", str(mt["steps"]),
+                     f"{ttg:.2f}" if ttg is not None else "-", f"{mt['final_error']:.2e}",
+                     f"{mt['min_manipulability']:.4f}", f"{mt['mean_manipulability']:.4f}",
+                     f"{mt['total_effort']:.4f}", f"{mt['max_abs_qd']:.3f}",
+                     f"{mt['min_joint_margin']:.3f}", str(mt["scaled_steps"]),
+                     str(mt["fallback_steps"]), f"{mt['max_kkt_residual']:.1e}"])
+    header = ["controller", "reached", "steps", "t_goal[s]", "final|e|[m]", "min m", "mean m",
+              "effort", "max|qd|", "margin[rad]", "scaled", "fallback", "max KKT"]
+    return _table(rows, header)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    scenario = _scenario(args)
+    names = args.controller or list(CONTROLLERS)
+    controllers = [get_controller(name) for name in names]
+    chain = [args.solver, *_fallback(args.fallback)]
+    for name in chain:
+        get_solver(name)
+    out = Path(args.out or f"results/{scenario.name}")
+    runs: dict[str, Run] = {}
+    start = time.perf_counter()
+    for controller in controllers:
+        runs[controller.name] = simulate(scenario, controller, solver=args.solver,
+                                         fallback=_fallback(args.fallback))
+    elapsed = time.perf_counter() - start
+    results = {name: metrics(run) for name, run in runs.items()}
+    with atomic_output(out) as staging:
+        for name, run in runs.items():
+            write_csv(staging / "trajectories" / f"{name}.csv", trajectory_header(scenario.n),
+                      trajectory_rows(run))
+            write_csv(staging / "diagnostics" / f"{name}.csv", diagnostics_header(scenario.n),
+                      diagnostics_rows(run))
+        write_json(staging / "metrics.json", {
+            "scenario": scenario.to_dict(),
+            "solver": args.solver,
+            "fallback": _fallback(args.fallback),
+            "emdm_version": __version__,
+            "controllers": results,
+        })
+    print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
+    print(summary_table(results))
+    return 0
+
+
+def cmd_scenario(args: argparse.Namespace) -> int:
+    print(_scenario(args).to_toml(), end="")
+    return 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    print("controllers: " + ", ".join(CONTROLLERS))
+    print("presets:     " + ", ".join(PRESETS))
+    print("solvers:")
+    for spec in registered_solvers().values():
+        state = "installed" if spec.is_available() else f"pip install 'emdm[{spec.extra}]'"
+        print(f"  {spec.name:<11} {spec.family:<13} {state:<28} {spec.description}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="emdm",
+        description="Optimisation-based velocity control of planar manipulators (EMDM vs IVKC).")
+    parser.add_argument("--version", action="version", version=f"emdm {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="run controllers on a scenario; write metrics.json and CSVs",
+                         description="Run controllers in closed loop and record every step.")
+    _add_scenario_args(run)
+    run.add_argument("--controller", action="append", metavar="NAME",
+                     help=f"controller to run (repeatable; default all: {', '.join(CONTROLLERS)})")
+    run.add_argument("--solver", default=DEFAULT_SOLVER, metavar="NAME",
+                     help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see 'emdm list')")
+    run.add_argument("--fallback", metavar="A,B",
+                     help=f"fallback chain when the solver fails (default {','.join(DEFAULT_FALLBACK)})")
+    run.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario name>)")
+    run.set_defaults(func=cmd_run)
+
+    show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
+    _add_scenario_args(show)
+    show.add_argument("--out", metavar="DIR", help="unused; accepted for uniformity")
+    show.set_defaults(func=cmd_scenario)
+
+    lst = sub.add_parser("list", help="list controllers, presets and solvers")
+    lst.add_argument("--out", metavar="DIR", help="unused; accepted for uniformity")
+    lst.set_defaults(func=cmd_list)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``emdm`` command; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except NoSolution as exc:
+        print(f"emdm: run stopped: {exc}", file=sys.stderr)
+        return 1
+    except EmdmError as exc:
+        print(f"emdm: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"emdm: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("emdm: interrupted; nothing was written", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: one line, the traceback on request
+        if os.environ.get("EMDM_DEBUG"):
+            raise
+        print(f"emdm: internal error: {type(exc).__name__}: {exc} (EMDM_DEBUG=1 shows the traceback)",
+              file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

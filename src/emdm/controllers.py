@@ -1,0 +1,139 @@
+"""The four controllers of the brief as per-step programs, and the infeasibility policy.
+
+============  =========================================  ==========================================
+controller    redundant arm (n > 2)                      non-redundant arm (n = 2)
+============  =========================================  ==========================================
+UC-IVKC       min E  s.t. J qd = v   (= J^+ v, eq. 4)    same (= J^-1 v)
+C-IVKC        same + lo(q) <= qd <= hi(q)                same
+UC-EMDM       min w_E E - w_M M  s.t. J qd = v           slack program, no joint bounds
+C-EMDM        same + lo(q) <= qd <= hi(q)                slack program + joint bounds
+============  =========================================  ==========================================
+
+Slack program (brief section 4): variables ``(qd, delta)``, minimise
+``w_E E(qd) - w_M M(qd) + 1/2 w_S ||delta||^2`` subject to ``J qd + delta = v`` and
+``delta_min <= delta <= delta_max``, with ``w_S = c_S / max(||e||, 1e-9 m)``.
+
+When a program is infeasible (the bounds cannot deliver the task) the scenario's ``on_infeasible``
+decides: ``scale`` solves the same program for ``alpha v`` with the largest feasible ``alpha`` in
+[0, 1] (direction-preserving task scaling, as in the SNS method of Flacco, De Luca and Khatib);
+``slack`` re-solves with unbounded task slack; ``error`` stops the run. A solution is never clipped
+into its bounds after the fact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .arm import Kinematics, Vector
+from .errors import EmdmError, NoSolution
+from .feasibility import task_scale
+from .limits import Bounds, position_damper, velocity_box
+from .problem import QP, effort, manipulability_rate, slack_penalty, task_program
+from .scenario import Scenario, Weights
+
+ERROR_FLOOR = 1e-9
+"""Smallest ``||e||`` (m) used in ``w_S = c_S / ||e||``."""
+
+
+@dataclass(frozen=True)
+class Controller:
+    """One of the four controllers: ``IVKC`` or ``EMDM``, constrained (``C-``) or not (``UC-``)."""
+
+    name: str
+    method: str
+    constrained: bool
+
+
+CONTROLLERS: dict[str, Controller] = {
+    name: Controller(name, name.split("-")[1], name.startswith("C-"))
+    for name in ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM")
+}
+
+
+def get_controller(name: str) -> Controller:
+    """The controller called ``name`` (case-insensitive), or an :class:`EmdmError` listing them."""
+    for key, controller in CONTROLLERS.items():
+        if key.lower() == name.lower():
+            return controller
+    raise EmdmError(f"unknown controller {name!r} (known: {', '.join(CONTROLLERS)})")
+
+
+def joint_bounds(scenario: Scenario, q: Vector) -> Bounds:
+    """The velocity box intersected with the position dampers at ``q`` (the C- bounds)."""
+    arm, damper = scenario.arm, scenario.damper
+    return velocity_box(arm.qd_min, arm.qd_max) & position_damper(
+        q, q_min=arm.q_min, q_max=arm.q_max,
+        influence=damper.influence, stop=damper.stop, gain=damper.gain,
+    )
+
+
+def slack_weight(scenario: Scenario, error_norm: float, weights: Weights | None = None) -> float:
+    """``w_S = c_S / max(||e||, 1e-9 m)``: heavier as the end effector nears the goal."""
+    c_s = (weights or scenario.weights).slack
+    return c_s / max(error_norm, ERROR_FLOOR)
+
+
+def step_program(
+    controller: Controller,
+    scenario: Scenario,
+    q: Vector,
+    kin: Kinematics,
+    v: Vector,
+    error_norm: float,
+    *,
+    weights: Weights | None = None,
+) -> QP:
+    """The program of ``controller`` at configuration ``q`` for the desired velocity ``v``."""
+    w = weights or scenario.weights
+    n = q.size
+    bounds = joint_bounds(scenario, q) if controller.constrained else Bounds.free(n)
+    if controller.method == "IVKC":
+        return task_program(effort(n), kin.J, v, bounds.lo, bounds.hi)
+    objective = effort(n, w.effort) + manipulability_rate(kin.Jm, w.manipulability)
+    if scenario.redundant:
+        return task_program(objective, kin.J, v, bounds.lo, bounds.hi)
+    return task_program(
+        objective, kin.J, v, bounds.lo, bounds.hi,
+        slack=slack_penalty(slack_weight(scenario, error_norm, w)),
+        slack_lo=np.asarray(scenario.slack.min), slack_hi=np.asarray(scenario.slack.max),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Admissible:
+    """The program actually solved at a step, after the infeasibility policy.
+
+    ``alpha`` is the task scale (1 when the nominal program is feasible); ``policy`` names the policy
+    that changed the program (``None`` when it was feasible as built).
+    """
+
+    qp: QP
+    alpha: float
+    policy: str | None
+
+
+def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = None) -> Admissible:
+    """Apply the infeasibility policy ``policy`` (``scale``, ``slack`` or ``error``) to ``qp``."""
+    alpha = task_scale(qp.A, qp.b, qp.lb, qp.ub)
+    if alpha == 1.0:
+        return Admissible(qp, 1.0, None)
+    where = f"step {step}: " if step is not None else ""
+    reach = "no task scale in [0, 1] is feasible" if alpha is None else (
+        f"the bounds deliver at most alpha = {alpha:.6g} of the desired velocity")
+    if policy == "scale":
+        if alpha is None:
+            raise NoSolution(f"{where}the program is infeasible even with the task scaled to zero "
+                             "(the joint bounds exclude every motion that keeps the task direction)",
+                             problem=qp)
+        return Admissible(qp.with_rhs(alpha * qp.b), alpha, "scale")
+    if policy == "slack":
+        relaxed = qp.with_free_slack(slack_weight)
+        if task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub) != 1.0:
+            raise NoSolution(f"{where}the program is infeasible even with free slack "
+                             "(the joint bounds are empty)", problem=qp)
+        return Admissible(relaxed, 1.0, "slack")
+    raise NoSolution(f"{where}the task is infeasible under the joint bounds: {reach} "
+                     "(controller.on_infeasible = \"error\"; use \"scale\" or \"slack\" to continue)",
+                     problem=qp)

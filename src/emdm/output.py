@@ -1,0 +1,118 @@
+"""Writing results: CSV with round-trip precision, JSON, and atomic output folders.
+
+Everything a command writes goes first to a hidden staging folder beside ``--out``; only when the
+whole command has succeeded are the files moved into place (``os.replace``, atomic per file). A
+failed or interrupted command leaves the previous results in ``--out`` untouched.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .simulate import Run
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float | np.floating):
+        return repr(float(value))
+    if isinstance(value, np.integer | np.bool_):
+        return str(value.item())
+    return str(value)
+
+
+def trajectory_header(n: int) -> list[str]:
+    """Columns of ``trajectories/<controller>.csv`` (DESIGN.md section 3)."""
+    return ["t", *[f"q{i}" for i in range(1, n + 1)], *[f"qd{i}" for i in range(1, n + 1)],
+            "x", "y", "ex", "ey", "vx", "vy", "m", "effort", "manip_rate", "alpha",
+            "delta_x", "delta_y", "status", "solver", "iterations", "solve_time"]
+
+
+def trajectory_rows(run: Run) -> Iterator[list[str]]:
+    """One row per state; the final state's command fields are empty."""
+    n = run.scenario.n
+    for k in range(run.steps + 1):
+        state = [run.t[k], *run.q[k]]
+        where = [*run.p[k], *run.e[k], *run.v[k], run.m[k]]
+        if k < run.steps:
+            cmd = [*run.qd[k]]
+            rest = [run.effort[k], run.manip_rate[k], run.alpha[k], *run.delta[k],
+                    run.status[k], run.solver[k], run.iterations[k], run.solve_time[k]]
+        else:
+            cmd, rest = [""] * n, [""] * 9
+        yield [_cell(x) for x in (*state, *cmd, *where, *rest)]
+
+
+def diagnostics_header(n: int) -> list[str]:
+    """Columns of ``diagnostics/<controller>.csv``: how every command was obtained."""
+    return ["step", "kkt_residual", "bound_excess", "fallback", "policy", "attempts",
+            *[f"lo{i}" for i in range(1, n + 1)], *[f"hi{i}" for i in range(1, n + 1)],
+            *[f"active{i}" for i in range(1, n + 1)]]
+
+
+def diagnostics_rows(run: Run) -> Iterator[list[str]]:
+    """One row per command."""
+    for k in range(run.steps):
+        yield [_cell(x) for x in (k, run.kkt[k], run.bound_excess[k], bool(run.fallback[k]),
+                                  run.policy[k], run.attempts[k], *run.lo[k], *run.hi[k],
+                                  *run.active[k])]
+
+
+def write_csv(path: Path, header: Sequence[str], rows: Iterator[list[str]]) -> None:
+    """Write a CSV file (creating its folder)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _json_safe(value.tolist())
+    if isinstance(value, np.floating | float):
+        f = float(value)
+        return f if math.isfinite(f) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def write_json(path: Path, data: Any) -> None:
+    """Write JSON (non-finite floats become null), floats with round-trip precision."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(_json_safe(data), indent=2) + "\n", encoding="utf-8")
+
+
+@contextmanager
+def atomic_output(out: Path) -> Iterator[Path]:
+    """Yield a staging folder; on success move its files into ``out``, on any failure discard it."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"--out {out} exists and is not a folder")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        yield staging
+        for file in sorted(p for p in staging.rglob("*") if p.is_file()):
+            target = out / file.relative_to(staging)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(file, target)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)

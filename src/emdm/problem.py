@@ -1,0 +1,150 @@
+"""The per-step program: a small strictly convex QP, built separately from solving it.
+
+Every program of DESIGN.md section 1 has the form::
+
+    minimise   1/2 x^T P x + c^T x
+    subject to A x = b,   lb <= x <= ub
+
+with ``x = (qd, delta)``: the joint velocities (rad/s) first, then the task slack (m/s) when the
+program has one. ``A`` always has 2 rows (the planar task), ``P`` is positive definite (``w_E > 0``,
+``w_S > 0``), so the optimum is unique. Bounds are either finite on both sides or absent (+-inf).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .arm import Matrix, Vector
+
+
+@dataclass(frozen=True, eq=False, slots=True)
+class Objective:
+    """A quadratic term ``1/2 x^T P x + c^T x`` over some block of variables."""
+
+    P: Matrix
+    c: Vector
+
+    def __add__(self, other: Objective) -> Objective:
+        return Objective(self.P + other.P, self.c + other.c)
+
+    def stack(self, other: Objective) -> Objective:
+        """The sum of two terms over consecutive, disjoint blocks of variables (block diagonal)."""
+        n1, n2 = self.c.size, other.c.size
+        P = np.zeros((n1 + n2, n1 + n2))
+        P[:n1, :n1], P[n1:, n1:] = self.P, other.P
+        return Objective(P, np.concatenate((self.c, other.c)))
+
+
+@dataclass(frozen=True, eq=False, slots=True)
+class QP:
+    """``min 1/2 x^T P x + c^T x  s.t.  A x = b, lb <= x <= ub``; the first ``n_joints`` entries are qd."""
+
+    P: Matrix
+    c: Vector
+    A: Matrix
+    b: Vector
+    lb: Vector
+    ub: Vector
+    n_joints: int
+
+    @property
+    def n(self) -> int:
+        """Number of variables."""
+        return int(self.c.size)
+
+    @property
+    def n_slack(self) -> int:
+        """Number of slack variables (0 or 2)."""
+        return self.n - self.n_joints
+
+    @property
+    def bounded(self) -> bool:
+        """True when any variable has finite bounds."""
+        return bool(np.isfinite(self.lb).any() or np.isfinite(self.ub).any())
+
+    def objective(self, x: Vector) -> float:
+        """``1/2 x^T P x + c^T x``."""
+        return float(0.5 * x @ self.P @ x + self.c @ x)
+
+    def equality_residual(self, x: Vector) -> float:
+        """``||A x - b||_inf``."""
+        return float(np.max(np.abs(self.A @ x - self.b)))
+
+    def bound_excess(self, x: Vector) -> float:
+        """Largest amount by which ``x`` leaves its bounds (0 when inside)."""
+        return float(max(0.0, np.max(self.lb - x), np.max(x - self.ub)))
+
+    def violation(self, x: Vector) -> float:
+        """Largest equality residual or bound excess."""
+        return max(self.equality_residual(x), self.bound_excess(x))
+
+    def with_rhs(self, b: Vector) -> QP:
+        """The same program with the task right-hand side ``b`` (e.g. a scaled task ``alpha v``)."""
+        return replace(self, b=np.asarray(b, dtype=float))
+
+    def with_free_slack(self, weight: float) -> QP:
+        """The program with unbounded task slack ``delta`` (``A x + delta = b``, cost ``w/2 ||delta||^2``).
+
+        A program that already has slack keeps its variables and loses the slack bounds.
+        """
+        if self.n_slack:
+            lb, ub = self.lb.copy(), self.ub.copy()
+            lb[self.n_joints :], ub[self.n_joints :] = -np.inf, np.inf
+            return replace(self, lb=lb, ub=ub)
+        k = self.A.shape[0]
+        objective = Objective(self.P, self.c).stack(slack_penalty(weight, k))
+        return QP(
+            P=objective.P,
+            c=objective.c,
+            A=np.hstack((self.A, np.eye(k))),
+            b=self.b,
+            lb=np.concatenate((self.lb, np.full(k, -np.inf))),
+            ub=np.concatenate((self.ub, np.full(k, np.inf))),
+            n_joints=self.n_joints,
+        )
+
+
+def effort(n: int, weight: float = 1.0) -> Objective:
+    """``w_E E(qd) = w_E/2 ||qd||^2`` (rad^2/s^2)."""
+    return Objective(weight * np.eye(n), np.zeros(n))
+
+
+def manipulability_rate(Jm: Vector, weight: float) -> Objective:
+    """``-w_M M(qd) = -w_M Jm^T qd``: minimising it maximises the manipulability rate."""
+    return Objective(np.zeros((Jm.size, Jm.size)), -weight * Jm)
+
+
+def slack_penalty(weight: float, k: int = 2) -> Objective:
+    """``w_S/2 ||delta||^2`` over the ``k`` task-slack variables."""
+    return Objective(weight * np.eye(k), np.zeros(k))
+
+
+def task_program(
+    objective: Objective,
+    J: Matrix,
+    v: Vector,
+    qd_lo: Vector,
+    qd_hi: Vector,
+    *,
+    slack: Objective | None = None,
+    slack_lo: Vector | None = None,
+    slack_hi: Vector | None = None,
+) -> QP:
+    """Assemble ``J qd (+ delta) = v`` with the joint bounds and, optionally, a slack block."""
+    n = J.shape[1]
+    if slack is None:
+        return QP(objective.P, objective.c, J, v, qd_lo, qd_hi, n_joints=n)
+    assert slack_lo is not None and slack_hi is not None
+    total = objective.stack(slack)
+    k = J.shape[0]
+    return QP(
+        P=total.P,
+        c=total.c,
+        A=np.hstack((J, np.eye(k))),
+        b=v,
+        lb=np.concatenate((qd_lo, slack_lo)),
+        ub=np.concatenate((qd_hi, slack_hi)),
+        n_joints=n,
+    )

@@ -1,0 +1,429 @@
+"""Scenarios: frozen, validated descriptions of one control task (DESIGN.md section 3).
+
+A scenario comes from a TOML file, a built-in preset (``task1``, ``task2``: Tables 1 and 2 of the
+brief), ``--set section.key=value`` overrides or the Python API; all of them go through the same
+validation in :func:`scenario_from_dict`, which raises :class:`~emdm.errors.ScenarioError` naming the
+source, the key and the problem. Per-joint values may be given as one scalar.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .arm import PlanarArm, Vector
+from .errors import ScenarioError
+
+PRESETS = ("task1", "task2")
+POLICIES = ("scale", "slack", "error")
+
+
+class ScenarioWarning(UserWarning):
+    """A scenario that is valid but probably not what was meant (e.g. an unreachable goal)."""
+
+
+# ---------------------------------------------------------------------------------------- schema
+# kind: "joints" (n values, scalar allowed), "vec2" (2 values, scalar allowed for kp only),
+# "number", "str". Missing optional keys take the default (the brief's values).
+@dataclass(frozen=True)
+class _Key:
+    kind: str
+    default: Any = None  # None: required
+    scalar_ok: bool = True
+
+
+SCHEMA: dict[str, dict[str, _Key]] = {
+    "arm": {
+        "lengths": _Key("joints", scalar_ok=False),
+        "q_min": _Key("joints"),
+        "q_max": _Key("joints"),
+        "qd_min": _Key("joints"),
+        "qd_max": _Key("joints"),
+    },
+    "motion": {
+        "q0": _Key("joints", scalar_ok=False),
+        "goal": _Key("vec2", scalar_ok=False),
+        "dt": _Key("number", 0.05),
+        "kp": _Key("vec2", 1.0),
+        "tolerance": _Key("number", 1e-3),
+        "max_time": _Key("number", 30.0),
+    },
+    "weights": {
+        "effort": _Key("number", 0.1),
+        "manipulability": _Key("number", 5.0),
+        "slack": _Key("number", 10.0),
+    },
+    "slack": {"min": _Key("vec2", [-1.0, -1.0]), "max": _Key("vec2", [1.0, 1.0])},
+    "damper": {
+        "influence": _Key("joints", 0.785398),
+        "stop": _Key("joints", 0.0872665),
+        "gain": _Key("joints", 1.0),
+    },
+    "controller": {"on_infeasible": _Key("str", "scale")},
+}
+
+
+def _frozen(values: Any) -> Vector:
+    arr = np.array(values, dtype=float)
+    arr.setflags(write=False)
+    return arr
+
+
+# ---------------------------------------------------------------------------------- sections
+@dataclass(frozen=True, eq=False)
+class ArmSpec:
+    """Link lengths (m), joint limits ``q_min, q_max`` (rad) and velocity limits (rad/s), per joint."""
+
+    lengths: Vector
+    q_min: Vector
+    q_max: Vector
+    qd_min: Vector
+    qd_max: Vector
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """Start ``q0`` (rad), goal (m), sampling time ``dt`` (s), gain ``kp`` (1/s, diagonal), stop rules."""
+
+    q0: Vector
+    goal: Vector
+    dt: float
+    kp: Vector
+    tolerance: float
+    max_time: float
+
+
+@dataclass(frozen=True)
+class Weights:
+    """``w_E`` (effort), ``w_M`` (manipulability rate) and ``c_S`` (slack: ``w_S = c_S / ||e||``)."""
+
+    effort: float
+    manipulability: float
+    slack: float
+
+
+@dataclass(frozen=True, eq=False)
+class SlackBounds:
+    """``delta_min <= delta <= delta_max`` (m/s) for the non-redundant slack program."""
+
+    min: Vector
+    max: Vector
+
+
+@dataclass(frozen=True, eq=False)
+class Damper:
+    """Joint-position damper (brief eq. 11), per joint: influence ``i`` and stop ``s`` (rad), gain."""
+
+    influence: Vector
+    stop: Vector
+    gain: Vector
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (DESIGN.md section 1)."""
+
+    on_infeasible: str
+
+
+@dataclass(frozen=True, eq=False)
+class Scenario:
+    """A complete, validated control task. Build with :func:`load_scenario` or :func:`scenario_from_dict`."""
+
+    name: str
+    arm: ArmSpec
+    motion: Motion
+    weights: Weights
+    slack: SlackBounds
+    damper: Damper
+    controller: ControllerSettings
+    source: str = "<python>"
+    warnings: tuple[str, ...] = field(default=())
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return int(self.arm.lengths.size)
+
+    @property
+    def redundant(self) -> bool:
+        """True when the arm has more joints than the 2 task dimensions."""
+        return self.n > 2
+
+    @cached_property
+    def planar_arm(self) -> PlanarArm:
+        """The kinematic model of this scenario's arm."""
+        return PlanarArm(self.arm.lengths)
+
+    @property
+    def max_steps(self) -> int:
+        """Number of control steps that fit in ``max_time``: ``floor(max_time / dt)``."""
+        return int(math.floor(self.motion.max_time / self.motion.dt + 1e-9))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scenario as plain data (the TOML layout), every per-joint value written out."""
+        out: dict[str, Any] = {"name": self.name}
+        for section in SCHEMA:
+            obj = getattr(self, section)
+            out[section] = {key: _plain(getattr(obj, key)) for key in SCHEMA[section]}
+        return out
+
+    def to_toml(self) -> str:
+        """The scenario as a TOML document that :func:`load_scenario` reads back identically."""
+        lines = [f"name = {_toml_value(self.name)}"]
+        for section, values in self.to_dict().items():
+            if section == "name":
+                continue
+            lines.append(f"\n[{section}]")
+            lines.extend(f"{key} = {_toml_value(value)}" for key, value in values.items())
+        return "\n".join(lines) + "\n"
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> Scenario:
+        """A new scenario with ``{"section.key": value}`` replaced, validated like a file."""
+        data = self.to_dict()
+        for dotted, value in overrides.items():
+            section, _, key = dotted.partition(".")
+            if section == "name" and not key:
+                data["name"] = value
+                continue
+            if section not in SCHEMA or key not in SCHEMA[section]:
+                known = ", ".join(f"{s}.{k}" for s in SCHEMA for k in SCHEMA[s])
+                raise ScenarioError("--set", dotted, f"unknown key (known: name, {known})")
+            data[section][key] = value
+        return scenario_from_dict(data, source=self.source)
+
+
+_SECTION_TYPES: dict[str, Callable[..., Any]] = {
+    "arm": ArmSpec,
+    "motion": Motion,
+    "weights": Weights,
+    "slack": SlackBounds,
+    "damper": Damper,
+    "controller": ControllerSettings,
+}
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return [float(v) for v in value]
+    return value
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(float(value))
+
+
+# ------------------------------------------------------------------------------ validation
+class _Checker:
+    """Reads one raw section value at a time, raising ScenarioError with the source and the key."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, key: str, problem: str) -> ScenarioError:
+        return ScenarioError(self.source, key, problem)
+
+    def number(self, key: str, value: Any) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, f"must be a number, got {_show(value)}")
+        if not math.isfinite(value):
+            raise self.fail(key, f"must be finite, got {value}")
+        return float(value)
+
+    def vector(self, key: str, value: Any, size: int, scalar_ok: bool) -> Vector:
+        if isinstance(value, list):
+            if len(value) != size:
+                raise self.fail(key, f"must have {size} values, got {len(value)}")
+            return _frozen([self.number(f"{key}[{i}]", v) for i, v in enumerate(value)])
+        if scalar_ok:
+            return _frozen(np.full(size, self.number(key, value)))
+        raise self.fail(key, f"must be a list of {size} numbers, got {_show(value)}")
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _fmt(values: Vector) -> str:
+    return "[" + ", ".join(f"{v:g}" for v in values) + "]"
+
+
+def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> Scenario:
+    """Validate raw scenario data (the TOML layout) and build a :class:`Scenario`."""
+    check = _Checker(source)
+    if not isinstance(data, Mapping):
+        raise check.fail("", "a scenario must be a table of sections")
+    for key, value in data.items():
+        if key == "name":
+            if not isinstance(value, str) or not value:
+                raise check.fail("name", f"must be a non-empty string, got {_show(value)}")
+        elif key not in SCHEMA:
+            raise check.fail(key, f"unknown section (known: name, {', '.join(SCHEMA)})")
+        elif not isinstance(value, Mapping):
+            raise check.fail(key, f"must be a table ([{key}]), got {_show(value)}")
+        else:
+            for sub in value:
+                if sub not in SCHEMA[key]:
+                    raise check.fail(
+                        f"{key}.{sub}", f"unknown key (known in [{key}]: {', '.join(SCHEMA[key])})"
+                    )
+
+    raw_lengths = data.get("arm", {}).get("lengths")
+    if raw_lengths is None:
+        raise check.fail("arm.lengths", "is required")
+    if not isinstance(raw_lengths, list) or len(raw_lengths) < 2:
+        raise check.fail("arm.lengths", "must be a list of at least 2 link lengths")
+    n = len(raw_lengths)
+
+    parsed: dict[str, dict[str, Any]] = {}
+    for section, keys in SCHEMA.items():
+        raw_section = data.get(section, {})
+        parsed[section] = {}
+        for key, spec in keys.items():
+            dotted = f"{section}.{key}"
+            value = raw_section.get(key, spec.default)
+            if value is None:
+                raise check.fail(dotted, "is required")
+            if spec.kind == "joints":
+                parsed[section][key] = check.vector(dotted, value, n, spec.scalar_ok)
+            elif spec.kind == "vec2":
+                parsed[section][key] = check.vector(dotted, value, 2, spec.scalar_ok)
+            elif spec.kind == "number":
+                parsed[section][key] = check.number(dotted, value)
+            else:
+                if not isinstance(value, str):
+                    raise check.fail(dotted, f"must be a string, got {_show(value)}")
+                parsed[section][key] = value
+
+    warnings_found = _check_consistency(check, parsed, n)
+    name = data.get("name") or Path(source).stem or "scenario"
+    sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
+    return Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
+
+
+def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
+    """Cross-field rules; returns the warnings (valid but suspicious settings)."""
+    arm, motion, weights, slack, damper = (p[s] for s in ("arm", "motion", "weights", "slack", "damper"))
+
+    def positive(dotted: str, values: Any) -> None:
+        arr = np.atleast_1d(values)
+        if np.any(arr <= 0):
+            raise check.fail(dotted, f"must be > 0, got {_fmt(arr) if arr.size > 1 else f'{arr[0]:g}'}")
+
+    positive("arm.lengths", arm["lengths"])
+    if np.any(arm["q_min"] >= arm["q_max"]):
+        j = int(np.argmax(arm["q_min"] >= arm["q_max"]))
+        raise check.fail("arm.q_min", f"must be < arm.q_max (joint {j + 1}: "
+                         f"{arm['q_min'][j]:g} >= {arm['q_max'][j]:g})")
+    if np.any(arm["qd_min"] >= 0):
+        raise check.fail("arm.qd_min", f"must be < 0 (the arm must be able to stop), got {_fmt(arm['qd_min'])}")
+    if np.any(arm["qd_max"] <= 0):
+        raise check.fail("arm.qd_max", f"must be > 0 (the arm must be able to stop), got {_fmt(arm['qd_max'])}")
+    for key in ("dt", "tolerance", "max_time"):
+        positive(f"motion.{key}", motion[key])
+    positive("motion.kp", motion["kp"])
+    if motion["max_time"] < motion["dt"]:
+        raise check.fail("motion.max_time", f"must be >= motion.dt ({motion['dt']:g} s)")
+    positive("weights.effort", weights["effort"])
+    positive("weights.slack", weights["slack"])
+    if weights["manipulability"] < 0:
+        raise check.fail("weights.manipulability", f"must be >= 0, got {weights['manipulability']:g}")
+    if np.any(slack["min"] >= slack["max"]):
+        raise check.fail("slack.min", f"must be < slack.max, got {_fmt(slack['min'])} and {_fmt(slack['max'])}")
+    if np.any(damper["stop"] < 0):
+        raise check.fail("damper.stop", f"must be >= 0, got {_fmt(damper['stop'])}")
+    if np.any(damper["stop"] >= damper["influence"]):
+        raise check.fail("damper.stop", f"must be < damper.influence, got stop {_fmt(damper['stop'])} "
+                         f"and influence {_fmt(damper['influence'])}")
+    positive("damper.gain", damper["gain"])
+    if p["controller"]["on_infeasible"] not in POLICIES:
+        raise check.fail("controller.on_infeasible",
+                         f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}")
+
+    q0 = motion["q0"]
+    outside = (q0 < arm["q_min"]) | (q0 > arm["q_max"])
+    if np.any(outside):
+        j = int(np.argmax(outside))
+        raise check.fail("motion.q0", f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
+                         f"[{arm['q_min'][j]:g}, {arm['q_max'][j]:g}]")
+    margin = np.minimum(arm["q_max"] - q0, q0 - arm["q_min"])
+    inside_stop = margin < damper["stop"]
+    if np.any(inside_stop):
+        j = int(np.argmax(inside_stop))
+        raise check.fail("motion.q0", f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
+                         f"damper's stop zone ({damper['stop'][j]:g} rad), which the dampers forbid")
+
+    found: list[str] = []
+    overshoot = motion["dt"] >= damper["gain"] * (damper["influence"] - damper["stop"])
+    if np.any(overshoot):
+        found.append("damper: dt >= gain * (influence - stop): the position damper can overshoot into the "
+                     "stop zone in one step")
+    lengths = arm["lengths"]
+    radius = float(np.hypot(*motion["goal"]))
+    reach, inner = float(lengths.sum()), max(0.0, float(2 * lengths.max() - lengths.sum()))
+    if radius > reach or radius < inner:
+        found.append(f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
+                     f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached")
+    return found
+
+
+# ----------------------------------------------------------------------------------- loading
+def parse_override(text: str) -> tuple[str, Any]:
+    """``"section.key=value"`` -> ``("section.key", value)``; the value is read as TOML, else a string."""
+    dotted, sep, raw = text.partition("=")
+    dotted, raw = dotted.strip(), raw.strip()
+    if not sep or not dotted:
+        raise ScenarioError("--set", text, "expected section.key=value")
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return dotted, value
+
+
+def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Load a preset (``"task1"``, ``"task2"``) or a TOML file, apply overrides, validate.
+
+    Raises :class:`~emdm.errors.ScenarioError` for a missing file, a file that is not TOML, or invalid
+    content. Valid but suspicious settings are kept in ``scenario.warnings`` and issued as
+    :class:`ScenarioWarning`.
+    """
+    text_name = str(name_or_path)
+    if text_name in PRESETS and not Path(text_name).exists():
+        text = resources.files("emdm").joinpath("scenarios", f"{text_name}.toml").read_text()
+        source = text_name
+    else:
+        path = Path(name_or_path)
+        source = str(path)
+        if not path.is_file():
+            hint = f" (presets: {', '.join(PRESETS)})" if path.suffix == "" else ""
+            raise ScenarioError(source, "", f"no such scenario file{hint}")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ScenarioError(source, "", f"cannot be read: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(source, "", f"not a valid TOML file: {exc}") from None
+    data.setdefault("name", Path(source).stem)
+    scenario = scenario_from_dict(data, source=source)
+    if overrides:
+        scenario = scenario.with_overrides(overrides)
+    for message in scenario.warnings:
+        warnings.warn(f"{source}: {message}", ScenarioWarning, stacklevel=2)
+    return scenario

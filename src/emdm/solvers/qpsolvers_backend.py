@@ -1,0 +1,66 @@
+"""Off-the-shelf QP solvers through qpsolvers (https://github.com/qpsolvers/qpsolvers).
+
+Each backend that qpsolvers finds installed is registered under its own name (``daqp``,
+``quadprog``, and with ``pip install 'emdm[solvers]'`` also ``proxqp``, ``piqp``, ``clarabel``,
+``osqp``, ``highs``). Unbounded variables are passed as +-inf bounds, or no bounds at all.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..problem import QP
+from .base import SolverResult, SolverSpec, register
+
+BACKENDS = {
+    "daqp": "dual active-set (DAQP), exact, dense",
+    "quadprog": "Goldfarb-Idnani dual active-set (quadprog), exact, dense",
+    "proxqp": "proximal augmented Lagrangian (ProxQP)",
+    "piqp": "proximal interior point (PIQP)",
+    "clarabel": "interior point (Clarabel)",
+    "osqp": "ADMM (OSQP), first order, default tolerances",
+    "highs": "HiGHS QP (active set)",
+}
+
+
+def _installed(name: str) -> bool:
+    try:
+        import qpsolvers
+    except ImportError:  # pragma: no cover - qpsolvers is a core dependency
+        return False
+    return name in qpsolvers.available_solvers
+
+
+def solve_qpsolvers(qp: QP, backend: str) -> SolverResult:
+    """Solve ``qp`` with one qpsolvers backend; an unsolved program has ``x = None``."""
+    from qpsolvers import Problem, solve_problem
+
+    lb = qp.lb if np.isfinite(qp.lb).any() else None
+    ub = qp.ub if np.isfinite(qp.ub).any() else None
+    if backend == "quadprog" and lb is not None:
+        # quadprog cannot take infinite bounds: free variables get none
+        lb = np.where(np.isfinite(qp.lb), qp.lb, -1e30)
+        ub = np.where(np.isfinite(qp.ub), qp.ub, 1e30)
+    problem = Problem(qp.P, qp.c, None, None, qp.A, qp.b, lb, ub)
+    start = time.perf_counter()
+    solution = solve_problem(problem, solver=backend)
+    elapsed = time.perf_counter() - start
+    if not solution.found or solution.x is None:
+        return SolverResult(None, "infeasible or failed", 0, elapsed)
+    iterations = int(solution.extras.get("iter", solution.extras.get("iterations", 0)) or 0)
+    return SolverResult(np.asarray(solution.x, dtype=float), "optimal", iterations, elapsed)
+
+
+def register_backends() -> None:
+    """Register every qpsolvers backend this module knows (available or not)."""
+    for name, description in BACKENDS.items():
+        register(SolverSpec(
+            name=name,
+            family="exact",
+            solve=lambda qp, _b=name: solve_qpsolvers(qp, _b),
+            description=description,
+            extra=None if name in ("daqp", "quadprog") else "solvers",
+            is_available=lambda _b=name: _installed(_b),
+        ))
