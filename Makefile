@@ -21,7 +21,8 @@ study: $(STAMP)
 	$(BIN)/emdm run task2 --out $(OUT)/task2
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests
+	$(BIN)/ruff format --check src tests
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

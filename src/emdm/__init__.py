@@ -13,7 +13,14 @@ __version__ = "0.1.0"
 
 from .analysis import metrics
 from .arm import Kinematics, PlanarArm
-from .controllers import CONTROLLERS, Controller, admissible, get_controller, joint_bounds, step_program
+from .controllers import (
+    CONTROLLERS,
+    Controller,
+    admissible,
+    get_controller,
+    joint_bounds,
+    step_program,
+)
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
 from .feasibility import feasible_point, task_scale
 from .problem import QP, Objective

@@ -65,7 +65,9 @@ class PlanarArm:
         if lengths_arr.ndim != 1 or lengths_arr.size < 2:
             raise ScenarioError("PlanarArm", "lengths", "needs a list of at least 2 link lengths")
         if not np.all(np.isfinite(lengths_arr)) or np.any(lengths_arr <= 0):
-            raise ScenarioError("PlanarArm", "lengths", f"must be finite and > 0, got {lengths_arr}")
+            raise ScenarioError(
+                "PlanarArm", "lengths", f"must be finite and > 0, got {lengths_arr}"
+            )
         lengths_arr.setflags(write=False)
         self.lengths: Vector = lengths_arr
         self.n: int = int(lengths_arr.size)
@@ -95,7 +97,9 @@ class PlanarArm:
     def _check_q(self, q: ArrayLike) -> Vector:
         q_arr = np.asarray(q, dtype=float)
         if q_arr.shape != (self.n,):
-            raise ScenarioError("PlanarArm", "q", f"expected {self.n} joint angles, got {q_arr.shape}")
+            raise ScenarioError(
+                "PlanarArm", "q", f"expected {self.n} joint angles, got {q_arr.shape}"
+            )
         return q_arr
 
     def link_vectors(self, q: ArrayLike) -> Matrix:
@@ -111,13 +115,14 @@ class PlanarArm:
     def joint_positions(self, q: ArrayLike) -> Matrix:
         """Positions of the base, every joint and the end effector: an (n + 1) x 2 array (m)."""
         links = self.link_vectors(q)
-        points = np.zeros((self.n + 1, 2))
+        points: Matrix = np.zeros((self.n + 1, 2))
         points[1:] = np.cumsum(links, axis=1).T
         return points
 
     def forward(self, q: ArrayLike) -> Vector:
         """End-effector position ``p = f(q)`` (m), brief eq. (1)."""
-        return self.link_vectors(q).sum(axis=1)
+        p: Vector = self.link_vectors(q).sum(axis=1)
+        return p
 
     def jacobian(self, q: ArrayLike) -> Matrix:
         """Manipulator Jacobian ``J = dp/dq`` (2 x n, m/rad), brief eq. (3)."""

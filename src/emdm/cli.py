@@ -45,8 +45,12 @@ def _scenario(args: argparse.Namespace) -> Scenario:
 
 def _add_scenario_args(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", help=f"a preset ({', '.join(PRESETS)}) or a scenario TOML file")
-    parser.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
-                        help="override one scenario value (repeatable), e.g. --set weights.effort=0.2")
+    parser.add_argument(
+        "--set",
+        action="append",
+        metavar="SECTION.KEY=VALUE",
+        help="override one scenario value (repeatable), e.g. --set weights.effort=0.2",
+    )
 
 
 def _fallback(text: str | None) -> list[str]:
@@ -58,8 +62,13 @@ def _fallback(text: str | None) -> list[str]:
 def _table(rows: list[list[str]], header: list[str]) -> str:
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
     line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))
-    body = ["  ".join(str(c).rjust(w) if i else str(c).ljust(w) for i, (c, w) in
-                      enumerate(zip(r, widths, strict=True))) for r in rows]
+    body = [
+        "  ".join(
+            str(c).rjust(w) if i else str(c).ljust(w)
+            for i, (c, w) in enumerate(zip(r, widths, strict=True))
+        )
+        for r in rows
+    ]
     return "\n".join([line, "-" * len(line), *body])
 
 
@@ -68,14 +77,38 @@ def summary_table(results: dict[str, dict[str, Any]]) -> str:
     rows = []
     for name, mt in results.items():
         ttg = mt["time_to_goal"]
-        rows.append([name, "yes" if mt["reached"] else "no", str(mt["steps"]),
-                     f"{ttg:.2f}" if ttg is not None else "-", f"{mt['final_error']:.2e}",
-                     f"{mt['min_manipulability']:.4f}", f"{mt['mean_manipulability']:.4f}",
-                     f"{mt['total_effort']:.4f}", f"{mt['max_abs_qd']:.3f}",
-                     f"{mt['min_joint_margin']:.3f}", str(mt["scaled_steps"]),
-                     str(mt["fallback_steps"]), f"{mt['max_kkt_residual']:.1e}"])
-    header = ["controller", "reached", "steps", "t_goal[s]", "final|e|[m]", "min m", "mean m",
-              "effort", "max|qd|", "margin[rad]", "scaled", "fallback", "max KKT"]
+        rows.append(
+            [
+                name,
+                "yes" if mt["reached"] else "no",
+                str(mt["steps"]),
+                f"{ttg:.2f}" if ttg is not None else "-",
+                f"{mt['final_error']:.2e}",
+                f"{mt['min_manipulability']:.4f}",
+                f"{mt['mean_manipulability']:.4f}",
+                f"{mt['total_effort']:.4f}",
+                f"{mt['max_abs_qd']:.3f}",
+                f"{mt['min_joint_margin']:.3f}",
+                str(mt["scaled_steps"]),
+                str(mt["fallback_steps"]),
+                f"{mt['max_kkt_residual']:.1e}",
+            ]
+        )
+    header = [
+        "controller",
+        "reached",
+        "steps",
+        "t_goal[s]",
+        "final|e|[m]",
+        "min m",
+        "mean m",
+        "effort",
+        "max|qd|",
+        "margin[rad]",
+        "scaled",
+        "fallback",
+        "max KKT",
+    ]
     return _table(rows, header)
 
 
@@ -90,23 +123,33 @@ def cmd_run(args: argparse.Namespace) -> int:
     runs: dict[str, Run] = {}
     start = time.perf_counter()
     for controller in controllers:
-        runs[controller.name] = simulate(scenario, controller, solver=args.solver,
-                                         fallback=_fallback(args.fallback))
+        runs[controller.name] = simulate(
+            scenario, controller, solver=args.solver, fallback=_fallback(args.fallback)
+        )
     elapsed = time.perf_counter() - start
     results = {name: metrics(run) for name, run in runs.items()}
     with atomic_output(out) as staging:
         for name, run in runs.items():
-            write_csv(staging / "trajectories" / f"{name}.csv", trajectory_header(scenario.n),
-                      trajectory_rows(run))
-            write_csv(staging / "diagnostics" / f"{name}.csv", diagnostics_header(scenario.n),
-                      diagnostics_rows(run))
-        write_json(staging / "metrics.json", {
-            "scenario": scenario.to_dict(),
-            "solver": args.solver,
-            "fallback": _fallback(args.fallback),
-            "emdm_version": __version__,
-            "controllers": results,
-        })
+            write_csv(
+                staging / "trajectories" / f"{name}.csv",
+                trajectory_header(scenario.n),
+                trajectory_rows(run),
+            )
+            write_csv(
+                staging / "diagnostics" / f"{name}.csv",
+                diagnostics_header(scenario.n),
+                diagnostics_rows(run),
+            )
+        write_json(
+            staging / "metrics.json",
+            {
+                "scenario": scenario.to_dict(),
+                "solver": args.solver,
+                "fallback": _fallback(args.fallback),
+                "emdm_version": __version__,
+                "controllers": results,
+            },
+        )
     print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
     print(summary_table(results))
     return 0
@@ -130,19 +173,34 @@ def cmd_list(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="emdm",
-        description="Optimisation-based velocity control of planar manipulators (EMDM vs IVKC).")
+        description="Optimisation-based velocity control of planar manipulators (EMDM vs IVKC).",
+    )
     parser.add_argument("--version", action="version", version=f"emdm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    run = sub.add_parser("run", help="run controllers on a scenario; write metrics.json and CSVs",
-                         description="Run controllers in closed loop and record every step.")
+    run = sub.add_parser(
+        "run",
+        help="run controllers on a scenario; write metrics.json and CSVs",
+        description="Run controllers in closed loop and record every step.",
+    )
     _add_scenario_args(run)
-    run.add_argument("--controller", action="append", metavar="NAME",
-                     help=f"controller to run (repeatable; default all: {', '.join(CONTROLLERS)})")
-    run.add_argument("--solver", default=DEFAULT_SOLVER, metavar="NAME",
-                     help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see 'emdm list')")
-    run.add_argument("--fallback", metavar="A,B",
-                     help=f"fallback chain when the solver fails (default {','.join(DEFAULT_FALLBACK)})")
+    run.add_argument(
+        "--controller",
+        action="append",
+        metavar="NAME",
+        help=f"controller to run (repeatable; default all: {', '.join(CONTROLLERS)})",
+    )
+    run.add_argument(
+        "--solver",
+        default=DEFAULT_SOLVER,
+        metavar="NAME",
+        help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see 'emdm list')",
+    )
+    run.add_argument(
+        "--fallback",
+        metavar="A,B",
+        help=f"fallback chain when the solver fails (default {','.join(DEFAULT_FALLBACK)})",
+    )
     run.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario name>)")
     run.set_defaults(func=cmd_run)
 
@@ -178,8 +236,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # an internal error: one line, the traceback on request
         if os.environ.get("EMDM_DEBUG"):
             raise
-        print(f"emdm: internal error: {type(exc).__name__}: {exc} (EMDM_DEBUG=1 shows the traceback)",
-              file=sys.stderr)
+        print(
+            f"emdm: internal error: {type(exc).__name__}: {exc} (EMDM_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
         return 1
 
 

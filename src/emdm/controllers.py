@@ -64,8 +64,12 @@ def joint_bounds(scenario: Scenario, q: Vector) -> Bounds:
     """The velocity box intersected with the position dampers at ``q`` (the C- bounds)."""
     arm, damper = scenario.arm, scenario.damper
     return velocity_box(arm.qd_min, arm.qd_max) & position_damper(
-        q, q_min=arm.q_min, q_max=arm.q_max,
-        influence=damper.influence, stop=damper.stop, gain=damper.gain,
+        q,
+        q_min=arm.q_min,
+        q_max=arm.q_max,
+        influence=damper.influence,
+        stop=damper.stop,
+        gain=damper.gain,
     )
 
 
@@ -95,9 +99,14 @@ def step_program(
     if scenario.redundant:
         return task_program(objective, kin.J, v, bounds.lo, bounds.hi)
     return task_program(
-        objective, kin.J, v, bounds.lo, bounds.hi,
+        objective,
+        kin.J,
+        v,
+        bounds.lo,
+        bounds.hi,
         slack=slack_penalty(slack_weight(scenario, error_norm, w)),
-        slack_lo=np.asarray(scenario.slack.min), slack_hi=np.asarray(scenario.slack.max),
+        slack_lo=np.asarray(scenario.slack.min),
+        slack_hi=np.asarray(scenario.slack.max),
     )
 
 
@@ -120,20 +129,30 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
     if alpha == 1.0:
         return Admissible(qp, 1.0, None)
     where = f"step {step}: " if step is not None else ""
-    reach = "no task scale in [0, 1] is feasible" if alpha is None else (
-        f"the bounds deliver at most alpha = {alpha:.6g} of the desired velocity")
+    reach = (
+        "no task scale in [0, 1] is feasible"
+        if alpha is None
+        else (f"the bounds deliver at most alpha = {alpha:.6g} of the desired velocity")
+    )
     if policy == "scale":
         if alpha is None:
-            raise NoSolution(f"{where}the program is infeasible even with the task scaled to zero "
-                             "(the joint bounds exclude every motion that keeps the task direction)",
-                             problem=qp)
+            raise NoSolution(
+                f"{where}the program is infeasible even with the task scaled to zero "
+                "(the joint bounds exclude every motion that keeps the task direction)",
+                problem=qp,
+            )
         return Admissible(qp.with_rhs(alpha * qp.b), alpha, "scale")
     if policy == "slack":
         relaxed = qp.with_free_slack(slack_weight)
         if task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub) != 1.0:
-            raise NoSolution(f"{where}the program is infeasible even with free slack "
-                             "(the joint bounds are empty)", problem=qp)
+            raise NoSolution(
+                f"{where}the program is infeasible even with free slack "
+                "(the joint bounds are empty)",
+                problem=qp,
+            )
         return Admissible(relaxed, 1.0, "slack")
-    raise NoSolution(f"{where}the task is infeasible under the joint bounds: {reach} "
-                     "(controller.on_infeasible = \"error\"; use \"scale\" or \"slack\" to continue)",
-                     problem=qp)
+    raise NoSolution(
+        f"{where}the task is infeasible under the joint bounds: {reach} "
+        '(controller.on_infeasible = "error"; use "scale" or "slack" to continue)',
+        problem=qp,
+    )

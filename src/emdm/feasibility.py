@@ -48,7 +48,9 @@ def _project(A: Matrix, lb: Vector, ub: Vector) -> tuple[Matrix, Matrix, np.ndar
         Q = np.eye(m)
     G = np.zeros((2, int(bounded.sum())))
     G[: Q.shape[1]] = Q.T @ A[:, bounded]
-    G[np.abs(G) <= RANK_TOL * max(float(np.abs(A).max(initial=0.0)), 1e-300)] = 0.0  # rounding noise
+    G[np.abs(G) <= RANK_TOL * max(float(np.abs(A).max(initial=0.0)), 1e-300)] = (
+        0.0  # rounding noise
+    )
     return Q, G, bounded
 
 
@@ -77,7 +79,11 @@ def _ray_interval(
     S = W @ G
     h = np.sum(np.maximum(S * lb, S * ub), axis=1) - W @ y0
     a = W @ d
-    size = 1.0 + float(np.sum(np.abs(G) * np.maximum(np.abs(lb), np.abs(ub)))) + float(np.abs(y0).sum())
+    size = (
+        1.0
+        + float(np.sum(np.abs(G) * np.maximum(np.abs(lb), np.abs(ub))))
+        + float(np.abs(y0).sum())
+    )
     flat = np.abs(a) <= 1e-13 * max(float(np.abs(d).sum()), 1e-300)
     if np.any(flat & (h < -FEASIBILITY_TOL * size)):
         return np.inf, -np.inf, None

@@ -33,9 +33,27 @@ def _cell(value: Any) -> str:
 
 def trajectory_header(n: int) -> list[str]:
     """Columns of ``trajectories/<controller>.csv`` (DESIGN.md section 3)."""
-    return ["t", *[f"q{i}" for i in range(1, n + 1)], *[f"qd{i}" for i in range(1, n + 1)],
-            "x", "y", "ex", "ey", "vx", "vy", "m", "effort", "manip_rate", "alpha",
-            "delta_x", "delta_y", "status", "solver", "iterations", "solve_time"]
+    return [
+        "t",
+        *[f"q{i}" for i in range(1, n + 1)],
+        *[f"qd{i}" for i in range(1, n + 1)],
+        "x",
+        "y",
+        "ex",
+        "ey",
+        "vx",
+        "vy",
+        "m",
+        "effort",
+        "manip_rate",
+        "alpha",
+        "delta_x",
+        "delta_y",
+        "status",
+        "solver",
+        "iterations",
+        "solve_time",
+    ]
 
 
 def trajectory_rows(run: Run) -> Iterator[list[str]]:
@@ -46,8 +64,16 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
         where = [*run.p[k], *run.e[k], *run.v[k], run.m[k]]
         if k < run.steps:
             cmd = [*run.qd[k]]
-            rest = [run.effort[k], run.manip_rate[k], run.alpha[k], *run.delta[k],
-                    run.status[k], run.solver[k], run.iterations[k], run.solve_time[k]]
+            rest = [
+                run.effort[k],
+                run.manip_rate[k],
+                run.alpha[k],
+                *run.delta[k],
+                run.status[k],
+                run.solver[k],
+                run.iterations[k],
+                run.solve_time[k],
+            ]
         else:
             cmd, rest = [""] * n, [""] * 9
         yield [_cell(x) for x in (*state, *cmd, *where, *rest)]
@@ -55,17 +81,36 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
 
 def diagnostics_header(n: int) -> list[str]:
     """Columns of ``diagnostics/<controller>.csv``: how every command was obtained."""
-    return ["step", "kkt_residual", "bound_excess", "fallback", "policy", "attempts",
-            *[f"lo{i}" for i in range(1, n + 1)], *[f"hi{i}" for i in range(1, n + 1)],
-            *[f"active{i}" for i in range(1, n + 1)]]
+    return [
+        "step",
+        "kkt_residual",
+        "bound_excess",
+        "fallback",
+        "policy",
+        "attempts",
+        *[f"lo{i}" for i in range(1, n + 1)],
+        *[f"hi{i}" for i in range(1, n + 1)],
+        *[f"active{i}" for i in range(1, n + 1)],
+    ]
 
 
 def diagnostics_rows(run: Run) -> Iterator[list[str]]:
     """One row per command."""
     for k in range(run.steps):
-        yield [_cell(x) for x in (k, run.kkt[k], run.bound_excess[k], bool(run.fallback[k]),
-                                  run.policy[k], run.attempts[k], *run.lo[k], *run.hi[k],
-                                  *run.active[k])]
+        yield [
+            _cell(x)
+            for x in (
+                k,
+                run.kkt[k],
+                run.bound_excess[k],
+                bool(run.fallback[k]),
+                run.policy[k],
+                run.attempts[k],
+                *run.lo[k],
+                *run.hi[k],
+                *run.active[k],
+            )
+        ]
 
 
 def write_csv(path: Path, header: Sequence[str], rows: Iterator[list[str]]) -> None:

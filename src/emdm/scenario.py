@@ -167,7 +167,7 @@ class Scenario:
     @property
     def max_steps(self) -> int:
         """Number of control steps that fit in ``max_time``: ``floor(max_time / dt)``."""
-        return int(math.floor(self.motion.max_time / self.motion.dt + 1e-9))
+        return math.floor(self.motion.max_time / self.motion.dt + 1e-9)
 
     def to_dict(self) -> dict[str, Any]:
         """The scenario as plain data (the TOML layout), every per-joint value written out."""
@@ -317,22 +317,32 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
 
 def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
     """Cross-field rules; returns the warnings (valid but suspicious settings)."""
-    arm, motion, weights, slack, damper = (p[s] for s in ("arm", "motion", "weights", "slack", "damper"))
+    arm, motion, weights, slack, damper = (
+        p[s] for s in ("arm", "motion", "weights", "slack", "damper")
+    )
 
     def positive(dotted: str, values: Any) -> None:
         arr = np.atleast_1d(values)
         if np.any(arr <= 0):
-            raise check.fail(dotted, f"must be > 0, got {_fmt(arr) if arr.size > 1 else f'{arr[0]:g}'}")
+            raise check.fail(
+                dotted, f"must be > 0, got {_fmt(arr) if arr.size > 1 else f'{arr[0]:g}'}"
+            )
 
     positive("arm.lengths", arm["lengths"])
     if np.any(arm["q_min"] >= arm["q_max"]):
         j = int(np.argmax(arm["q_min"] >= arm["q_max"]))
-        raise check.fail("arm.q_min", f"must be < arm.q_max (joint {j + 1}: "
-                         f"{arm['q_min'][j]:g} >= {arm['q_max'][j]:g})")
+        raise check.fail(
+            "arm.q_min",
+            f"must be < arm.q_max (joint {j + 1}: {arm['q_min'][j]:g} >= {arm['q_max'][j]:g})",
+        )
     if np.any(arm["qd_min"] >= 0):
-        raise check.fail("arm.qd_min", f"must be < 0 (the arm must be able to stop), got {_fmt(arm['qd_min'])}")
+        raise check.fail(
+            "arm.qd_min", f"must be < 0 (the arm must be able to stop), got {_fmt(arm['qd_min'])}"
+        )
     if np.any(arm["qd_max"] <= 0):
-        raise check.fail("arm.qd_max", f"must be > 0 (the arm must be able to stop), got {_fmt(arm['qd_max'])}")
+        raise check.fail(
+            "arm.qd_max", f"must be > 0 (the arm must be able to stop), got {_fmt(arm['qd_max'])}"
+        )
     for key in ("dt", "tolerance", "max_time"):
         positive(f"motion.{key}", motion[key])
     positive("motion.kp", motion["kp"])
@@ -341,43 +351,62 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
     positive("weights.effort", weights["effort"])
     positive("weights.slack", weights["slack"])
     if weights["manipulability"] < 0:
-        raise check.fail("weights.manipulability", f"must be >= 0, got {weights['manipulability']:g}")
+        raise check.fail(
+            "weights.manipulability", f"must be >= 0, got {weights['manipulability']:g}"
+        )
     if np.any(slack["min"] >= slack["max"]):
-        raise check.fail("slack.min", f"must be < slack.max, got {_fmt(slack['min'])} and {_fmt(slack['max'])}")
+        raise check.fail(
+            "slack.min", f"must be < slack.max, got {_fmt(slack['min'])} and {_fmt(slack['max'])}"
+        )
     if np.any(damper["stop"] < 0):
         raise check.fail("damper.stop", f"must be >= 0, got {_fmt(damper['stop'])}")
     if np.any(damper["stop"] >= damper["influence"]):
-        raise check.fail("damper.stop", f"must be < damper.influence, got stop {_fmt(damper['stop'])} "
-                         f"and influence {_fmt(damper['influence'])}")
+        raise check.fail(
+            "damper.stop",
+            f"must be < damper.influence, got stop {_fmt(damper['stop'])} "
+            f"and influence {_fmt(damper['influence'])}",
+        )
     positive("damper.gain", damper["gain"])
     if p["controller"]["on_infeasible"] not in POLICIES:
-        raise check.fail("controller.on_infeasible",
-                         f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}")
+        raise check.fail(
+            "controller.on_infeasible",
+            f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}",
+        )
 
     q0 = motion["q0"]
     outside = (q0 < arm["q_min"]) | (q0 > arm["q_max"])
     if np.any(outside):
         j = int(np.argmax(outside))
-        raise check.fail("motion.q0", f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
-                         f"[{arm['q_min'][j]:g}, {arm['q_max'][j]:g}]")
+        raise check.fail(
+            "motion.q0",
+            f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
+            f"[{arm['q_min'][j]:g}, {arm['q_max'][j]:g}]",
+        )
     margin = np.minimum(arm["q_max"] - q0, q0 - arm["q_min"])
     inside_stop = margin < damper["stop"]
     if np.any(inside_stop):
         j = int(np.argmax(inside_stop))
-        raise check.fail("motion.q0", f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
-                         f"damper's stop zone ({damper['stop'][j]:g} rad), which the dampers forbid")
+        raise check.fail(
+            "motion.q0",
+            f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
+            f"damper's stop zone ({damper['stop'][j]:g} rad), which the dampers forbid",
+        )
 
     found: list[str] = []
     overshoot = motion["dt"] >= damper["gain"] * (damper["influence"] - damper["stop"])
     if np.any(overshoot):
-        found.append("damper: dt >= gain * (influence - stop): the position damper can overshoot into the "
-                     "stop zone in one step")
+        found.append(
+            "damper: dt >= gain * (influence - stop): the position damper can overshoot into the "
+            "stop zone in one step"
+        )
     lengths = arm["lengths"]
     radius = float(np.hypot(*motion["goal"]))
     reach, inner = float(lengths.sum()), max(0.0, float(2 * lengths.max() - lengths.sum()))
     if radius > reach or radius < inner:
-        found.append(f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
-                     f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached")
+        found.append(
+            f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
+            f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached"
+        )
     return found
 
 

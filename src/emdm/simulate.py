@@ -104,8 +104,13 @@ def simulate(
     motion = scenario.motion
     policy = scenario.controller.on_infeasible
 
-    t = np.arange(N + 1) * motion.dt
-    q, p, e, v = np.empty((N + 1, n)), np.empty((N + 1, 2)), np.empty((N + 1, 2)), np.empty((N + 1, 2))
+    t = np.arange(N + 1, dtype=float) * motion.dt
+    q, p, e, v = (
+        np.empty((N + 1, n)),
+        np.empty((N + 1, 2)),
+        np.empty((N + 1, 2)),
+        np.empty((N + 1, 2)),
+    )
     m = np.empty(N + 1)
     qd, delta = np.empty((N, n)), np.zeros((N, 2))
     lo, hi = np.empty((N, n)), np.empty((N, n))
@@ -134,7 +139,9 @@ def simulate(
         if k >= N:
             break
         nominal = step_program(ctrl, scenario, q[k], kin, v[k], error_norm)
-        program = admissible(nominal, policy, slack_weight=slack_weight(scenario, error_norm), step=k)
+        program = admissible(
+            nominal, policy, slack_weight=slack_weight(scenario, error_norm), step=k
+        )
         result = solve_chain(program.qp, chain, context=f"step {k} (t = {t[k]:g} s): ")
         x = result.x
         qd[k] = x[:n]
@@ -157,13 +164,32 @@ def simulate(
 
     K = k
     return Run(
-        scenario=scenario, controller=ctrl,
-        t=t[: K + 1], q=q[: K + 1], p=p[: K + 1], e=e[: K + 1], v=v[: K + 1], m=m[: K + 1],
-        qd=qd[:K], effort=effort_[:K], manip_rate=manip[:K], alpha=alpha[:K], delta=delta[:K],
-        lo=lo[:K], hi=hi[:K], active=active[:K], iterations=iterations[:K],
-        solve_time=solve_time[:K], kkt=kkt[:K], bound_excess=excess[:K],
-        fallback=fallback_used[:K], solver=solvers_used, status=statuses, attempts=attempts,
-        policy=policies, reached=reached,
+        scenario=scenario,
+        controller=ctrl,
+        t=t[: K + 1],
+        q=q[: K + 1],
+        p=p[: K + 1],
+        e=e[: K + 1],
+        v=v[: K + 1],
+        m=m[: K + 1],
+        qd=qd[:K],
+        effort=effort_[:K],
+        manip_rate=manip[:K],
+        alpha=alpha[:K],
+        delta=delta[:K],
+        lo=lo[:K],
+        hi=hi[:K],
+        active=active[:K],
+        iterations=iterations[:K],
+        solve_time=solve_time[:K],
+        kkt=kkt[:K],
+        bound_excess=excess[:K],
+        fallback=fallback_used[:K],
+        solver=solvers_used,
+        status=statuses,
+        attempts=attempts,
+        policy=policies,
+        reached=reached,
     )
 
 

@@ -26,10 +26,22 @@ from .qpsolvers_backend import register_backends
 DEFAULT_SOLVER = "active-set"
 DEFAULT_FALLBACK = ("daqp", "quadprog")
 
-register(SolverSpec("active-set", "exact", solve_active_set,
-                    "primal active-set method (custom, exact, finite termination)"))
-register(SolverSpec("kkt", "exact", solve_kkt,
-                    "one KKT solve of the equality-constrained program (custom; ignores bounds)"))
+register(
+    SolverSpec(
+        "active-set",
+        "exact",
+        solve_active_set,
+        "primal active-set method (custom, exact, finite termination)",
+    )
+)
+register(
+    SolverSpec(
+        "kkt",
+        "exact",
+        solve_kkt,
+        "one KKT solve of the equality-constrained program (custom; ignores bounds)",
+    )
+)
 register_backends()
 
 __all__ = [

@@ -92,12 +92,16 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
     n = qp.n
     limit = max_iter if max_iter is not None else 10 * (n + A.shape[0]) + 20
 
-    snap = 1e-14 * (1.0 + np.maximum(np.abs(np.where(np.isfinite(lb), lb, 0.0)),
-                                      np.abs(np.where(np.isfinite(ub), ub, 0.0))))
+    snap = 1e-13 * (
+        1.0
+        + np.maximum(
+            np.abs(np.where(np.isfinite(lb), lb, 0.0)), np.abs(np.where(np.isfinite(ub), ub, 0.0))
+        )
+    )
     at_lo, at_hi = x - lb <= snap, ub - x <= snap
     x[at_lo], x[at_hi] = lb[at_lo], ub[at_hi]
     work = np.zeros(n, dtype=np.int8)  # -1: fixed at lb, +1: fixed at ub, 0: free
-    for j in np.flatnonzero(at_lo | at_hi):
+    for j in map(int, np.flatnonzero(at_lo | at_hi)):
         trial = work == 0
         trial[j] = False
         if _full_row_rank(A[:, trial]):
@@ -117,8 +121,14 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
         p = np.zeros(n)
         p[free] = p_free
         if history:
-            trace.append({"iteration": float(iteration), "objective": qp.objective(x),
-                          "step": float(np.abs(p).max()), "working_set": float(np.count_nonzero(work))})
+            trace.append(
+                {
+                    "iteration": float(iteration),
+                    "objective": qp.objective(x),
+                    "step": float(np.abs(p).max()),
+                    "working_set": float(np.count_nonzero(work)),
+                }
+            )
         if np.abs(p).max() <= 1e-12 * (1.0 + np.abs(x).max()):
             mu = g - A.T @ lam  # multiplier of each fixed variable's bound
             wrong = np.where(work == -1, -mu, np.where(work == 1, mu, 0.0))
@@ -126,7 +136,9 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
             if wrong.max() <= tol or kkt_report(qp, x).is_optimal():
                 # the second test settles degenerate vertices: more bounds are active than the
                 # working set can hold, and sign-feasible multipliers exist over all of them
-                return SolverResult(x, "optimal", iteration, time.perf_counter() - start, tuple(trace))
+                return SolverResult(
+                    x, "optimal", iteration, time.perf_counter() - start, tuple(trace)
+                )
             j = int(np.flatnonzero(wrong > tol)[0]) if zero_step else int(np.argmax(wrong))
             work[j] = 0
             continue
@@ -138,6 +150,9 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
         blocking = int(np.argmin(ratio))
         step = min(1.0, max(0.0, float(ratio[blocking])))
         x = x + step * p
+        # ties in the ratio test land on their bound up to rounding: put them exactly there
+        x = np.where(moving & (x < lb) & (lb - x <= snap), lb, x)
+        x = np.where(moving & (x > ub) & (x - ub <= snap), ub, x)
         zero_step = step == 0.0
         if step < 1.0:
             side = -1 if p[blocking] < 0 else 1

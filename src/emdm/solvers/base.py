@@ -92,7 +92,9 @@ def kkt_report(qp: QP, x: Vector, *, active_tol: float = 1e-9) -> KKTReport:
     equality = float(np.abs(qp.A @ x - qp.b).max()) / max(1.0, float(np.abs(qp.b).max()))
     gap_lo = (x - qp.lb)[at_lo]
     gap_hi = (qp.ub - x)[at_hi]
-    comp = float(max(np.abs(mu_lo * gap_lo).max(initial=0.0), np.abs(mu_hi * gap_hi).max(initial=0.0)))
+    comp = float(
+        max(np.abs(mu_lo * gap_lo).max(initial=0.0), np.abs(mu_hi * gap_hi).max(initial=0.0))
+    )
     return KKTReport(stationarity, equality, comp / scale_g, qp.bound_excess(x))
 
 
@@ -139,14 +141,18 @@ def get_solver(name: str) -> SolverSpec:
         for other in _REGISTRY.values():
             if other.extra and not other.is_available():
                 extras.setdefault(other.extra, []).append(other.name)
-        how = "".join(f"; {', '.join(names)} with pip install 'emdm[{extra}]'"
-                      for extra, names in extras.items())
+        how = "".join(
+            f"; {', '.join(names)} with pip install 'emdm[{extra}]'"
+            for extra, names in extras.items()
+        )
         what = "not installed" if spec is not None else "unknown solver"
         raise SolverNotFound(f"{what} {name!r} (installed: {', '.join(available_solvers())}{how})")
     return spec
 
 
-def timed(function: Callable[[], tuple[Vector | None, str, int]]) -> tuple[Vector | None, str, int, float]:
+def timed(
+    function: Callable[[], tuple[Vector | None, str, int]],
+) -> tuple[Vector | None, str, int, float]:
     """Run ``function`` and add its wall time (s, ``time.perf_counter``)."""
     start = time.perf_counter()
     x, status, iterations = function()
@@ -190,17 +196,35 @@ def solve_chain(
             continue
         report = kkt_report(qp, result.x)
         if not report.is_optimal(tol):
-            attempts.append((name, f"not optimal ({result.status}, KKT {report.residual:.1e}, "
-                                   f"bound excess {report.bound_excess:.1e})"))
+            attempts.append(
+                (
+                    name,
+                    f"not optimal ({result.status}, KKT {report.residual:.1e}, "
+                    f"bound excess {report.bound_excess:.1e})",
+                )
+            )
             continue
         attempts.append((name, "optimal"))
-        return ChainResult(result.x, name, result.status, result.iterations, total, report,
-                           position > 0, tuple(attempts))
+        return ChainResult(
+            result.x,
+            name,
+            result.status,
+            result.iterations,
+            total,
+            report,
+            position > 0,
+            tuple(attempts),
+        )
     detail = "; ".join(f"{n}: {s}" for n, s in attempts)
     raise NoSolution(f"{context}no solver found the optimum ({detail})", problem=qp)
 
 
 def describe(spec: SolverSpec) -> dict[str, Any]:
     """A JSON-friendly description of a solver."""
-    return {"name": spec.name, "family": spec.family, "description": spec.description,
-            "available": spec.is_available(), "extra": spec.extra}
+    return {
+        "name": spec.name,
+        "family": spec.family,
+        "description": spec.description,
+        "available": spec.is_available(),
+        "extra": spec.extra,
+    }

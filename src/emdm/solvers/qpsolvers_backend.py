@@ -8,6 +8,7 @@ Each backend that qpsolvers finds installed is registered under its own name (``
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
@@ -49,18 +50,21 @@ def solve_qpsolvers(qp: QP, backend: str) -> SolverResult:
     elapsed = time.perf_counter() - start
     if not solution.found or solution.x is None:
         return SolverResult(None, "infeasible or failed", 0, elapsed)
-    iterations = int(solution.extras.get("iter", solution.extras.get("iterations", 0)) or 0)
+    raw = solution.extras.get("iter", solution.extras.get("iterations", 0))
+    iterations = int(np.atleast_1d(raw)[0]) if raw is not None else 0
     return SolverResult(np.asarray(solution.x, dtype=float), "optimal", iterations, elapsed)
 
 
 def register_backends() -> None:
     """Register every qpsolvers backend this module knows (available or not)."""
     for name, description in BACKENDS.items():
-        register(SolverSpec(
-            name=name,
-            family="exact",
-            solve=lambda qp, _b=name: solve_qpsolvers(qp, _b),
-            description=description,
-            extra=None if name in ("daqp", "quadprog") else "solvers",
-            is_available=lambda _b=name: _installed(_b),
-        ))
+        register(
+            SolverSpec(
+                name=name,
+                family="exact",
+                solve=partial(solve_qpsolvers, backend=name),
+                description=description,
+                extra=None if name in ("daqp", "quadprog") else "solvers",
+                is_available=partial(_installed, name),
+            )
+        )

@@ -1,0 +1,309 @@
+"""The command line end to end: outputs as specified, bad input rejected, results never lost."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import assert_step_optimal, reference_bounds
+
+import emdm
+from emdm.cli import main
+
+CONTROLLERS = ["UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"]
+
+
+def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    with path.open() as handle:
+        reader = csv.DictReader(handle)
+        return list(reader.fieldnames or []), list(reader)
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
+    }
+
+
+@pytest.fixture(scope="module")
+def task_outputs(tmp_path_factory):
+    out = {}
+    for task in ("task1", "task2"):
+        folder = tmp_path_factory.mktemp(task)
+        assert main(["run", task, "--out", str(folder)]) == 0
+        out[task] = folder
+    return out
+
+
+@pytest.mark.parametrize("task", ["task1", "task2"])
+def test_run_writes_metrics_and_trajectories(task_outputs, task):
+    folder = task_outputs[task]
+    data = json.loads((folder / "metrics.json").read_text())
+    assert data["scenario"]["name"] == task
+    assert set(data["controllers"]) == set(CONTROLLERS)
+    required = {
+        "reached",
+        "steps",
+        "time_to_goal",
+        "final_error",
+        "min_manipulability",
+        "mean_manipulability",
+        "final_manipulability",
+        "total_effort",
+        "max_abs_qd",
+        "min_joint_margin",
+        "scaled_steps",
+        "fallback_steps",
+    }
+    sc = emdm.load_scenario(task)
+    n = sc.n
+    header_expected = [
+        "t",
+        *[f"q{i}" for i in range(1, n + 1)],
+        *[f"qd{i}" for i in range(1, n + 1)],
+        "x",
+        "y",
+        "ex",
+        "ey",
+        "vx",
+        "vy",
+        "m",
+        "effort",
+        "manip_rate",
+        "alpha",
+        "delta_x",
+        "delta_y",
+        "status",
+        "solver",
+        "iterations",
+        "solve_time",
+    ]
+    for name, mt in data["controllers"].items():
+        assert required <= set(mt)
+        header, rows = read_csv(folder / "trajectories" / f"{name}.csv")
+        assert header == header_expected
+        assert len(rows) == mt["steps"] + 1
+        assert all(rows[-1][f"qd{i}"] == "" for i in range(1, n + 1)) and rows[-1]["status"] == ""
+        # full precision: the CSV reproduces the simulation bit for bit
+        run = emdm.simulate(sc, name)
+        q = np.array([[float(r[f"q{i}"]) for i in range(1, n + 1)] for r in rows])
+        assert np.array_equal(q, run.q)
+        assert mt["reached"] == run.reached and mt["steps"] == run.steps
+        if mt["reached"]:
+            assert mt["time_to_goal"] == pytest.approx(float(rows[-1]["t"]))
+            assert mt["final_error"] < sc.motion.tolerance
+        else:
+            assert mt["time_to_goal"] is None
+        assert mt["total_effort"] == pytest.approx(
+            sum(float(r["effort"]) for r in rows[:-1]) * sc.motion.dt, rel=1e-12
+        )
+        assert mt["min_manipulability"] == pytest.approx(
+            min(float(r["m"]) for r in rows), rel=1e-12
+        )
+        assert mt["scaled_steps"] == sum(float(r["alpha"]) < 1 for r in rows[:-1])
+
+
+def test_summary_table_is_printed(capsys, tmp_path):
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "C-EMDM" in out and "reached" in out and "UC-IVKC" not in out
+
+
+def test_set_overrides_reach_the_run(tmp_path):
+    assert (
+        main(
+            [
+                "run",
+                "task1",
+                "--controller",
+                "UC-EMDM",
+                "--set",
+                "weights.manipulability=0",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
+    data = json.loads((tmp_path / "metrics.json").read_text())
+    assert data["scenario"]["weights"]["manipulability"] == 0.0
+
+
+def test_solver_choice_and_fallback_are_recorded(tmp_path):
+    assert (
+        main(
+            [
+                "run",
+                "task2",
+                "--controller",
+                "C-EMDM",
+                "--solver",
+                "daqp",
+                "--fallback",
+                "quadprog",
+                "--out",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
+    _, rows = read_csv(tmp_path / "trajectories" / "C-EMDM.csv")
+    assert {r["solver"] for r in rows[:-1]} == {"daqp"}
+    data = json.loads((tmp_path / "metrics.json").read_text())
+    assert data["solver"] == "daqp" and data["fallback"] == ["quadprog"]
+
+
+BAD_ARGS = [
+    (["run", "task9"], "no such scenario file"),
+    (["run", "task1", "--controller", "X"], "unknown controller"),
+    (["run", "task1", "--solver", "nope"], "unknown solver"),
+    (["run", "task1", "--set", "weights.effort=-1"], "weights.effort: must be > 0"),
+    (["run", "task1", "--set", "arm.lengths=[0.2, 0.6]"], "arm.q_min"),
+    (["run", "task1", "--set", "bogus"], "expected section.key=value"),
+    (["run", "task1", "--set", "motion.q0=[0, 3, 0]"], "motion.q0"),
+    (["run", "task1", "--set", "damper.stop=1.0"], "damper.stop: must be < damper.influence"),
+    (["run", "task1", "--set", "motion.goal=[nan, 0]"], "motion.goal[0]: must be finite"),
+]
+
+
+@pytest.mark.parametrize(("args", "message"), BAD_ARGS, ids=[" ".join(a) for a, _ in BAD_ARGS])
+def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, message):
+    out = tmp_path / "out"
+    assert main([*args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_bad_file_names_the_file(tmp_path, capsys):
+    bad = tmp_path / "arm.toml"
+    bad.write_text(
+        emdm.load_scenario("task1").to_toml().replace("lengths = [0.2,", "lengths = [-0.2,")
+    )
+    assert main(["run", str(bad), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}: arm.lengths: must be > 0" in err
+
+
+def test_failed_run_keeps_previous_results(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", "task2", "--out", str(out)]) == 0
+    before = snapshot(out)
+    # a run that stops on its first step (on_infeasible = error on task 1's infeasible start)
+    code = main(["run", "task1", "--set", "controller.on_infeasible=error", "--out", str(out)])
+    assert code == 1
+    assert "run stopped: step 0" in capsys.readouterr().err
+    assert snapshot(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no staging folder left behind
+
+
+def test_interrupted_run_keeps_previous_results(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "out"
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    before = snapshot(out)
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("emdm.cli.write_json", interrupted)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 130
+    assert snapshot(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_console_script_entry_point(tmp_path):
+    exe = Path(sys.executable).with_name("emdm")
+    command = [str(exe)] if exe.exists() else [sys.executable, "-m", "emdm.cli"]
+    ok = subprocess.run(
+        [*command, "run", "task2", "--controller", "UC-IVKC", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert ok.returncode == 0, ok.stderr
+    bad = subprocess.run(
+        [*command, "run", "task2", "--set", "arm.qd_max=-1"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1
+    helped = subprocess.run([*command, "--help"], capture_output=True, text=True, check=False)
+    assert helped.returncode == 0 and "run" in helped.stdout
+
+
+def test_scenario_and_list_commands(capsys):
+    assert main(["scenario", "task2", "--set", "weights.effort=0.3"]) == 0
+    text = capsys.readouterr().out
+    assert "effort = 0.3" in text and "[damper]" in text
+    assert main(["list"]) == 0
+    assert "active-set" in capsys.readouterr().out
+
+
+# --------------------------------------------------------------------- randomised scenarios
+def random_scenario(rng, index: int) -> emdm.Scenario:
+    n = 2 + index % 6
+    lengths = rng.uniform(0.15, 0.8, n)
+    q_lim = rng.uniform(1.5, 3.0, n)
+    qd_lim = rng.uniform(0.5, 2.0, n)
+    stop, influence = 0.08, 0.6
+    q0 = rng.uniform(-q_lim + influence, q_lim - influence)
+    target = rng.uniform(-q_lim + influence, q_lim - influence)
+    goal = emdm.PlanarArm(lengths).forward(target)
+    base = emdm.load_scenario("task1").to_dict()
+    base.update(name=f"random{index}")
+    base["arm"] = {
+        "lengths": lengths.tolist(),
+        "q_min": (-q_lim).tolist(),
+        "q_max": q_lim.tolist(),
+        "qd_min": (-qd_lim).tolist(),
+        "qd_max": qd_lim.tolist(),
+    }
+    base["motion"].update(
+        q0=q0.tolist(), goal=goal.tolist(), max_time=6.0, kp=float(rng.uniform(0.5, 2.0))
+    )
+    base["weights"] = {
+        "effort": float(10 ** rng.uniform(-2, 0)),
+        "manipulability": float(10 ** rng.uniform(-1, 1)),
+        "slack": float(rng.uniform(1, 20)),
+    }
+    base["damper"] = {"influence": influence, "stop": stop, "gain": float(rng.uniform(0.5, 2.0))}
+    return emdm.scenario_from_dict(base, source=f"random{index}")
+
+
+def test_random_scenarios_through_the_command_line(tmp_path):
+    rng = np.random.default_rng(2024)
+    checked = 0
+    for index in range(12):
+        sc = random_scenario(rng, index)
+        path = tmp_path / f"random{index}.toml"
+        path.write_text(sc.to_toml())
+        out = tmp_path / f"out{index}"
+        assert main(["run", str(path), "--out", str(out)]) == 0
+        data = json.loads((out / "metrics.json").read_text())
+        for name in CONTROLLERS:
+            mt = data["controllers"][name]
+            assert mt["max_kkt_residual"] <= 1e-9 and mt["max_bound_excess"] <= 1e-12
+            _, rows = read_csv(out / "trajectories" / f"{name}.csv")
+            n = sc.n
+            for row in rows[:-1]:
+                q = np.array([float(row[f"q{i}"]) for i in range(1, n + 1)])
+                qd = np.array([float(row[f"qd{i}"]) for i in range(1, n + 1)])
+                delta = np.array([float(row["delta_x"]), float(row["delta_y"])])
+                assert_step_optimal(sc, name, q, qd, delta, float(row["alpha"]))
+                if name.startswith("C-"):
+                    lo, hi = reference_bounds(sc, q)
+                    assert np.all(qd >= lo - 1e-12) and np.all(qd <= hi + 1e-12)
+                    margin = np.minimum(q - sc.arm.q_min, sc.arm.q_max - q)
+                    assert margin.min() > sc.damper.stop.min()
+                checked += 1
+            assert all(math.isfinite(float(r["m"])) for r in rows)
+        shutil.rmtree(out)
+    assert checked > 1000

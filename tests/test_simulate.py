@@ -1,0 +1,127 @@
+"""Closed-loop runs: every recorded command is the optimum of its step's program; limits hold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import assert_step_optimal, reference_bounds
+
+import emdm
+
+CONTROLLERS = ["UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"]
+
+
+@pytest.fixture(scope="module")
+def preset_runs():
+    return {
+        (task, c): emdm.simulate(emdm.load_scenario(task), c)
+        for task in ("task1", "task2")
+        for c in CONTROLLERS
+    }
+
+
+@pytest.mark.parametrize("task", ["task1", "task2"])
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_every_step_is_the_exact_optimum(preset_runs, task, controller):
+    run = preset_runs[(task, controller)]
+    sc = run.scenario
+    assert run.steps > 0
+    for k in range(run.steps):
+        assert_step_optimal(sc, controller, run.q[k], run.qd[k], run.delta[k], run.alpha[k])
+    assert run.kkt.max() <= 1e-9
+    assert run.bound_excess.max() <= 1e-12
+
+
+@pytest.mark.parametrize("task", ["task1", "task2"])
+@pytest.mark.parametrize("controller", ["C-IVKC", "C-EMDM"])
+def test_constrained_runs_respect_velocity_limits_and_stop_zones(preset_runs, task, controller):
+    run = preset_runs[(task, controller)]
+    sc = run.scenario
+    for k in range(run.steps):
+        lo, hi = reference_bounds(sc, run.q[k])
+        assert np.all(run.qd[k] >= lo - 1e-12) and np.all(run.qd[k] <= hi + 1e-12)
+    assert np.all(np.abs(run.qd) <= sc.arm.qd_max + 1e-12)
+    margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
+    assert margin.min() >= sc.damper.stop.min()
+    # the damper invariant: inside the influence zone, d - s shrinks by at most the factor
+    # 1 - dt / (K (i - s)) per step, so a joint never reaches its stop zone
+    factor = 1 - sc.motion.dt / (sc.damper.gain * (sc.damper.influence - sc.damper.stop))
+    for side in (sc.arm.q_max - run.q, run.q - sc.arm.q_min):
+        gap = side - sc.damper.stop
+        assert np.all(gap > 0)
+        in_zone = side[:-1] < sc.damper.influence
+        assert np.all((gap[1:] >= factor * gap[:-1] - 1e-12)[in_zone])
+
+
+def test_task1_start_is_scaled_and_recorded(preset_runs):
+    run = preset_runs[("task1", "C-EMDM")]
+    assert 0.17 < run.alpha[0] < 0.19
+    assert run.policy[0] == "scale"
+    scaled = run.alpha < 1
+    # the commanded end-effector velocity is alpha v, along v
+    for k in np.flatnonzero(scaled)[:10]:
+        J = run.scenario.planar_arm.jacobian(run.q[k])
+        np.testing.assert_allclose(J @ run.qd[k], run.alpha[k] * run.v[k], atol=1e-12)
+
+
+def test_outcomes_of_the_presets(preset_runs):
+    for (task, controller), run in preset_runs.items():
+        if (task, controller) == ("task2", "C-IVKC"):
+            # the straight path to the goal needs q1 beyond its damper: IVKC stalls there
+            assert not run.reached and run.steps == run.scenario.max_steps
+            assert run.alpha[-1] < 1e-6
+        else:
+            assert run.reached, (task, controller)
+            assert run.error_norm[-1] < run.scenario.motion.tolerance
+            assert np.all(run.error_norm[:-1] >= run.scenario.motion.tolerance)
+
+
+def test_emdm_raises_mean_manipulability_over_ivkc_on_task1(preset_runs):
+    for prefix in ("UC-", "C-"):
+        emdm_run, ivkc = (
+            preset_runs[("task1", prefix + "EMDM")],
+            preset_runs[("task1", prefix + "IVKC")],
+        )
+        assert emdm_run.m.mean() > ivkc.m.mean()
+
+
+def test_runs_are_deterministic(preset_runs):
+    again = emdm.simulate(emdm.load_scenario("task1"), "C-EMDM")
+    ref = preset_runs[("task1", "C-EMDM")]
+    assert np.array_equal(again.q, ref.q) and np.array_equal(again.qd, ref.qd)
+
+
+def test_record_is_consistent(preset_runs):
+    run = preset_runs[("task1", "C-EMDM")]
+    sc = run.scenario
+    dt = sc.motion.dt
+    np.testing.assert_array_equal(run.t, np.arange(run.steps + 1) * dt)
+    np.testing.assert_allclose(run.q[1:], run.q[:-1] + run.qd * dt, atol=1e-15)
+    for k in range(run.steps + 1):
+        np.testing.assert_allclose(run.p[k], sc.planar_arm.forward(run.q[k]), atol=1e-15)
+    np.testing.assert_allclose(run.effort, 0.5 * np.sum(run.qd**2, axis=1))
+    assert len(run.solver) == len(run.status) == run.steps
+
+
+def test_run_that_times_out_is_a_result():
+    sc = emdm.load_scenario("task1", {"motion.max_time": 1.0})
+    run = emdm.simulate(sc, "C-EMDM")
+    assert not run.reached and run.steps == 20 and run.time_to_goal is None
+
+
+def test_goal_at_the_start_needs_no_step():
+    sc = emdm.load_scenario("task2")
+    start = sc.planar_arm.forward(sc.motion.q0)
+    run = emdm.simulate(sc.with_overrides({"motion.goal": list(start)}), "C-EMDM")
+    assert run.reached and run.steps == 0 and run.time_to_goal == 0.0
+
+
+@pytest.mark.parametrize("q0", [[0.0, 0.0, 0.0], [0.5, 0.0]])
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_singular_starts_run_cleanly(q0, controller):
+    base = "task1" if len(q0) == 3 else "task2"
+    sc = emdm.load_scenario(base, {"motion.q0": q0})
+    run = emdm.simulate(sc, controller)
+    assert np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.qd))
+    if controller.endswith("EMDM"):
+        assert run.m[1] > 0 or run.reached  # EMDM leaves the singularity at once

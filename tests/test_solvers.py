@@ -1,0 +1,135 @@
+"""Solvers: exact optima on random programs, the KKT certificate, and the fallback chain."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import reference_solve
+
+from emdm import QP, NoSolution, SolverNotFound, get_solver, kkt_report, solve_chain, task_scale
+from emdm.solvers import SolverResult, SolverSpec, register, solve_active_set, solve_kkt
+from emdm.solvers.base import _REGISTRY
+
+
+def random_qp(rng, trial):
+    n = int(rng.integers(2, 9))
+    A = rng.normal(size=(2, n))
+    if trial % 7 == 0:
+        A[:, 1] = 0.3 * A[:, 0]
+    P = np.diag(rng.uniform(0.05, 10, n))
+    if trial % 4 == 0:
+        M = rng.normal(size=(n, n))
+        P = M @ M.T + 0.1 * np.eye(n)
+    c = rng.normal(size=n) * rng.uniform(0.1, 10)
+    lb, ub = -rng.uniform(0, 2, n), rng.uniform(0, 2, n)
+    if trial % 5 == 0:
+        lb[-2:], ub[-2:] = -np.inf, np.inf
+    b = rng.normal(size=2) * rng.uniform(0.1, 4)
+    alpha = task_scale(A, b, lb, ub)
+    if alpha is None:
+        return None
+    return QP(P, c, A, alpha * b, lb, ub, n_joints=n)
+
+
+def test_active_set_is_exact_on_random_programs(rng):
+    solved = 0
+    for trial in range(1500):
+        qp = random_qp(rng, trial)
+        if qp is None:
+            continue
+        result = solve_active_set(qp)
+        assert result.status == "optimal", trial
+        ref = reference_solve(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
+        np.testing.assert_allclose(result.x, ref, atol=1e-8 * max(1, np.abs(ref).max()))
+        report = kkt_report(qp, result.x)
+        assert report.is_optimal(1e-9), (trial, report)
+        assert qp.bound_excess(result.x) <= 1e-12
+        solved += 1
+    assert solved > 1000
+
+
+def test_kkt_solver_is_the_pseudoinverse(rng):
+    for _ in range(20):
+        J = rng.normal(size=(2, 3))
+        v = rng.normal(size=2)
+        inf = np.full(3, np.inf)
+        qp = QP(np.eye(3), np.zeros(3), J, v, -inf, inf, 3)
+        np.testing.assert_allclose(solve_kkt(qp).x, np.linalg.pinv(J) @ v, atol=1e-13)
+        np.testing.assert_allclose(solve_active_set(qp).x, np.linalg.pinv(J) @ v, atol=1e-13)
+
+
+def test_kkt_report_rejects_non_optimal_points(rng):
+    qp = None
+    while qp is None:
+        qp = random_qp(rng, 1)
+    x = solve_active_set(qp).x
+    assert kkt_report(qp, x).is_optimal()
+    # a feasible but non-optimal point: move along the null space of A, inside the box
+    null = np.linalg.svd(qp.A)[2][-1]
+    worse = x + 1e-4 * null
+    if qp.bound_excess(worse) == 0:
+        assert not kkt_report(qp, worse).is_optimal()
+    assert not kkt_report(qp, x + 1e-3).is_optimal()
+    assert not kkt_report(qp, np.full_like(x, np.nan)).is_optimal()
+
+
+def test_infeasible_program_is_reported_not_answered():
+    qp = QP(np.eye(2), np.zeros(2), np.eye(2), np.array([5.0, 0.0]), -np.ones(2), np.ones(2), 2)
+    assert solve_active_set(qp).status == "infeasible"
+    assert solve_active_set(qp).x is None
+    with pytest.raises(NoSolution, match="no solver found the optimum"):
+        solve_chain(qp, ["active-set", "daqp", "quadprog"])
+
+
+def test_unknown_solver_lists_installed_ones():
+    with pytest.raises(SolverNotFound, match=r"unknown solver 'nope' \(installed: active-set, kkt"):
+        get_solver("nope")
+
+
+# ------------------------------------------------------------------------------ fault injection
+def _faulty(name, behaviour):
+    def solve(qp):
+        if behaviour == "raise":
+            raise RuntimeError("boom")
+        good = solve_active_set(qp)
+        if behaviour == "nan":
+            return SolverResult(np.full(qp.n, np.nan), "optimal", 1, 0.0)
+        if behaviour == "wrong":
+            return SolverResult(good.x + 0.01, "optimal", 1, 0.0)
+        if behaviour == "budget":
+            return SolverResult(good.x + 0.01, "max_iter", 100, 0.0)
+        return SolverResult(None, "infeasible", 1, 0.0)
+
+    register(SolverSpec(name, "exact", solve, "fault injection"))
+    return name
+
+
+@pytest.mark.parametrize("behaviour", ["raise", "nan", "wrong", "budget", "none"])
+def test_faulty_solver_triggers_the_fallback(behaviour, rng):
+    name = _faulty(f"faulty-{behaviour}", behaviour)
+    try:
+        qp = None
+        while qp is None:
+            qp = random_qp(rng, 2)
+        result = solve_chain(qp, [name, "daqp"])
+        assert result.fallback and result.solver == "daqp"
+        assert result.attempts[0][0] == name and result.attempts[0][1] != "optimal"
+        assert result.kkt.is_optimal()
+    finally:
+        del _REGISTRY[name]
+
+
+def test_faulty_solver_in_a_run_is_recorded():
+    import emdm
+
+    name = _faulty("faulty-run", "wrong")
+    try:
+        run = emdm.simulate(
+            emdm.load_scenario("task2"), "C-EMDM", solver=name, fallback=["quadprog"]
+        )
+        assert run.reached
+        assert run.fallback.all()
+        assert set(run.solver) == {"quadprog"}
+        assert all(a.startswith("faulty-run: not optimal") for a in run.attempts)
+    finally:
+        del _REGISTRY[name]
