@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import assert_step_optimal, reference_bounds
+from test_scenario import BAD, write_bad_scenario
 
 import emdm
 from emdm.cli import main
@@ -180,6 +181,17 @@ def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, args, messa
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("key", "value", "message"), BAD, ids=[f"{k}={v}" for k, v, _ in BAD])
+def test_every_bad_scenario_value_exits_2_through_the_cli(tmp_path, capsys, key, value, message):
+    path = tmp_path / "bad.toml"
+    write_bad_scenario(path, key, value)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"emdm: error: {path}: {key}") and message in err
+    assert err.count("\n") == 1 and not out.exists()
 
 
 def test_bad_file_names_the_file(tmp_path, capsys):

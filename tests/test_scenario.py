@@ -122,9 +122,8 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize(("key", "value", "message"), BAD, ids=[f"{k}={v}" for k, v, _ in BAD])
-def test_bad_values_name_file_key_and_problem(tmp_path, key, value, message):
-    path = tmp_path / "bad.toml"
+def write_bad_scenario(path, key, value):
+    """task1 as TOML with ``key`` set to the raw TOML text ``value``."""
     text = load_scenario("task1").to_toml()
     section, name = key.split(".")
     lines = text.splitlines()
@@ -136,6 +135,12 @@ def test_bad_values_name_file_key_and_problem(tmp_path, key, value, message):
     else:
         lines.insert(start + 1, f"{name} = {value}")
     path.write_text("\n".join(lines))
+
+
+@pytest.mark.parametrize(("key", "value", "message"), BAD, ids=[f"{k}={v}" for k, v, _ in BAD])
+def test_bad_values_name_file_key_and_problem(tmp_path, key, value, message):
+    path = tmp_path / "bad.toml"
+    write_bad_scenario(path, key, value)
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     text = str(info.value)
