@@ -13,12 +13,14 @@ install: $(STAMP)
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,lab,solvers]'
 	touch $@
 
 study: $(STAMP)
 	$(BIN)/emdm run task1 --out $(OUT)/task1
 	$(BIN)/emdm run task2 --out $(OUT)/task2
+	$(BIN)/emdm solvers task2 --controller C-EMDM --out $(OUT)/task2-solvers
+	$(BIN)/emdm solvers task1 --controller C-EMDM --solvers active-set,interior-point,admm,daqp,quadprog,slsqp --out $(OUT)/task1-solvers
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests

@@ -17,6 +17,7 @@ from .controllers import CONTROLLERS, get_controller
 from .errors import EmdmError, NoSolution
 from .output import (
     atomic_output,
+    cell,
     diagnostics_header,
     diagnostics_rows,
     trajectory_header,
@@ -155,6 +156,93 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def lab_table(summary: dict[str, dict[str, Any]]) -> str:
+    """The solver comparison as a readable table."""
+    rows = []
+    for name, s in summary.items():
+        ttg = s.get("time_to_goal")
+        rows.append(
+            [
+                name,
+                s["family"],
+                f"{s['median_time'] * 1e3:.3f}",
+                f"{s['p95_time'] * 1e3:.3f}",
+                f"{s['median_iterations']:.0f}",
+                f"{s['median_evaluations']:.0f}",
+                f"{s['max_abs_gap']:.1e}",
+                f"{s['max_violation']:.1e}",
+                str(s["failures"]),
+                "yes" if s.get("reached") else "no",
+                f"{ttg:.2f}" if ttg is not None else "-",
+            ]
+        )
+    header = [
+        "solver",
+        "family",
+        "median[ms]",
+        "p95[ms]",
+        "iters",
+        "evals",
+        "max|gap|",
+        "max viol",
+        "failed",
+        "reached",
+        "t_goal[s]",
+    ]
+    return _table(rows, header)
+
+
+def cmd_solvers(args: argparse.Namespace) -> int:
+    from .lab import DEFAULT_LAB_SOLVERS, lab_header, lab_json, lab_rows, run_lab
+    from .lab_plots import lab_figures
+    from .solvers import available_solvers
+
+    scenario = _scenario(args)
+    controller = get_controller(args.controller)
+    if args.solvers:
+        names = [n.strip() for n in args.solvers.split(",") if n.strip()]
+        for name in names:
+            get_solver(name)
+    else:
+        names = [n for n in DEFAULT_LAB_SOLVERS if n in available_solvers()]
+    out = Path(args.out or f"results/{scenario.name}-solvers")
+    start = time.perf_counter()
+
+    def progress(name: str) -> None:
+        print(f"  {name} done ({time.perf_counter() - start:.1f} s)", file=sys.stderr, flush=True)
+
+    lab = run_lab(
+        scenario,
+        controller,
+        names,
+        sample=None if args.sample <= 0 else args.sample,
+        repeats=args.repeats,
+        budget=args.budget,
+        workers=args.workers,
+        progress=progress,
+    )
+    data = lab_json(lab)
+    data["wall_time"] = time.perf_counter() - start
+    table = lab_table(data["solvers"])
+    with atomic_output(out) as staging:
+        write_json(staging / "solvers.json", data)
+        for name in lab.studies:
+            write_csv(
+                staging / "solvers" / f"{name}.csv",
+                lab_header(lab),
+                ([cell(v) for v in row] for row in lab_rows(lab, name)),
+            )
+        (staging / "solvers.txt").write_text(table + "\n", encoding="utf-8")
+        if not args.no_figures:
+            lab_figures(lab, staging / "figures")
+    print(
+        f"{scenario.name} {controller.name}: {len(names)} solvers, {len(lab.steps)} steps "
+        f"re-solved in {data['wall_time']:.1f} s -> {out}/"
+    )
+    print(table)
+    return 0
+
+
 def cmd_scenario(args: argparse.Namespace) -> int:
     print(_scenario(args).to_toml(), end="")
     return 0
@@ -203,6 +291,68 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario name>)")
     run.set_defaults(func=cmd_run)
+
+    solvers = sub.add_parser(
+        "solvers",
+        help="compare solvers on a controller's per-step programs (the solver lab)",
+        description="Run the controller with each solver in closed loop, and re-solve the programs "
+        "along the exact trajectory with each, against the exact optimum.",
+    )
+    solvers.add_argument(
+        "scenario",
+        nargs="?",
+        default="task2",
+        help="a preset or a scenario TOML file (default task2)",
+    )
+    solvers.add_argument(
+        "--set",
+        action="append",
+        metavar="SECTION.KEY=VALUE",
+        help="override one scenario value (repeatable)",
+    )
+    solvers.add_argument(
+        "--controller",
+        default="C-EMDM",
+        metavar="NAME",
+        help="controller whose programs are solved (default C-EMDM)",
+    )
+    solvers.add_argument(
+        "--solvers",
+        metavar="A,B,...",
+        help="solvers to compare (default: every installed one of the standard set)",
+    )
+    solvers.add_argument(
+        "--sample",
+        type=int,
+        default=100,
+        metavar="N",
+        help="re-solve N evenly spaced steps (0: every step; default 100)",
+    )
+    solvers.add_argument(
+        "--repeats",
+        type=int,
+        default=5,
+        metavar="R",
+        help="timing repeats per step, median taken (default 5)",
+    )
+    solvers.add_argument(
+        "--budget",
+        type=int,
+        metavar="N",
+        help="evaluation budget of the gradient-free methods (default 2000)",
+    )
+    solvers.add_argument(
+        "--workers",
+        type=int,
+        default=2,
+        metavar="W",
+        help="processes to spread the solvers over (default 2)",
+    )
+    solvers.add_argument("--no-figures", action="store_true", help="skip the figures")
+    solvers.add_argument(
+        "--out", metavar="DIR", help="output folder (default results/<scenario>-solvers)"
+    )
+    solvers.set_defaults(func=cmd_solvers)
 
     show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
     _add_scenario_args(show)

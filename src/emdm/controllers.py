@@ -156,3 +156,43 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
         '(controller.on_infeasible = "error"; use "scale" or "slack" to continue)',
         problem=qp,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class StepState:
+    """What the loop knows at a state: kinematics, error ``e`` (m), desired velocity ``v`` (m/s)."""
+
+    kin: Kinematics
+    e: Vector
+    v: Vector
+
+    @property
+    def error_norm(self) -> float:
+        return float(np.hypot(self.e[0], self.e[1]))
+
+
+def state_at(scenario: Scenario, q: Vector) -> StepState:
+    """Brief Algorithm 1, lines 5-8: ``p = f(q)``, ``e = p_goal - p``, ``v = Kp e``, ``J``, ``Jm``."""
+    kin = scenario.planar_arm.kinematics(q)
+    e = scenario.motion.goal - kin.p
+    return StepState(kin, e, scenario.motion.kp * e)
+
+
+def program_at(
+    controller: Controller,
+    scenario: Scenario,
+    q: Vector,
+    state: StepState | None = None,
+    *,
+    weights: Weights | None = None,
+    step: int | None = None,
+) -> Admissible:
+    """The admissible program of ``controller`` at ``q``: built, then the policy applied."""
+    st = state or state_at(scenario, q)
+    nominal = step_program(controller, scenario, q, st.kin, st.v, st.error_norm, weights=weights)
+    return admissible(
+        nominal,
+        scenario.controller.on_infeasible,
+        slack_weight=slack_weight(scenario, st.error_norm, weights),
+        step=step,
+    )

@@ -23,7 +23,7 @@ import numpy as np
 from .simulate import Run
 
 
-def _cell(value: Any) -> str:
+def cell(value: Any) -> str:
     if isinstance(value, float | np.floating):
         return repr(float(value))
     if isinstance(value, np.integer | np.bool_):
@@ -76,7 +76,7 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
             ]
         else:
             cmd, rest = [""] * n, [""] * 9
-        yield [_cell(x) for x in (*state, *cmd, *where, *rest)]
+        yield [cell(x) for x in (*state, *cmd, *where, *rest)]
 
 
 def diagnostics_header(n: int) -> list[str]:
@@ -98,7 +98,7 @@ def diagnostics_rows(run: Run) -> Iterator[list[str]]:
     """One row per command."""
     for k in range(run.steps):
         yield [
-            _cell(x)
+            cell(x)
             for x in (
                 k,
                 run.kkt[k],

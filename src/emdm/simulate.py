@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .arm import Matrix, Vector
-from .controllers import Controller, admissible, get_controller, slack_weight, step_program
+from .controllers import Controller, get_controller, program_at, state_at
 from .errors import NoSolution
 from .scenario import Scenario
 from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, solve_chain
@@ -88,21 +88,22 @@ def simulate(
     *,
     solver: str = DEFAULT_SOLVER,
     fallback: Sequence[str] = DEFAULT_FALLBACK,
+    certify: bool = True,
 ) -> Run:
     """Run ``controller`` on ``scenario`` from ``q0`` until the goal or ``max_time``.
 
     ``solver`` is tried first at every step, then each of ``fallback`` in order; the first answer
-    whose KKT report is optimal is used. Raises :class:`~emdm.errors.NoSolution` when a step has
-    no admissible command (``on_infeasible = "error"``, or no solver succeeds).
+    whose KKT report is optimal is used; with ``certify=False`` the first finite answer is used
+    as it is (to study inexact solvers in closed loop; its KKT residual is recorded).
+    Raises :class:`~emdm.errors.NoSolution` when a step has no admissible command
+    (``on_infeasible = "error"``, or no solver succeeds).
     """
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     chain = [solver, *[f for f in fallback if f != solver]]
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
-    arm = scenario.planar_arm
     n, N = scenario.n, scenario.max_steps
     motion = scenario.motion
-    policy = scenario.controller.on_infeasible
 
     t = np.arange(N + 1, dtype=float) * motion.dt
     q, p, e, v = (
@@ -128,21 +129,18 @@ def simulate(
     reached = False
     k = 0
     while True:
-        kin = arm.kinematics(q[k])
-        p[k], m[k] = kin.p, kin.m
-        e[k] = motion.goal - kin.p
-        v[k] = motion.kp * e[k]
-        error_norm = float(np.hypot(*e[k]))
-        if error_norm < motion.tolerance:
+        state = state_at(scenario, q[k])
+        kin = state.kin
+        p[k], m[k], e[k], v[k] = kin.p, kin.m, state.e, state.v
+        if state.error_norm < motion.tolerance:
             reached = True
             break
         if k >= N:
             break
-        nominal = step_program(ctrl, scenario, q[k], kin, v[k], error_norm)
-        program = admissible(
-            nominal, policy, slack_weight=slack_weight(scenario, error_norm), step=k
+        program = program_at(ctrl, scenario, q[k], state, step=k)
+        result = solve_chain(
+            program.qp, chain, context=f"step {k} (t = {t[k]:g} s): ", certify=certify
         )
-        result = solve_chain(program.qp, chain, context=f"step {k} (t = {t[k]:g} s): ")
         x = result.x
         qd[k] = x[:n]
         if program.qp.n_slack:

@@ -7,6 +7,7 @@ the qpsolvers backends are registered by name. See :mod:`emdm.solvers.base` for 
 from __future__ import annotations
 
 from .active_set import solve_active_set, solve_kkt
+from .admm import solve_admm
 from .base import (
     BOUND_TOL,
     KKT_TOL,
@@ -21,6 +22,8 @@ from .base import (
     registered_solvers,
     solve_chain,
 )
+from .interior_point import solve_interior_point
+from .nlp import gradient_free, solve_slsqp, solve_trust_constr
 from .qpsolvers_backend import register_backends
 
 DEFAULT_SOLVER = "active-set"
@@ -42,7 +45,64 @@ register(
         "one KKT solve of the equality-constrained program (custom; ignores bounds)",
     )
 )
+register(
+    SolverSpec(
+        "interior-point",
+        "exact",
+        solve_interior_point,
+        "primal-dual interior point, Mehrotra predictor-corrector (custom)",
+    )
+)
+register(
+    SolverSpec(
+        "admm",
+        "gradient",
+        solve_admm,
+        "ADMM operator splitting, first order (custom; OSQP's scheme)",
+    )
+)
 register_backends()
+register(
+    SolverSpec(
+        "slsqp", "gradient", solve_slsqp, "scipy SLSQP, exact gradients and constraint Jacobian"
+    )
+)
+register(
+    SolverSpec(
+        "trust-constr",
+        "gradient",
+        solve_trust_constr,
+        "scipy trust-constr, exact gradient and Hessian",
+    )
+)
+
+
+def _cma_installed() -> bool:
+    try:
+        import cma  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+for _method, _text in (
+    ("nelder-mead", "scipy Nelder-Mead simplex on the reduced program, l1 penalty"),
+    ("powell", "scipy Powell on the reduced program, l1 penalty"),
+    ("cobyqa", "scipy COBYQA (quadratic models) on the reduced program, native constraints"),
+    ("cobyla", "scipy COBYLA (linear models) on the reduced program, native constraints"),
+    ("differential-evolution", "scipy differential evolution, native constraints, seeded"),
+):
+    register(SolverSpec(_method, "gradient-free", gradient_free(_method), _text))
+register(
+    SolverSpec(
+        "cma-es",
+        "gradient-free",
+        gradient_free("cma-es"),
+        "CMA-ES (the cma package), bounds and l1 penalty, seeded",
+        extra="lab",
+        is_available=_cma_installed,
+    )
+)
 
 __all__ = [
     "BOUND_TOL",

@@ -6,7 +6,7 @@
     [ A    0  ] [ -lam ] = [  b ]
 
 which for ``min 1/2 ||qd||^2 s.t. J qd = v`` gives ``qd = J^+ v`` (brief eq. 4, 5). It ignores bounds
-and reports ``"unsupported"`` when its answer leaves them.
+and returns no point (status ``"unsupported"``) when its answer leaves them.
 
 ``active-set``: a primal active-set method (Nocedal & Wright, Algorithm 16.3) specialised to
 equalities plus simple bounds. It starts from an exact feasible point (:mod:`emdm.feasibility`), keeps
@@ -30,7 +30,7 @@ from ..problem import QP
 from .base import SolverResult, kkt_report
 
 
-def _independent_rows(A: Matrix, b: Vector) -> tuple[Matrix, Vector]:
+def independent_rows(A: Matrix, b: Vector) -> tuple[Matrix, Vector]:
     """Drop linearly dependent equality rows (a singular Jacobian); ``A x = b`` must be consistent."""
     U, s, _ = np.linalg.svd(A, full_matrices=False)
     rank = int(np.sum(s > RANK_TOL * max(s[0], 1.0))) if s.size else 0
@@ -63,21 +63,26 @@ def _eqp(P: Matrix, A: Matrix, g: Vector) -> tuple[Vector, Vector]:
     return p, lam
 
 
-def solve_kkt(qp: QP) -> SolverResult:
+def solve_kkt(qp: QP, *, history: bool = False) -> SolverResult:
     """The equality-constrained optimum in one KKT solve (bounds are not enforced, only checked)."""
     start = time.perf_counter()
     try:
-        A, b = _independent_rows(qp.A, qp.b)
+        A, b = independent_rows(qp.A, qp.b)
         n, m = qp.n, A.shape[0]
         K = np.zeros((n + m, n + m))
         K[:n, :n], K[:n, n:], K[n:, :n] = qp.P, -A.T, A
         x = np.linalg.solve(K, np.concatenate((-qp.c, b)))[:n]
     except np.linalg.LinAlgError as exc:
         return SolverResult(None, f"error: {exc}", 1, time.perf_counter() - start)
-    status = "optimal" if qp.bound_excess(x) == 0.0 else "unsupported"
+    elapsed = time.perf_counter() - start
     if np.abs(qp.A @ x - qp.b).max() > 1e-9 * max(1.0, float(np.abs(qp.b).max())):
-        status = "infeasible"
-    return SolverResult(x, status, 1, time.perf_counter() - start)
+        return SolverResult(None, "infeasible", 1, elapsed)
+    excess = qp.bound_excess(x)
+    if excess > 0.0:  # not an answer to the bounded program: say so, return no point
+        return SolverResult(
+            None, f"unsupported: the equality optimum leaves the bounds by {excess:.2g}", 1, elapsed
+        )
+    return SolverResult(x, "optimal", 1, elapsed)
 
 
 def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = False) -> SolverResult:
@@ -88,7 +93,7 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
     x = x0.copy()
     P, c, lb, ub = qp.P, qp.c, qp.lb, qp.ub
-    A, _ = _independent_rows(qp.A, qp.b)
+    A, _ = independent_rows(qp.A, qp.b)
     n = qp.n
     limit = max_iter if max_iter is not None else 10 * (n + A.shape[0]) + 20
 

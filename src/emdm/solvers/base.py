@@ -46,6 +46,7 @@ class SolverResult:
     iterations: int
     time: float
     history: tuple[dict[str, float], ...] = ()
+    evaluations: int = 0
 
     @property
     def found(self) -> bool:
@@ -150,6 +151,17 @@ def get_solver(name: str) -> SolverSpec:
     return spec
 
 
+def infeasible(qp: QP) -> bool:
+    """True when no point satisfies ``A x = b`` within the bounds (exact test, emdm.feasibility).
+
+    The iterative and general-purpose solvers call this first (their phase 1), so an infeasible
+    program is reported infeasible, never answered with a wrong point.
+    """
+    from ..feasibility import feasible_point
+
+    return feasible_point(qp.A, qp.b, qp.lb, qp.ub) is None
+
+
 def timed(
     function: Callable[[], tuple[Vector | None, str, int]],
 ) -> tuple[Vector | None, str, int, float]:
@@ -175,11 +187,13 @@ class ChainResult:
 
 
 def solve_chain(
-    qp: QP, chain: Sequence[str], *, tol: float = KKT_TOL, context: str = ""
+    qp: QP, chain: Sequence[str], *, tol: float = KKT_TOL, context: str = "", certify: bool = True
 ) -> ChainResult:
     """Try each solver of ``chain`` in turn; accept the first answer whose KKT report is optimal.
 
-    Raises :class:`~emdm.errors.NoSolution` when none is, naming every attempt and its outcome.
+    With ``certify=False`` the first finite answer is accepted whatever its KKT report (used to
+    study inexact solvers in closed loop; the report is still recorded). Raises
+    :class:`~emdm.errors.NoSolution` when no answer is accepted, naming every attempt.
     """
     attempts: list[tuple[str, str]] = []
     total = 0.0
@@ -195,7 +209,7 @@ def solve_chain(
             attempts.append((name, result.status if result.x is None else "non-finite answer"))
             continue
         report = kkt_report(qp, result.x)
-        if not report.is_optimal(tol):
+        if certify and not report.is_optimal(tol):
             attempts.append(
                 (
                     name,
@@ -204,7 +218,9 @@ def solve_chain(
                 )
             )
             continue
-        attempts.append((name, "optimal"))
+        attempts.append(
+            (name, "optimal" if report.is_optimal(tol) else f"accepted ({result.status})")
+        )
         return ChainResult(
             result.x,
             name,

@@ -1,0 +1,332 @@
+"""The solver lab: every solver on the real per-step programs, measured against the exact optimum.
+
+Two experiments per solver (brief Task 1 and 2; DESIGN.md section 3, ``emdm solvers``):
+
+1. *Closed loop*: the controller runs with that solver alone (its answers used as they are,
+   certified or not, with the exact ``active-set`` only where it returns nothing). Does it still
+   reach the goal, and when?
+2. *Re-solve*: at the states of the exact trajectory, each step's program is solved again and the
+   answer compared with the exact optimum ``x*`` (the certified command of the reference run):
+   ``gap = f(x) - f(x*)`` and ``violation`` = the largest equality residual or bound excess. Times
+   are medians over repeats after one warm-up solve, per step.
+
+Convergence histories (objective, residuals per iteration or per evaluation) are recorded at three
+representative steps: the first, the first scaled one (``alpha < 1``) when there is one, the last.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .arm import Vector
+from .controllers import Controller, get_controller, program_at
+from .errors import NoSolution
+from .problem import QP
+from .scenario import Scenario
+from .simulate import Run, simulate
+from .solvers import SolverResult, SolverSpec, available_solvers, get_solver
+
+DEFAULT_LAB_SOLVERS = (
+    "active-set",
+    "interior-point",
+    "admm",
+    "daqp",
+    "quadprog",
+    "slsqp",
+    "trust-constr",
+    "nelder-mead",
+    "powell",
+    "cobyqa",
+    "cobyla",
+    "differential-evolution",
+    "cma-es",
+)
+"""The default comparison: custom, exact off-the-shelf, gradient-based and gradient-free."""
+
+
+@dataclass(frozen=True, eq=False)
+class StepSolve:
+    """One solver's answer to one step's program."""
+
+    step: int
+    x: Vector | None
+    objective: float
+    gap: float
+    violation: float
+    iterations: int
+    evaluations: int
+    time: float
+    status: str
+
+
+@dataclass(eq=False)
+class SolverStudy:
+    """Everything measured for one solver."""
+
+    spec: SolverSpec
+    solves: list[StepSolve] = field(default_factory=list)
+    histories: dict[str, tuple[dict[str, float], ...]] = field(default_factory=dict)
+    closed_loop: Run | None = None
+    closed_loop_error: str | None = None
+
+    def summary(self) -> dict[str, Any]:
+        """The solver's row of ``solvers.json``."""
+        times = np.array([s.time for s in self.solves])
+        found = [s for s in self.solves if s.x is not None]
+        gaps = np.array([s.gap for s in found]) if found else np.array([math.nan])
+        out: dict[str, Any] = {
+            "family": self.spec.family,
+            "description": self.spec.description,
+            "resolved_steps": len(self.solves),
+            "failures": len(self.solves) - len(found),
+            "median_time": float(np.median(times)),
+            "p95_time": float(np.percentile(times, 95)),
+            "median_iterations": float(np.median([s.iterations for s in self.solves])),
+            "median_evaluations": float(np.median([s.evaluations for s in self.solves])),
+            "max_gap": float(gaps.max()),
+            "max_abs_gap": float(np.abs(gaps).max()),
+            "max_violation": float(max((s.violation for s in found), default=math.nan)),
+            "optimal_claims": sum(s.status == "optimal" for s in self.solves),
+        }
+        run = self.closed_loop
+        if run is not None:
+            out.update(
+                reached=run.reached,
+                time_to_goal=run.time_to_goal,
+                closed_loop_steps=run.steps,
+                closed_loop_final_error=float(run.error_norm[-1]),
+                closed_loop_fallback_steps=int(run.fallback.sum()),
+                closed_loop_max_kkt=float(run.kkt.max()) if run.steps else 0.0,
+                closed_loop_max_bound_excess=float(run.bound_excess.max()) if run.steps else 0.0,
+                closed_loop_mean_manipulability=float(run.m.mean()),
+            )
+        else:
+            out.update(reached=False, time_to_goal=None, closed_loop_error=self.closed_loop_error)
+        return out
+
+
+@dataclass(eq=False)
+class LabResult:
+    """The reference run, the re-solved steps and every solver's study."""
+
+    scenario: Scenario
+    controller: Controller
+    reference: Run
+    steps: list[int]
+    representative: dict[str, int]
+    studies: dict[str, SolverStudy]
+    optimum: dict[int, tuple[Vector, float]]
+
+
+def sample_steps(run: Run, sample: int | None) -> list[int]:
+    """All steps, or ``sample`` evenly spaced ones that always include the representative steps."""
+    steps = list(range(run.steps))
+    if sample is None or sample >= len(steps):
+        return steps
+    chosen = {round(i) for i in np.linspace(0, run.steps - 1, sample)}
+    chosen |= set(representative_steps(run).values())
+    return sorted(chosen)
+
+
+def representative_steps(run: Run) -> dict[str, int]:
+    """The first step, the first scaled step (if any) and the last step of a run."""
+    reps = {"first": 0}
+    scaled = np.flatnonzero(run.alpha < 1.0)
+    if scaled.size:
+        reps["scaled"] = int(scaled[0]) if scaled[0] != 0 else int(scaled[min(1, scaled.size - 1)])
+    reps["last"] = run.steps - 1
+    return reps
+
+
+def _call(spec: SolverSpec, qp: QP, budget: int | None, history: bool = False) -> SolverResult:
+    kwargs: dict[str, Any] = {"history": history}
+    if budget is not None and spec.family == "gradient-free":
+        kwargs["budget"] = budget
+    return spec.solve(qp, **kwargs)
+
+
+def _timed(
+    spec: SolverSpec, qp: QP, budget: int | None, repeats: int
+) -> tuple[SolverResult, float]:
+    """The solver's result and the median wall time of up to ``repeats`` solves (>= 1)."""
+    times = []
+    result = None
+    for _ in range(max(1, repeats)):
+        start = time.perf_counter()
+        try:
+            result = _call(spec, qp, budget)
+        except Exception as exc:  # a raising solver is a measured failure
+            result = SolverResult(None, f"error: {type(exc).__name__}: {exc}", 0, 0.0)
+        times.append(time.perf_counter() - start)
+        if times[-1] > 0.02:  # slow solvers: one measurement is already far above timer noise
+            break
+    assert result is not None
+    return result, float(np.median(times))
+
+
+def run_lab(
+    scenario: Scenario,
+    controller: str | Controller,
+    solvers: Sequence[str] = DEFAULT_LAB_SOLVERS,
+    *,
+    sample: int | None = 100,
+    repeats: int = 5,
+    budget: int | None = None,
+    closed_loop: bool = True,
+    workers: int = 1,
+    progress: Any = None,
+) -> LabResult:
+    """Measure ``solvers`` on ``controller``'s programs along the exact trajectory of ``scenario``.
+
+    ``sample`` limits the number of re-solved steps (``None``: every step); ``budget`` sets the
+    evaluation budget of the gradient-free methods (default: their own); ``workers > 1`` spreads
+    the solvers over that many processes (each solver's timings stay within one process).
+    """
+    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    specs = [get_solver(name) for name in solvers]
+    reference = simulate(scenario, ctrl)
+    steps = sample_steps(reference, sample)
+    reps = representative_steps(reference) if reference.steps else {}
+    programs = {k: program_at(ctrl, scenario, reference.q[k]).qp for k in steps}
+    optimum = {}
+    for k, qp in programs.items():
+        x_star = np.concatenate((reference.qd[k], reference.delta[k][: qp.n_slack]))
+        optimum[k] = (x_star, qp.objective(x_star))
+
+    jobs = [
+        (scenario, ctrl, spec.name, programs, optimum, reps, budget, repeats, closed_loop)
+        for spec in specs
+    ]
+    studies: dict[str, SolverStudy] = {}
+    if workers > 1 and len(jobs) > 1:
+        context = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            futures = {pool.submit(_study, *job): job[2] for job in jobs}
+            done = {}
+            for future in as_completed(futures):
+                done[futures[future]] = future.result()
+                if progress is not None:
+                    progress(futures[future])
+        parts = [done[spec.name] for spec in specs]
+    else:
+        parts = []
+        for job in jobs:
+            parts.append(_study(*job))
+            if progress is not None:
+                progress(job[2])
+    for spec, (solves, histories, run, error) in zip(specs, parts, strict=True):
+        studies[spec.name] = SolverStudy(spec, solves, histories, run, error)
+    return LabResult(scenario, ctrl, reference, steps, reps, studies, optimum)
+
+
+def _study(
+    scenario: Scenario,
+    ctrl: Controller,
+    name: str,
+    programs: dict[int, QP],
+    optimum: dict[int, tuple[Vector, float]],
+    reps: dict[str, int],
+    budget: int | None,
+    repeats: int,
+    closed_loop: bool,
+) -> tuple[list[StepSolve], dict[str, tuple[dict[str, float], ...]], Run | None, str | None]:
+    """One solver's measurements (runs in a worker process when the lab is parallel)."""
+    spec = get_solver(name)
+    steps = sorted(programs)
+    solves = []
+    if steps:
+        _timed(spec, programs[steps[0]], budget, 1)  # warm-up, not measured
+    for k in steps:
+        qp = programs[k]
+        result, elapsed = _timed(spec, qp, budget, repeats)
+        x = result.x if result.x is not None and np.all(np.isfinite(result.x)) else None
+        objective = qp.objective(x) if x is not None else math.nan
+        solves.append(
+            StepSolve(
+                step=k,
+                x=x,
+                objective=objective,
+                gap=objective - optimum[k][1],
+                violation=qp.violation(x) if x is not None else math.nan,
+                iterations=result.iterations,
+                evaluations=result.evaluations,
+                time=elapsed,
+                status=result.status,
+            )
+        )
+    histories: dict[str, tuple[dict[str, float], ...]] = {}
+    for label, k in reps.items():
+        try:
+            histories[label] = _call(spec, programs[k], budget, history=True).history
+        except Exception:  # a raising solver simply has no history to show
+            histories[label] = ()
+    run, error = None, None
+    if closed_loop:
+        try:
+            run = simulate(scenario, ctrl, solver=name, fallback=("active-set",), certify=False)
+        except NoSolution as exc:
+            error = str(exc)
+    return solves, histories, run, error
+
+
+def lab_json(lab: LabResult) -> dict[str, Any]:
+    """``solvers.json`` (DESIGN.md section 3)."""
+    return {
+        "scenario": lab.scenario.name,
+        "controller": lab.controller.name,
+        "reference_solver": "active-set",
+        "resolved_steps": lab.steps,
+        "representative_steps": lab.representative,
+        "installed": available_solvers(),
+        "solvers": {name: study.summary() for name, study in lab.studies.items()},
+    }
+
+
+def lab_header(lab: LabResult) -> list[str]:
+    """Columns of ``solvers/<NAME>.csv``."""
+    n = lab.scenario.n
+    width = max((qp_x.size for qp_x, _ in lab.optimum.values()), default=n)
+    return [
+        "step",
+        *[f"q{i}" for i in range(1, n + 1)],
+        *[f"x{i}" for i in range(1, width + 1)],
+        "objective",
+        "gap",
+        "violation",
+        "iterations",
+        "evaluations",
+        "time",
+        "status",
+    ]
+
+
+def lab_rows(lab: LabResult, name: str) -> list[list[Any]]:
+    """One row per re-solved step of solver ``name``."""
+    width = len(lab_header(lab)) - 8 - lab.scenario.n
+    rows = []
+    for s in lab.studies[name].solves:
+        x = list(s.x) if s.x is not None else []
+        x += [""] * (width - len(x))
+        rows.append(
+            [
+                s.step,
+                *lab.reference.q[s.step],
+                *x,
+                s.objective,
+                s.gap,
+                s.violation,
+                s.iterations,
+                s.evaluations,
+                s.time,
+                s.status,
+            ]
+        )
+    return rows

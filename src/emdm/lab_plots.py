@@ -1,0 +1,137 @@
+"""Figures of the solver lab: convergence, solve times, closed-loop trajectories."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.patches import Patch
+
+from .lab import LabResult
+from .style import COLUMN, DOUBLE, FAMILY_COLOR, color, figure
+
+FLOOR = 1e-17
+
+
+def _error_curve(history: tuple[dict[str, float], ...], f_star: float) -> np.ndarray:
+    """Running best of ``|f - f*| + violation`` along a history (floored for log axes)."""
+    values = [
+        abs(h["objective"] - f_star) + h.get("violation", h.get("primal_residual", 0.0))
+        for h in history
+    ]
+    return np.maximum(np.minimum.accumulate(np.array(values)), FLOOR)
+
+
+def _line_style(index: int) -> dict[str, object]:
+    """Colour and dash pattern for the ``index``-th solver: 8 colours x 3 dash patterns."""
+    return {"color": color(index), "linestyle": ("-", "--", ":")[(index // 8) % 3]}
+
+
+def convergence_figure(lab: LabResult, out: Path) -> Path:
+    """Optimality error against iterations (top) and evaluations (bottom) at representative steps."""
+    reps = lab.representative
+    stem = out / "convergence"
+    with figure(stem, width=DOUBLE, height=4.2, nrows=2, ncols=len(reps), squeeze=False) as (
+        fig,
+        ax,
+    ):
+        for col, (label, k) in enumerate(reps.items()):
+            f_star = lab.optimum[k][1]
+            for i, (name, study) in enumerate(lab.studies.items()):
+                hist = study.histories.get(label, ())
+                if not hist:
+                    continue
+                err = _error_curve(hist, f_star)
+                style = {
+                    **_line_style(i),
+                    "label": name,
+                    "linewidth": 1.0,
+                    "marker": ".",
+                    "markersize": 2,
+                }
+                if "iteration" in hist[0]:
+                    ax[0, col].loglog([h["iteration"] + 1 for h in hist], err, **style)
+                if "evaluations" in hist[0]:
+                    ax[1, col].loglog([h["evaluations"] for h in hist], err, **style)
+            alpha = lab.reference.alpha[k]
+            ax[0, col].set_title(f"{label} step (k = {k}, alpha = {alpha:.3g})")
+            ax[0, col].set_xlabel("iteration + 1")
+            ax[1, col].set_xlabel("objective evaluations")
+            for row in range(2):
+                ax[row, col].set_ylabel("best |f - f*| + violation")
+                ax[row, col].set_ylim(1e-17, None)
+        handles, labels = [], []
+        for axis in ax.flat:
+            for h, lab_ in zip(*axis.get_legend_handles_labels(), strict=True):
+                if lab_ not in labels:
+                    handles.append(h)
+                    labels.append(lab_)
+        fig.legend(handles, labels, loc="outside right center", ncols=1)
+        fig.suptitle(f"Convergence on {lab.scenario.name} {lab.controller.name} programs")
+    return stem
+
+
+def times_figure(lab: LabResult, out: Path) -> Path:
+    """Distribution of per-step solve times, one box per solver, coloured by family."""
+    stem = out / "solve_times"
+    names = list(lab.studies)
+    with figure(stem, width=COLUMN, height=0.22 * len(names) + 0.8) as (_, ax):
+        data = [np.array([s.time for s in lab.studies[n].solves]) * 1e3 for n in names]
+        box = ax.boxplot(
+            data,
+            orientation="horizontal",
+            tick_labels=names,
+            showfliers=False,
+            patch_artist=True,
+            medianprops={"color": "black"},
+        )
+        for patch, name in zip(box["boxes"], names, strict=True):
+            patch.set_facecolor(FAMILY_COLOR.get(lab.studies[name].spec.family, "grey"))
+            patch.set_alpha(0.7)
+        ax.set_xscale("log")
+        ax.set_xlabel("solve time per step (ms)")
+        ax.invert_yaxis()
+        ax.set_title(f"{lab.scenario.name} {lab.controller.name}: time per solve")
+        families = [Patch(facecolor=c, alpha=0.7, label=f) for f, c in FAMILY_COLOR.items()]
+        ax.legend(handles=families, loc="lower right", fontsize=6)
+    return stem
+
+
+def trajectories_figure(lab: LabResult, out: Path) -> Path:
+    """End-effector paths and error norms of the closed loop with each solver."""
+    stem = out / "trajectories"
+    with figure(stem, width=DOUBLE, height=2.6, ncols=2) as (fig, (path_ax, err_ax)):
+        for i, (name, study) in enumerate(lab.studies.items()):
+            run = study.closed_loop
+            if run is None:
+                continue
+            style = {
+                **_line_style(i),
+                "label": name,
+                "linewidth": 1.0,
+                "marker": ".",
+                "markersize": 2,
+            }
+            path_ax.plot(run.p[:, 0], run.p[:, 1], **style)
+            err_ax.semilogy(run.t, np.maximum(run.error_norm, 1e-6), **style)
+        goal = lab.scenario.motion.goal
+        path_ax.plot(*goal, marker="*", color="black", markersize=9, linestyle="none", label="goal")
+        start = lab.reference.p[0]
+        path_ax.plot(
+            *start, marker="o", color="black", markersize=4, linestyle="none", label="start"
+        )
+        path_ax.set_aspect("equal", adjustable="datalim")
+        path_ax.set_xlabel("x (m)")
+        path_ax.set_ylabel("y (m)")
+        path_ax.set_title("end-effector path, closed loop per solver")
+        err_ax.axhline(lab.scenario.motion.tolerance, color="grey", linewidth=0.8, linestyle=":")
+        err_ax.set_xlabel("t (s)")
+        err_ax.set_ylabel("||e|| (m)")
+        err_ax.set_title("tracking error")
+        fig.legend(*path_ax.get_legend_handles_labels(), loc="outside right center", fontsize=6)
+    return stem
+
+
+def lab_figures(lab: LabResult, out: Path) -> list[Path]:
+    """Every lab figure (PNG, PDF and SVG each); returns the stems."""
+    return [convergence_figure(lab, out), times_figure(lab, out), trajectories_figure(lab, out)]

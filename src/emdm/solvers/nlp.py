@@ -1,0 +1,293 @@
+"""General-purpose optimisers on the per-step programs: gradient-based and gradient-free.
+
+Gradient-based (scipy): ``slsqp`` and ``trust-constr`` on the full program, with the exact gradient
+``P x + c``, the exact Hessian ``P`` (trust-constr) and the exact constraint Jacobian ``A``.
+
+Gradient-free methods search the *reduced* program, where the task equality is eliminated:
+
+- with task slack (the non-redundant programs): ``t = qd`` and ``delta = b - A_qd qd``, so the slack
+  bounds become linear inequalities on ``qd`` (DESIGN.md section 1);
+- without slack: ``x = x_p + Z t`` with ``x_p = A^+ b`` and ``Z`` an orthonormal basis of ``null(A)``.
+
+Either way only the linear inequalities ``G t <= h`` (from the bounds) remain. ``cobyqa``, ``cobyla``
+and ``differential-evolution`` take them natively; ``nelder-mead``, ``powell`` and ``cma-es`` see an
+exact l1 penalty ``rho * sum(max(0, G t - h))`` with ``rho = 1e4 (1 + ||P||)``. Nothing is
+projected or clipped afterwards: the returned point's constraint violation is measured by the lab.
+Random methods are seeded (seed 0) so every run is reproducible.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.optimize import Bounds, LinearConstraint, differential_evolution, linprog, minimize
+
+from ..arm import Matrix, Vector
+from ..problem import QP
+from .base import SolverResult, infeasible
+
+DEFAULT_BUDGET = 2000
+"""Default number of objective evaluations for the gradient-free methods."""
+
+
+@dataclass(frozen=True, eq=False)
+class Reduced:
+    """The program in the reduced variables ``t``: ``x = x0 + Z t`` and ``G t <= h``."""
+
+    x0: Vector
+    Z: Matrix
+    G: Matrix
+    h: Vector
+    qp: QP
+
+    @property
+    def dim(self) -> int:
+        return int(self.Z.shape[1])
+
+    def x(self, t: Vector) -> Vector:
+        return self.x0 + self.Z @ t
+
+    def objective(self, t: Vector) -> float:
+        return self.qp.objective(self.x(t))
+
+    def excess(self, t: Vector) -> float:
+        return float(np.maximum(self.G @ t - self.h, 0.0).sum()) if self.h.size else 0.0
+
+    def box(self, default: float = 10.0) -> tuple[Vector, Vector]:
+        """The tightest box around the feasible set of ``t`` (one small LP per side), or +-default."""
+        lo, hi = np.full(self.dim, -default), np.full(self.dim, default)
+        if not self.h.size:
+            return lo, hi
+        for i in range(self.dim):
+            for sign in (1.0, -1.0):
+                cost = np.zeros(self.dim)
+                cost[i] = sign
+                res = linprog(
+                    cost, A_ub=self.G, b_ub=self.h, bounds=[(None, None)] * self.dim, method="highs"
+                )
+                if res.status == 0:
+                    if sign > 0:
+                        lo[i] = res.fun
+                    else:
+                        hi[i] = -res.fun
+        return lo, hi
+
+
+def reduce(qp: QP) -> Reduced:
+    """Eliminate the task equality (and the slack, when the program has one)."""
+    n, k = qp.n_joints, qp.n_slack
+    if k == qp.A.shape[0] and np.array_equal(qp.A[:, n:], np.eye(k)):
+        x0 = np.concatenate((np.zeros(n), qp.b))
+        Z = np.vstack((np.eye(n), -qp.A[:, :n]))
+    else:
+        U, s, Vt = np.linalg.svd(qp.A)
+        rank = int(np.sum(s > 1e-12 * max(s[0], 1.0)))
+        x0 = Vt[:rank].T @ ((U[:, :rank].T @ qp.b) / s[:rank])
+        Z = Vt[rank:].T
+    rows, rhs = [], []
+    for bound, sign in ((qp.ub, 1.0), (qp.lb, -1.0)):
+        finite = np.isfinite(bound)
+        rows.append(sign * Z[finite])
+        rhs.append(sign * (bound[finite] - x0[finite]))
+    G = np.vstack(rows) if rows else np.zeros((0, Z.shape[1]))
+    return Reduced(x0, Z, G, np.concatenate(rhs), qp)
+
+
+@dataclass
+class _Recorder:
+    """Counts evaluations and keeps the history of evaluated points (objective and violation)."""
+
+    red: Reduced
+    penalty: float = 0.0
+    keep: bool = False
+    evaluations: int = 0
+    trace: list[dict[str, float]] = field(default_factory=list)
+
+    def __call__(self, t: Vector) -> float:
+        self.evaluations += 1
+        f = self.red.objective(t)
+        if self.keep:
+            self.trace.append(
+                {
+                    "evaluations": float(self.evaluations),
+                    "objective": f,
+                    "violation": self.red.qp.violation(self.red.x(t)),
+                }
+            )
+        return f + self.penalty * self.red.excess(t) if self.penalty else f
+
+
+def _finish(
+    red: Reduced, t: Vector, status: str, iterations: int, rec: _Recorder, start: float
+) -> SolverResult:
+    return SolverResult(
+        red.x(np.asarray(t, dtype=float)),
+        status,
+        iterations,
+        time.perf_counter() - start,
+        tuple(rec.trace),
+        rec.evaluations,
+    )
+
+
+def gradient_free(method: str) -> Callable[..., SolverResult]:
+    """A solver function running the gradient-free ``method`` on the reduced program."""
+
+    def solve(qp: QP, *, budget: int = DEFAULT_BUDGET, history: bool = False) -> SolverResult:
+        start = time.perf_counter()
+        if infeasible(qp):
+            return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
+        red = reduce(qp)
+        if red.dim == 0:  # the equality leaves a single point
+            rec = _Recorder(red, keep=history)
+            rec(np.zeros(0))
+            return _finish(red, np.zeros(0), "optimal", 0, rec, start)
+        penalty = 1e4 * (1.0 + float(np.abs(qp.P).max()))
+        t0 = np.zeros(red.dim)
+        cons = LinearConstraint(red.G, -np.inf, red.h) if red.h.size else None
+        status, iterations = "optimal", 0
+        if method in ("nelder-mead", "powell"):
+            rec = _Recorder(red, penalty=penalty, keep=history)
+            options: dict[str, Any] = {"maxfev": budget, "xatol": 1e-12, "fatol": 1e-14}
+            if method == "powell":
+                options = {"maxfev": budget, "xtol": 1e-12, "ftol": 1e-14}
+            res = minimize(
+                rec,
+                t0,
+                method="Nelder-Mead" if method == "nelder-mead" else "Powell",
+                options=options,
+            )
+            t, iterations, ok = res.x, int(res.get("nit", 0)), bool(res.success)
+        elif method in ("cobyqa", "cobyla"):
+            rec = _Recorder(red, keep=history)
+            opts = (
+                {"maxfev": budget, "final_tr_radius": 1e-10}
+                if method == "cobyqa"
+                else {"maxiter": budget, "tol": 1e-10}
+            )
+            res = minimize(
+                rec, t0, method=method.upper(), constraints=[cons] if cons else (), options=opts
+            )
+            t, iterations, ok = res.x, int(res.get("nit", res.nfev)), bool(res.success)
+        elif method == "differential-evolution":
+            rec = _Recorder(red, keep=history)
+            lo, hi = red.box()
+            popsize = 15
+            res = differential_evolution(
+                rec,
+                Bounds(lo, hi),
+                constraints=cons if cons else (),
+                seed=0,
+                tol=1e-12,
+                atol=1e-14,
+                popsize=popsize,
+                polish=False,
+                maxiter=max(1, budget // (popsize * red.dim) - 1),
+            )
+            t, iterations, ok = res.x, int(res.nit), bool(res.success)
+        elif method == "cma-es":
+            import cma
+
+            rec = _Recorder(red, penalty=penalty, keep=history)
+            lo, hi = red.box()
+            sigma = 0.3 * float(np.max(hi - lo))
+            es = cma.CMAEvolutionStrategy(
+                np.clip(t0, lo, hi),
+                sigma,
+                {
+                    "bounds": [list(lo), list(hi)],
+                    "maxfevals": budget,
+                    "seed": 1,
+                    "verbose": -9,
+                    "tolfun": 1e-14,
+                    "tolx": 1e-13,
+                },
+            )
+            es.optimize(rec)
+            t, iterations, ok = es.result.xbest, int(es.result.iterations), True
+            if es.result.evaluations >= budget:
+                ok = False
+        else:  # pragma: no cover - guarded by the registry
+            raise ValueError(method)
+        if not ok:
+            status = "max_iter" if rec.evaluations >= budget else "not converged"
+        return _finish(red, t, status, iterations, rec, start)
+
+    solve.__name__ = f"solve_{method.replace('-', '_')}"
+    return solve
+
+
+def solve_slsqp(qp: QP, *, max_iter: int = 500, history: bool = False) -> SolverResult:
+    """SLSQP (sequential least squares) with exact gradients, on the full program."""
+    return _scipy_gradient(qp, "SLSQP", max_iter, history)
+
+
+def solve_trust_constr(qp: QP, *, max_iter: int = 500, history: bool = False) -> SolverResult:
+    """trust-constr (interior-point trust region) with the exact gradient and Hessian."""
+    return _scipy_gradient(qp, "trust-constr", max_iter, history)
+
+
+def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> SolverResult:
+    start = time.perf_counter()
+    if infeasible(qp):
+        return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
+    evaluations = 0
+    trace: list[dict[str, float]] = []
+
+    def f(x: Vector) -> float:
+        nonlocal evaluations
+        evaluations += 1
+        return qp.objective(x)
+
+    def grad(x: Vector) -> Vector:
+        return np.asarray(qp.P @ x + qp.c)
+
+    def callback(*args: Any) -> None:
+        x = np.asarray(args[0], dtype=float)
+        trace.append(
+            {
+                "iteration": float(len(trace) + 1),
+                "evaluations": float(evaluations),
+                "objective": qp.objective(x),
+                "violation": qp.violation(x),
+            }
+        )
+
+    x0 = np.clip(np.linalg.lstsq(qp.A, qp.b, rcond=None)[0], qp.lb, qp.ub)
+    bounds = Bounds(qp.lb, qp.ub) if qp.bounded else None
+    if method == "SLSQP":
+        res = minimize(
+            f,
+            x0,
+            jac=grad,
+            method="SLSQP",
+            bounds=bounds,
+            constraints=[{"type": "eq", "fun": lambda x: qp.A @ x - qp.b, "jac": lambda x: qp.A}],
+            options={"maxiter": max_iter, "ftol": 1e-14},
+            callback=callback if history else None,
+        )
+    else:
+        res = minimize(
+            f,
+            x0,
+            jac=grad,
+            hess=lambda x: qp.P,
+            method="trust-constr",
+            bounds=bounds,
+            constraints=[LinearConstraint(qp.A, qp.b, qp.b)],
+            options={"maxiter": max_iter, "gtol": 1e-12, "xtol": 1e-14},
+            callback=(lambda x, state: callback(x)) if history else None,
+        )
+    status = "optimal" if res.success else f"not converged: {res.message}"
+    return SolverResult(
+        np.asarray(res.x, dtype=float),
+        status,
+        int(res.get("nit", 0)),
+        time.perf_counter() - start,
+        tuple(trace),
+        evaluations,
+    )

@@ -1,0 +1,73 @@
+"""One look for every figure: IEEE column widths, a colour-blind-safe palette, units on every axis.
+
+Colours are the Okabe-Ito palette (safe for the common colour-vision deficiencies). Every figure is
+saved as PNG (for screens and the HTML report) and as PDF and SVG (vector, for LaTeX).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+from cycler import cycler
+
+matplotlib.use("Agg")  # no display needed
+import matplotlib.pyplot as plt
+
+COLUMN = 3.5
+"""IEEE single-column width (in)."""
+DOUBLE = 7.16
+"""IEEE double-column width (in)."""
+
+OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000"]
+
+CONTROLLER_STYLE: dict[str, dict[str, Any]] = {
+    "UC-IVKC": {"color": "#E69F00", "linestyle": "--"},
+    "C-IVKC": {"color": "#D55E00", "linestyle": "-"},
+    "UC-EMDM": {"color": "#56B4E9", "linestyle": "--"},
+    "C-EMDM": {"color": "#0072B2", "linestyle": "-"},
+}
+FAMILY_COLOR = {"exact": "#0072B2", "gradient": "#009E73", "gradient-free": "#D55E00"}
+
+RC: Any = {
+    "font.size": 8,
+    "axes.titlesize": 8,
+    "axes.labelsize": 8,
+    "legend.fontsize": 7,
+    "xtick.labelsize": 7,
+    "ytick.labelsize": 7,
+    "lines.linewidth": 1.2,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "grid.linewidth": 0.5,
+    "axes.prop_cycle": cycler(color=OKABE_ITO),
+    "savefig.dpi": 200,
+    "savefig.bbox": "tight",
+    "figure.constrained_layout.use": True,
+    "svg.fonttype": "none",
+    "pdf.fonttype": 42,
+}
+
+
+def color(index: int) -> str:
+    """The ``index``-th palette colour (cycling)."""
+    return OKABE_ITO[index % len(OKABE_ITO)]
+
+
+@contextmanager
+def figure(
+    path_stem: Path, width: float = COLUMN, height: float = 2.4, **subplots: Any
+) -> Iterator[tuple[Any, Any]]:
+    """Create a styled figure; on exit save ``<stem>.png``, ``.pdf`` and ``.svg`` and close it."""
+    with plt.rc_context(RC):
+        fig, axes = plt.subplots(figsize=(width, height), **subplots)
+        try:
+            yield fig, axes
+            path_stem.parent.mkdir(parents=True, exist_ok=True)
+            for suffix in (".png", ".pdf", ".svg"):
+                fig.savefig(path_stem.with_suffix(suffix))
+        finally:
+            plt.close(fig)
