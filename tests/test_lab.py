@@ -223,7 +223,7 @@ def test_solvers_command_writes_the_files(tmp_path, capsys):
     assert data["solvers"]["active-set"]["closed_loop_steps"] == 40
     with (out / "solvers" / "cobyqa.csv").open() as handle:
         rows = list(csv.reader(handle))
-    assert rows[0] == [
+    assert rows[0][:14] == [
         "step",
         "q1",
         "q2",
@@ -240,7 +240,9 @@ def test_solvers_command_writes_the_files(tmp_path, capsys):
         "status",
     ]
     assert len(rows) - 1 == len(data["resolved_steps"])
-    for stem in ("convergence", "solve_times", "trajectories"):
+    assert rows[0][14:] == ["cond_reduced", "w_slack", "cond_J", "m", "alpha", "active"]
+    assert "challenges" in data
+    for stem in ("convergence", "solve_times", "trajectories", "challenges"):
         for suffix in (".png", ".pdf", ".svg"):
             assert (out / "figures" / f"{stem}{suffix}").stat().st_size > 1000
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 import multiprocessing
 import time
+from collections import Counter
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -50,6 +51,9 @@ DEFAULT_LAB_SOLVERS = (
     "cma-es",
 )
 """The default comparison: custom, exact off-the-shelf, gradient-based and gradient-free."""
+
+FEATURES = ("cond_reduced", "w_slack", "cond_J", "m", "alpha", "active")
+"""Per-step features recorded with every re-solve (see :func:`step_features`)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,6 +108,9 @@ class SolverStudy:
                 closed_loop_steps=run.steps,
                 closed_loop_final_error=float(run.error_norm[-1]),
                 closed_loop_fallback_steps=int(run.fallback.sum()),
+                closed_loop_fallback_reasons=dict(
+                    Counter(run.attempts[k].split("; ")[0] for k in np.flatnonzero(run.fallback))
+                ),
                 closed_loop_max_kkt=float(run.kkt.max()) if run.steps else 0.0,
                 closed_loop_max_bound_excess=float(run.bound_excess.max()) if run.steps else 0.0,
                 closed_loop_mean_manipulability=float(run.m.mean()),
@@ -111,6 +118,32 @@ class SolverStudy:
         else:
             out.update(reached=False, time_to_goal=None, closed_loop_error=self.closed_loop_error)
         return out
+
+
+def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
+    """What makes step ``k``'s program hard: the numerical challenges the lab characterises.
+
+    ``cond_reduced``: condition number of the reduced Hessian ``Z^T P Z`` (``Z`` spans
+    ``null(A)``), which sets the rate of first-order methods; ``w_slack``: the slack weight
+    ``c_S / ||e||``, growing near the goal; ``cond_J``: ``sigma_max / sigma_min`` of ``J`` (near
+    singular arms); ``m``: manipulability (the gradient ``Jm`` is non-smooth at ``m = 0``);
+    ``alpha``: task scale (``< 1``: the feasible set is a face, degenerate active sets);
+    ``active``: number of joint bounds active at the optimum.
+    """
+    _, s, Vt = np.linalg.svd(qp.A)
+    Z = Vt[int(np.sum(s > 1e-12 * s[0])) :].T
+    reduced = Z.T @ qp.P @ Z
+    cond = float(np.linalg.cond(reduced)) if reduced.size else 1.0
+    J = qp.A[:, : qp.n_joints]
+    sj = np.linalg.svd(J, compute_uv=False)
+    return {
+        "cond_reduced": cond,
+        "w_slack": float(qp.P[-1, -1]) if qp.n_slack else 0.0,
+        "cond_J": float(sj[0] / sj[-1]) if sj[-1] > 0 else math.inf,
+        "m": float(run.m[k]),
+        "alpha": float(run.alpha[k]),
+        "active": float(np.count_nonzero(run.active[k])),
+    }
 
 
 @dataclass(eq=False)
@@ -124,6 +157,7 @@ class LabResult:
     representative: dict[str, int]
     studies: dict[str, SolverStudy]
     optimum: dict[int, tuple[Vector, float]]
+    features: dict[int, dict[str, float]] = field(default_factory=dict)
 
 
 def sample_steps(run: Run, sample: int | None) -> list[int]:
@@ -224,7 +258,8 @@ def run_lab(
                 progress(job[2])
     for spec, (solves, histories, run, error) in zip(specs, parts, strict=True):
         studies[spec.name] = SolverStudy(spec, solves, histories, run, error)
-    return LabResult(scenario, ctrl, reference, steps, reps, studies, optimum)
+    features = {k: step_features(reference, k, qp) for k, qp in programs.items()}
+    return LabResult(scenario, ctrl, reference, steps, reps, studies, optimum, features)
 
 
 def _study(
@@ -287,17 +322,68 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
         "representative_steps": lab.representative,
         "installed": available_solvers(),
         "solvers": {name: study.summary() for name, study in lab.studies.items()},
+        "challenges": challenges(lab),
     }
 
 
+def challenges(lab: LabResult) -> dict[str, Any]:
+    """How the numerical challenges show in the measurements (from the lab's own records).
+
+    For each iterative solver: the Spearman rank correlation of its iteration count with the
+    reduced-Hessian condition number, and its median iterations on scaled (``alpha < 1``) against
+    unscaled steps. Plus the ranges of the features over the re-solved steps.
+    """
+    if not lab.features:
+        return {}
+    steps = lab.steps
+    cond = np.array([lab.features[k]["cond_reduced"] for k in steps])
+    scaled = np.array([lab.features[k]["alpha"] < 1.0 for k in steps])
+    ranges = {
+        key: [
+            float(min(f[key] for f in lab.features.values())),
+            float(max(f[key] for f in lab.features.values())),
+        ]
+        for key in ("cond_reduced", "w_slack", "cond_J", "m", "alpha")
+    }
+    per_solver = {}
+    for name, study in lab.studies.items():
+        its = np.array([s.iterations for s in study.solves], dtype=float)
+        if np.ptp(its) == 0:
+            continue
+        entry: dict[str, Any] = {"iterations_vs_cond_spearman": _spearman(its, cond)}
+        if scaled.any() and (~scaled).any():
+            entry["median_iterations_scaled"] = float(np.median(its[scaled]))
+            entry["median_iterations_unscaled"] = float(np.median(its[~scaled]))
+        per_solver[name] = entry
+    return {
+        "feature_ranges": ranges,
+        "scaled_steps": int(scaled.sum()),
+        "solvers": per_solver,
+        "min_manipulability_step": int(
+            steps[int(np.argmin([lab.features[k]["m"] for k in steps]))]
+        ),
+    }
+
+
+def _spearman(a: Vector, b: Vector) -> float:
+    """Spearman's rank correlation (ties broken by order; enough for a descriptive number)."""
+    if np.ptp(a) == 0 or np.ptp(b) == 0:
+        return math.nan
+    ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def _x_width(lab: LabResult) -> int:
+    return max((x.size for x, _ in lab.optimum.values()), default=lab.scenario.n)
+
+
 def lab_header(lab: LabResult) -> list[str]:
-    """Columns of ``solvers/<NAME>.csv``."""
+    """Columns of ``solvers/<NAME>.csv``: DESIGN.md's, then the step features."""
     n = lab.scenario.n
-    width = max((qp_x.size for qp_x, _ in lab.optimum.values()), default=n)
     return [
         "step",
         *[f"q{i}" for i in range(1, n + 1)],
-        *[f"x{i}" for i in range(1, width + 1)],
+        *[f"x{i}" for i in range(1, _x_width(lab) + 1)],
         "objective",
         "gap",
         "violation",
@@ -305,16 +391,18 @@ def lab_header(lab: LabResult) -> list[str]:
         "evaluations",
         "time",
         "status",
+        *FEATURES,
     ]
 
 
 def lab_rows(lab: LabResult, name: str) -> list[list[Any]]:
     """One row per re-solved step of solver ``name``."""
-    width = len(lab_header(lab)) - 8 - lab.scenario.n
+    width = _x_width(lab)
     rows = []
     for s in lab.studies[name].solves:
         x = list(s.x) if s.x is not None else []
         x += [""] * (width - len(x))
+        feats = lab.features.get(s.step, {})
         rows.append(
             [
                 s.step,
@@ -327,6 +415,7 @@ def lab_rows(lab: LabResult, name: str) -> list[list[Any]]:
                 s.evaluations,
                 s.time,
                 s.status,
+                *[feats.get(key, math.nan) for key in FEATURES],
             ]
         )
     return rows

@@ -132,6 +132,56 @@ def trajectories_figure(lab: LabResult, out: Path) -> Path:
     return stem
 
 
+def challenges_figure(lab: LabResult, out: Path) -> Path:
+    """Iterations against the reduced-Hessian condition number, and the features along the run."""
+    stem = out / "challenges"
+    steps = lab.steps
+    cond = np.array([lab.features[k]["cond_reduced"] for k in steps])
+    with figure(stem, width=DOUBLE, height=2.6, ncols=2) as (fig, (left, right)):
+        for i, (name, study) in enumerate(lab.studies.items()):
+            its = np.array([s.iterations for s in study.solves], dtype=float)
+            if study.spec.family == "gradient-free" or np.ptp(its) == 0:
+                continue
+            left.loglog(
+                cond,
+                np.maximum(its, 1),
+                linestyle="none",
+                marker="o",
+                markersize=2.5,
+                color=color(i),
+                label=name,
+            )
+        left.set_xlabel("condition number of Z^T P Z")
+        left.set_ylabel("iterations")
+        left.set_title("iterations against conditioning")
+        if left.get_legend_handles_labels()[0]:
+            left.legend(fontsize=6)
+        t = lab.reference.t[steps]
+        for j, (label, key) in enumerate(
+            (("m (manipulability)", "m"), ("alpha (task scale)", "alpha"))
+        ):
+            right.plot(t, [lab.features[k][key] for k in steps], color=color(j), label=label)
+        right.set_xlabel("t (s)")
+        right.set_ylabel("m, alpha")
+        twin = right.twinx()
+        twin.semilogy(t, cond, color=color(3), linestyle="--", label="cond(Z^T P Z)")
+        w_s = [lab.features[k]["w_slack"] for k in steps]
+        if max(w_s) > 0:
+            twin.semilogy(t, w_s, color=color(4), linestyle=":", label="w_S = c_S / ||e||")
+        twin.set_ylabel("condition number, w_S")
+        twin.grid(False)
+        right.set_title("along the reference run")
+        handles = right.get_legend_handles_labels()[0] + twin.get_legend_handles_labels()[0]
+        labels = right.get_legend_handles_labels()[1] + twin.get_legend_handles_labels()[1]
+        fig.legend(handles, labels, loc="outside right center", fontsize=6)
+    return stem
+
+
 def lab_figures(lab: LabResult, out: Path) -> list[Path]:
     """Every lab figure (PNG, PDF and SVG each); returns the stems."""
-    return [convergence_figure(lab, out), times_figure(lab, out), trajectories_figure(lab, out)]
+    return [
+        convergence_figure(lab, out),
+        times_figure(lab, out),
+        trajectories_figure(lab, out),
+        challenges_figure(lab, out),
+    ]
