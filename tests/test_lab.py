@@ -34,7 +34,7 @@ def preset_programs():
         for name in ("C-EMDM", "C-IVKC", "UC-EMDM"):
             run = emdm.simulate(sc, name)
             ctrl = emdm.get_controller(name)
-            for k in range(0, run.steps, 2):
+            for k in range(run.steps):
                 qp = program_at(ctrl, sc, run.q[k]).qp
                 x_star = np.concatenate((run.qd[k], run.delta[k][: qp.n_slack]))
                 programs.append((qp, x_star))
@@ -42,7 +42,7 @@ def preset_programs():
 
 
 @pytest.mark.parametrize("solver", EXACT)
-def test_exact_solvers_on_every_other_step_of_both_presets(preset_programs, solver):
+def test_exact_solvers_on_every_step_of_both_presets(preset_programs, solver):
     spec = get_solver(solver)
     for qp, x_star in preset_programs:
         result = spec.solve(qp)
