@@ -161,3 +161,61 @@ def atomic_output(out: Path) -> Iterator[Path]:
             os.replace(file, target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _float(text: str) -> float:
+    return float(text) if text != "" else float("nan")
+
+
+def read_run(folder: Path, controller: str) -> Run:
+    """Read back the run of ``controller`` written by ``emdm run`` into ``folder``.
+
+    The CSVs hold every value at full precision, so the arrays equal the simulated ones exactly.
+    """
+    from .controllers import get_controller
+    from .scenario import scenario_from_dict
+
+    folder = Path(folder)
+    meta = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
+    scenario = scenario_from_dict(meta["scenario"], source=str(folder / "metrics.json"))
+    n = scenario.n
+    with (folder / "trajectories" / f"{controller}.csv").open(encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    with (folder / "diagnostics" / f"{controller}.csv").open(encoding="utf-8") as handle:
+        diag = list(csv.DictReader(handle))
+    K = len(rows) - 1
+
+    def column(*names: str, last: bool = True) -> np.ndarray:
+        used = rows if last else rows[:-1]
+        return np.array([[_float(r[name]) for name in names] for r in used])
+
+    joints = [str(i) for i in range(1, n + 1)]
+    return Run(
+        scenario=scenario,
+        controller=get_controller(controller),
+        t=column("t")[:, 0],
+        q=column(*[f"q{j}" for j in joints]),
+        p=column("x", "y"),
+        e=column("ex", "ey"),
+        v=column("vx", "vy"),
+        m=column("m")[:, 0],
+        qd=column(*[f"qd{j}" for j in joints], last=False).reshape(K, n),
+        effort=column("effort", last=False).reshape(K),
+        manip_rate=column("manip_rate", last=False).reshape(K),
+        alpha=column("alpha", last=False).reshape(K),
+        delta=column("delta_x", "delta_y", last=False).reshape(K, 2),
+        lo=np.array([[_float(d[f"lo{j}"]) for j in joints] for d in diag]).reshape(K, n),
+        hi=np.array([[_float(d[f"hi{j}"]) for j in joints] for d in diag]).reshape(K, n),
+        active=np.array([[int(d[f"active{j}"]) for j in joints] for d in diag],
+                        dtype=np.int8).reshape(K, n),
+        iterations=np.array([int(r["iterations"]) for r in rows[:-1]], dtype=np.int64),
+        solve_time=column("solve_time", last=False).reshape(K),
+        kkt=np.array([_float(d["kkt_residual"]) for d in diag]),
+        bound_excess=np.array([_float(d["bound_excess"]) for d in diag]),
+        fallback=np.array([d["fallback"] == "True" for d in diag], dtype=bool),
+        solver=[r["solver"] for r in rows[:-1]],
+        status=[r["status"] for r in rows[:-1]],
+        attempts=[d["attempts"] for d in diag],
+        policy=[d["policy"] for d in diag],
+        reached=bool(meta["controllers"][controller]["reached"]),
+    )

@@ -71,3 +71,12 @@ def figure(
                 fig.savefig(path_stem.with_suffix(suffix))
         finally:
             plt.close(fig)
+
+
+def figure_canvas(width: float, height: float, dpi: float = 110) -> tuple[Any, Any]:
+    """A styled figure with its Agg canvas, for frame-by-frame rendering (animations)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained")
+    return fig, FigureCanvasAgg(fig)

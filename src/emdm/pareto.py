@@ -1,0 +1,181 @@
+"""Pareto fronts between effort ``E(qd)`` and manipulability rate ``M(qd)`` (brief Task 1).
+
+*Per step*: at the states ``k = 0, floor(T/3), floor(2T/3), T`` of a run (``T`` the index of its final
+state), the step's program is solved for a sweep of weights: ``w_E`` fixed at the scenario's value
+and ``w_M = r w_E`` for ratios ``r`` log-spaced over ``decades`` decades, plus ``w_M = 0``. Each
+optimum gives a point ``(E(qd*), M(qd*))``; a point is *dominated* when another has no more effort
+and no less manipulability rate, one of them strictly. For UC-EMDM on a redundant arm the points lie
+on the parabola ``E = E0 + (M - M0)^2 / (2 ||N Jm||^2)`` (DESIGN.md section 1).
+
+*Per trajectory*: the whole controller is re-run for a grid of ``(w_E, w_M)``, giving total effort,
+mean manipulability and time to goal for each: the trade-off a user actually feels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.ticker import MaxNLocator
+
+from .analysis import metrics
+from .controllers import Controller, get_controller, program_at
+from .errors import NoSolution
+from .scenario import Scenario, Weights
+from .simulate import Run, simulate
+from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
+from .style import COLUMN, DOUBLE, color, figure
+
+
+def pareto_steps(run: Run) -> list[int]:
+    """``0, floor(T/3), floor(2T/3), T`` with ``T`` the index of the run's final state."""
+    T = run.steps
+    return [0, T // 3, (2 * T) // 3, T]
+
+
+def ratios(decades: float = 7.0, per_decade: int = 4, low: float = -3.0) -> np.ndarray:
+    """``w_M / w_E`` ratios, log-spaced from ``10^low`` over ``decades`` decades."""
+    return np.asarray(np.logspace(low, low + decades, int(decades * per_decade) + 1))
+
+
+def front_at(
+    scenario: Scenario, controller: Controller, q: np.ndarray, sweep: np.ndarray
+) -> list[dict[str, Any]]:
+    """The points of the front at configuration ``q`` (``w_M = 0`` first, then each ratio)."""
+    w0 = scenario.weights
+    points = []
+    for ratio in [0.0, *sweep]:
+        weights = Weights(effort=w0.effort, manipulability=ratio * w0.effort, slack=w0.slack)
+        program = program_at(controller, scenario, q, weights=weights)
+        result = solve_chain(program.qp, [DEFAULT_SOLVER, *DEFAULT_FALLBACK])
+        qd = result.x[: scenario.n]
+        Jm = scenario.planar_arm.manipulability_jacobian(q)
+        points.append({
+            "w_effort": weights.effort, "w_manip": weights.manipulability,
+            "E": 0.5 * float(qd @ qd), "M": float(Jm @ qd), "qd": [float(x) for x in qd],
+            "alpha": program.alpha, "kkt": result.kkt.residual,
+        })
+    _mark_dominated(points)
+    return points
+
+
+def _mark_dominated(points: list[dict[str, Any]], tol: float = 1e-12) -> None:
+    for p in points:
+        p["dominated"] = any(
+            o is not p and o["E"] <= p["E"] + tol and o["M"] >= p["M"] - tol
+            and (o["E"] < p["E"] - tol or o["M"] > p["M"] + tol)
+            for o in points
+        )
+
+
+def pareto_study(
+    scenario: Scenario, controller: str | Controller, *, sweep: np.ndarray | None = None
+) -> tuple[dict[str, Any], Run]:
+    """``pareto.json`` (DESIGN.md section 3) for ``controller`` on ``scenario``, and its run."""
+    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    run = simulate(scenario, ctrl)
+    sweep = ratios() if sweep is None else sweep
+    nominal = scenario.weights.manipulability / scenario.weights.effort
+    steps = []
+    for k in pareto_steps(run):
+        steps.append({"k": k, "t": float(run.t[k]), "q": [float(x) for x in run.q[k]],
+                      "points": front_at(scenario, ctrl, run.q[k], sweep)})
+    data = {"scenario": scenario.name, "controller": ctrl.name, "T": run.steps,
+            "nominal_ratio": nominal, "ratios": [0.0, *map(float, sweep)], "steps": steps}
+    return data, run
+
+
+def pareto_figure(data: dict[str, Any], out: Path) -> Path:
+    """E against M at the four steps, the nominal weights circled, dominated points hollow."""
+    stem = out / "pareto_front"
+    nominal = data["nominal_ratio"]
+    with figure(stem, width=DOUBLE, height=2.3, ncols=4) as (fig, axes):
+        for ax, step in zip(axes, data["steps"], strict=True):
+            pts = step["points"]
+            ratio = [p["w_manip"] / p["w_effort"] for p in pts]
+            E = np.array([p["E"] for p in pts])
+            M = np.array([p["M"] for p in pts])
+            dominated = np.array([p["dominated"] for p in pts])
+            ax.plot(M, E, color="grey", linewidth=0.6, zorder=1)
+            sc = ax.scatter(M[~dominated], E[~dominated],
+                            c=np.log10(np.maximum(np.array(ratio)[~dominated], 1e-4)),
+                            cmap="viridis", s=12, zorder=2)
+            ax.scatter(M[dominated], E[dominated], facecolors="none", edgecolors="black", s=14,
+                       linewidths=0.6, zorder=2, label="dominated")
+            near = int(np.argmin([abs(math.log10(max(r, 1e-12)) - math.log10(nominal)) for r in ratio]))
+            ax.scatter([M[near]], [E[near]], s=60, facecolors="none", edgecolors="#D55E00",
+                       linewidths=1.2, zorder=3, label=f"nominal w_M/w_E = {nominal:g}")
+            alpha = min(p["alpha"] for p in pts)
+            scaled = f", alpha = {alpha:.2f}" if alpha < 1.0 else ""
+            ax.set_title(f"k = {step['k']} (t = {step['t']:.2f} s{scaled})")
+            ax.set_xlabel("manip. rate M (1/s)")
+            ax.xaxis.set_major_locator(MaxNLocator(3))
+            ax.tick_params(axis="x", labelrotation=30)
+            ax.set_yscale("log")
+        axes[0].set_ylabel("effort E (rad^2/s^2)")
+        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2,
+                   fontsize=6)
+        fig.colorbar(sc, ax=axes, label="log10 w_M / w_E", shrink=0.9)
+        fig.suptitle(f"Pareto fronts, {data['scenario']} {data['controller']} (w_M = 0 at the far left)")
+    return stem
+
+
+def weight_grid(
+    scenario: Scenario, controller: str | Controller, grid: list[tuple[float, float]]
+) -> list[dict[str, Any]]:
+    """Re-run the whole controller for each ``(w_E, w_M)``: total effort, mean m, time to goal."""
+    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    rows = []
+    for w_e, w_m in grid:
+        sc = replace(scenario, weights=Weights(effort=w_e, manipulability=w_m,
+                                               slack=scenario.weights.slack))
+        try:
+            mt = metrics(simulate(sc, ctrl))
+        except NoSolution as exc:
+            rows.append({"w_effort": w_e, "w_manip": w_m, "error": str(exc)})
+            continue
+        rows.append({"w_effort": w_e, "w_manip": w_m, **{key: mt[key] for key in (
+            "reached", "time_to_goal", "total_effort", "mean_manipulability",
+            "min_manipulability", "final_manipulability", "scaled_steps")}})
+    return rows
+
+
+def default_grid(scenario: Scenario, points: int = 13) -> list[tuple[float, float]]:
+    """``w_E`` fixed, ``w_M / w_E`` from 0 then log-spaced over 1e-2 .. 1e3 (plus the nominal)."""
+    w_e = scenario.weights.effort
+    ratio_values = [0.0, *np.logspace(-2, 3, points - 1)]
+    nominal = scenario.weights.manipulability / w_e
+    if nominal not in ratio_values:
+        ratio_values.append(nominal)
+    return [(w_e, float(r * w_e)) for r in sorted(ratio_values)]
+
+
+def trade_off_figure(rows: list[dict[str, Any]], scenario: Scenario, controller: str,
+                     out: Path) -> Path:
+    """Trajectory-level trade-off: total effort against mean manipulability, and time to goal."""
+    stem = out / "trade_off"
+    ok = [r for r in rows if "error" not in r]
+    ratio = np.array([r["w_manip"] / r["w_effort"] for r in ok])
+    effort = np.array([r["total_effort"] for r in ok])
+    mean_m = np.array([r["mean_manipulability"] for r in ok])
+    ttg = np.array([r["time_to_goal"] if r["time_to_goal"] is not None else np.nan for r in ok])
+    nominal = scenario.weights.manipulability / scenario.weights.effort
+    with figure(stem, width=COLUMN, height=3.6, nrows=2) as (_, (top, bottom)):
+        top.plot(mean_m, effort, color="grey", linewidth=0.6)
+        s = top.scatter(mean_m, effort, c=np.log10(np.maximum(ratio, 1e-3)), cmap="viridis", s=14)
+        nom = np.isclose(ratio, nominal)
+        top.scatter(mean_m[nom], effort[nom], s=60, facecolors="none", edgecolors="#D55E00",
+                    linewidths=1.2, label="nominal weights")
+        top.set_yscale("log")
+        top.set_xlabel("mean manipulability over the run")
+        top.set_ylabel("total effort (rad^2/s)")
+        top.set_title(f"{scenario.name} {controller}: whole runs per weight ratio")
+        top.legend(fontsize=6)
+        bottom.semilogx(np.maximum(ratio, 1e-3), ttg, marker="o", markersize=3, color=color(0))
+        bottom.set_xlabel("w_M / w_E (0 drawn at 1e-3)")
+        bottom.set_ylabel("time to goal (s)")
+        top.figure.colorbar(s, ax=top, label="log10 w_M / w_E")
+    return stem

@@ -1,0 +1,159 @@
+"""Figures of runs: time series and workspace paths, overlaid for comparison (brief Task 1 and 2).
+
+Every figure is one IEEE column wide (3.5 in), in the shared style (:mod:`emdm.style`), saved as
+PNG, PDF and SVG. Controllers keep their colour and dash in every figure: EMDM blue, IVKC orange,
+constrained solid, unconstrained dashed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.patches import Circle
+
+from .simulate import Run
+from .style import COLUMN, CONTROLLER_STYLE, color, figure
+
+GROUPS = {
+    "UC": ("UC-IVKC", "UC-EMDM"),
+    "C": ("C-IVKC", "C-EMDM"),
+    "all": ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"),
+}
+"""The overlays the brief asks for, and all four together."""
+
+
+def _style(run: Run, index: int) -> dict[str, object]:
+    base = CONTROLLER_STYLE.get(run.controller.name, {"color": color(index), "linestyle": "-"})
+    return {**base, "label": run.controller.name}
+
+
+def _title(runs: Sequence[Run]) -> str:
+    return f"{runs[0].scenario.name}: " + " vs ".join(r.controller.name for r in runs)
+
+
+def _command_time(run: Run) -> np.ndarray:
+    return run.t[:-1]
+
+
+def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
+    """One scalar quantity against time, overlaid for ``runs``.
+
+    ``quantity``: ``effort`` (E, rad^2/s^2), ``manipulability`` (m), ``manip_rate`` (M, 1/s),
+    ``error`` (||e||, m, log scale), ``alpha`` (task scale) or ``slack`` (||delta||, m/s).
+    """
+    labels = {
+        "effort": "effort E = ||qd||^2 / 2 (rad^2/s^2)",
+        "manipulability": "manipulability m",
+        "manip_rate": "manipulability rate M (1/s)",
+        "error": "tracking error ||e|| (m)",
+        "alpha": "task scale alpha",
+        "slack": "task slack ||delta|| (m/s)",
+    }
+    with figure(stem, width=COLUMN, height=2.0) as (_, ax):
+        for i, run in enumerate(runs):
+            style = _style(run, i)
+            if quantity == "manipulability":
+                ax.plot(run.t, run.m, **style)
+            elif quantity == "error":
+                ax.semilogy(run.t, np.maximum(run.error_norm, 1e-6), **style)
+            else:
+                values = {
+                    "effort": run.effort,
+                    "manip_rate": run.manip_rate,
+                    "alpha": run.alpha,
+                    "slack": np.linalg.norm(run.delta, axis=1),
+                }[quantity]
+                ax.step(_command_time(run), values, where="post", **style)
+        if quantity == "error":
+            ax.axhline(runs[0].scenario.motion.tolerance, color="grey", linestyle=":",
+                       linewidth=0.8, label="tolerance")
+        if quantity == "alpha":
+            ax.set_ylim(-0.05, 1.05)
+        ax.set_xlabel("time t (s)")
+        ax.set_ylabel(labels[quantity])
+        ax.set_title(_title(runs))
+        ax.legend()
+    return stem
+
+
+def joints_figure(runs: Sequence[Run], kind: str, stem: Path) -> Path:
+    """Joint velocities (``kind="qd"``) with their limits, or joint positions (``"q"``) with the
+    limits and the dampers' influence (light) and stop (dark) zones shaded; one panel per joint."""
+    sc = runs[0].scenario
+    n = sc.n
+    with figure(stem, width=COLUMN, height=0.95 * n + 0.5, nrows=n, sharex=True, squeeze=False) as (
+        _, axes,
+    ):
+        for j in range(n):
+            ax = axes[j, 0]
+            if kind == "qd":
+                for i, run in enumerate(runs):
+                    ax.step(_command_time(run), run.qd[:, j], where="post", **_style(run, i))
+                for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
+                    ax.axhline(bound, color="black", linewidth=0.7, linestyle=":")
+                ax.set_ylabel(f"qd{j + 1} (rad/s)")
+            else:
+                for i, run in enumerate(runs):
+                    ax.plot(run.t, run.q[:, j], **_style(run, i))
+                lo, hi = sc.arm.q_min[j], sc.arm.q_max[j]
+                infl, stop = sc.damper.influence[j], sc.damper.stop[j]
+                ax.axhspan(hi - infl, hi, color="grey", alpha=0.12, linewidth=0)
+                ax.axhspan(lo, lo + infl, color="grey", alpha=0.12, linewidth=0)
+                ax.axhspan(hi - stop, hi, color="grey", alpha=0.35, linewidth=0)
+                ax.axhspan(lo, lo + stop, color="grey", alpha=0.35, linewidth=0)
+                for bound in (lo, hi):
+                    ax.axhline(bound, color="black", linewidth=0.7)
+                ax.set_ylabel(f"q{j + 1} (rad)")
+        axes[-1, 0].set_xlabel("time t (s)")
+        what = "joint velocities and limits" if kind == "qd" else "joint positions, damper zones"
+        axes[0, 0].set_title(f"{_title(runs)}\n{what}")
+        axes[0, 0].legend(ncols=2)
+    return stem
+
+
+def path_figure(runs: Sequence[Run], stem: Path) -> Path:
+    """End-effector paths in the workspace, with start, goal and the reachable annulus."""
+    sc = runs[0].scenario
+    arm = sc.planar_arm
+    with figure(stem, width=COLUMN, height=3.0) as (_, ax):
+        ax.add_patch(Circle((0, 0), arm.reach, color="grey", alpha=0.10, linewidth=0,
+                            label="reachable"))
+        if arm.inner_reach > 0:
+            ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
+        for i, run in enumerate(runs):
+            ax.plot(run.p[:, 0], run.p[:, 1], **_style(run, i))
+        start = arm.joint_positions(sc.motion.q0)
+        ax.plot(start[:, 0], start[:, 1], color="black", linewidth=1.5, marker="o", markersize=3,
+                label="arm at start")
+        ax.plot(*sc.motion.goal, marker="*", color="black", markersize=9, linestyle="none",
+                label="goal")
+        ax.set_aspect("equal")
+        ax.set_xlim(-arm.reach * 1.05, arm.reach * 1.05)
+        ax.set_ylim(-arm.reach * 1.05, arm.reach * 1.05)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(f"{_title(runs)}: end-effector path")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=3, fontsize=6)
+    return stem
+
+
+def run_figures(runs: dict[str, Run], out: Path) -> list[Path]:
+    """Every run figure for every group of the available controllers; returns the stems."""
+    stems: list[Path] = []
+    for group, names in GROUPS.items():
+        chosen = [runs[name] for name in names if name in runs]
+        if not chosen or (group == "all" and len(chosen) < 3):
+            continue
+        folder = out / group
+        for quantity in ("effort", "manipulability", "manip_rate", "error", "alpha", "slack"):
+            if quantity == "slack" and not any(np.any(r.delta != 0) for r in chosen):
+                continue
+            if quantity == "alpha" and all(np.all(r.alpha == 1.0) for r in chosen):
+                continue
+            stems.append(series_figure(chosen, quantity, folder / quantity))
+        stems.append(joints_figure(chosen, "qd", folder / "joint_velocities"))
+        stems.append(joints_figure(chosen, "q", folder / "joint_positions"))
+        stems.append(path_figure(chosen, folder / "path"))
+    return stems
