@@ -14,11 +14,13 @@ held ``hold`` seconds.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
@@ -27,7 +29,7 @@ from PIL import Image
 from .arm import Matrix, PlanarArm
 from .scenario import Scenario
 from .simulate import Run
-from .style import CONTROLLER_STYLE, RC, figure_canvas, plt
+from .style import CONTROLLER_STYLE, RC, figure_canvas
 
 CIRCLE = np.stack((np.cos(np.linspace(0, 2 * np.pi, 73)), np.sin(np.linspace(0, 2 * np.pi, 73))))
 
@@ -58,8 +60,9 @@ def frame_schedule(steps: int, dt: float, speedup: float, max_fps: float) -> tup
 class Animator:
     """Draws ``runs`` side by side, frame by frame (a frame is a state index of the longest run)."""
 
-    def __init__(self, runs: Sequence[Run], *, speedup: float = 1.0, max_fps: float = 20.0,
-                 hold: float = 1.0) -> None:
+    def __init__(
+        self, runs: Sequence[Run], *, speedup: float = 1.0, max_fps: float = 20.0, hold: float = 1.0
+    ) -> None:
         if speedup <= 0 or max_fps <= 0:
             raise ValueError("speedup and max_fps must be > 0")
         self.runs = list(runs)
@@ -71,7 +74,8 @@ class Animator:
         arm = sc.planar_arm
         biggest = max(
             float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(q) @ arm.jacobian(q).T)[-1]))
-            for run in self.runs for q in run.q
+            for run in self.runs
+            for q in run.q
         )
         self.scale = 0.3 * arm.reach / biggest if biggest > 0 else 1.0
         with plt.rc_context(RC):
@@ -96,19 +100,48 @@ class Animator:
             ax.set_ylabel("y (m)")
             ax.set_title(f"{sc.name}: {run.controller.name}")
             trace = Line2D([], [], color=style["color"], linewidth=1.0, animated=True)
-            links = Line2D([], [], color="black", linewidth=2.0, marker="o", markersize=3.5,
-                           markerfacecolor="white", animated=True)
-            ellipse = Polygon(np.zeros((2, 2)), closed=True, facecolor=style["color"], alpha=0.25,
-                              edgecolor=style["color"], animated=True)
-            text = ax.text(0.02, 0.98, "", transform=ax.transAxes, va="top", fontsize=7,
-                           animated=True, family="monospace")
+            links = Line2D(
+                [],
+                [],
+                color="black",
+                linewidth=2.0,
+                marker="o",
+                markersize=3.5,
+                markerfacecolor="white",
+                animated=True,
+            )
+            ellipse = Polygon(
+                np.zeros((2, 2)),
+                closed=True,
+                facecolor=style["color"],
+                alpha=0.25,
+                edgecolor=style["color"],
+                animated=True,
+            )
+            text = ax.text(
+                0.02,
+                0.98,
+                "",
+                transform=ax.transAxes,
+                va="top",
+                fontsize=7,
+                animated=True,
+                family="monospace",
+            )
             ax.add_line(trace)
             ax.add_patch(ellipse)
             ax.add_line(links)
-            ax.text(0.02, 0.02, f"ellipse x{self.scale:.2g} (m/s per rad/s)", transform=ax.transAxes,
-                    fontsize=6, color="grey")
-            self._artists.append({"ax": ax, "trace": trace, "links": links, "ellipse": ellipse,
-                                  "text": text})
+            ax.text(
+                0.02,
+                0.02,
+                f"ellipse x{self.scale:.2g} (m/s per rad/s)",
+                transform=ax.transAxes,
+                fontsize=6,
+                color="grey",
+            )
+            self._artists.append(
+                {"ax": ax, "trace": trace, "links": links, "ellipse": ellipse, "text": text}
+            )
         self.canvas.draw()
         self._background = self.canvas.copy_from_bbox(self.fig.bbox)
 
@@ -116,7 +149,7 @@ class Animator:
     def durations_ms(self) -> list[int]:
         """How long each frame is shown (ms): true to ``dt`` at the speed-up; the last is held."""
         out = []
-        for a, b in zip(self.indices, self.indices[1:], strict=False):
+        for a, b in itertools.pairwise(self.indices):
             out.append(round((b - a) * self.dt / self.speedup * 1000))
         out.append(round(self.hold * 1000))
         return out
@@ -133,8 +166,9 @@ class Animator:
             art["links"].set_data(points[:, 0], points[:, 1])
             art["trace"].set_data(run.p[: kk + 1, 0], run.p[: kk + 1, 1])
             art["ellipse"].set_xy(ellipse_points(arm.jacobian(q), run.p[kk], self.scale))
-            art["text"].set_text(f"t = {run.t[kk]:5.2f} s\nm = {run.m[kk]:.4f}\n"
-                                 f"|e| = {run.error_norm[kk]:.3f} m")
+            art["text"].set_text(
+                f"t = {run.t[kk]:5.2f} s\nm = {run.m[kk]:.4f}\n|e| = {run.error_norm[kk]:.3f} m"
+            )
             ax = art["ax"]
             for name in ("trace", "ellipse", "links", "text"):
                 ax.draw_artist(art[name])
@@ -156,8 +190,15 @@ class Animator:
         palette = images[0].quantize(colors=128, method=Image.Quantize.MEDIANCUT)
         quantized = [im.quantize(palette=palette, dither=Image.Dither.NONE) for im in images]
         path.parent.mkdir(parents=True, exist_ok=True)
-        quantized[0].save(path, save_all=True, append_images=quantized[1:], loop=0,
-                          duration=self.durations_ms, disposal=1, optimize=False)
+        quantized[0].save(
+            path,
+            save_all=True,
+            append_images=quantized[1:],
+            loop=0,
+            duration=self.durations_ms,
+            disposal=1,
+            optimize=False,
+        )
         return path
 
     def save_mp4(self, path: Path) -> Path | None:
@@ -171,8 +212,14 @@ class Animator:
         fps = self.speedup / (self.stride * self.dt)
         path.parent.mkdir(parents=True, exist_ok=True)
         writer = imageio_ffmpeg.write_frames(
-            str(path), (width, height), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
-            macro_block_size=1, output_params=["-loglevel", "error"])
+            str(path),
+            (width, height),
+            fps=fps,
+            codec="libx264",
+            pix_fmt_out="yuv420p",
+            macro_block_size=1,
+            output_params=["-loglevel", "error"],
+        )
         writer.send(None)
         for frame in frames + [frames[-1]] * max(0, math.ceil(self.hold * fps) - 1):
             writer.send(np.ascontiguousarray(frame))
@@ -184,8 +231,14 @@ class Animator:
         self.fig.clear()
 
 
-def animate(runs: Sequence[Run], out_stem: Path, *, speedup: float = 1.0, max_fps: float = 20.0,
-            mp4: bool = True) -> list[Path]:
+def animate(
+    runs: Sequence[Run],
+    out_stem: Path,
+    *,
+    speedup: float = 1.0,
+    max_fps: float = 20.0,
+    mp4: bool = True,
+) -> list[Path]:
     """Write ``<stem>.gif`` (and ``<stem>.mp4`` where ffmpeg is available) for ``runs``."""
     animator = Animator(runs, speedup=speedup, max_fps=max_fps)
     try:

@@ -250,7 +250,9 @@ def _runs(args: argparse.Namespace, names: Sequence[str]) -> tuple[Scenario, dic
     folder = Path(args.scenario)
     if folder.is_dir():
         if not (folder / "metrics.json").is_file():
-            raise UsageError(f"{folder}: not a run folder (no metrics.json; write one with emdm run)")
+            raise UsageError(
+                f"{folder}: not a run folder (no metrics.json; write one with emdm run)"
+            )
         if args.set:
             raise UsageError("--set applies to scenarios, not to a run folder")
         available = [n for n in names if (folder / "trajectories" / f"{n}.csv").is_file()]
@@ -313,13 +315,17 @@ def cmd_pareto(args: argparse.Namespace) -> int:
     grid = weight_grid(scenario, controller, default_grid(scenario, args.grid))
     with atomic_output(out) as staging:
         write_json(staging / "pareto.json", data)
-        write_json(staging / "weight_grid.json", {"scenario": scenario.name,
-                                                  "controller": controller.name, "runs": grid})
+        write_json(
+            staging / "weight_grid.json",
+            {"scenario": scenario.name, "controller": controller.name, "runs": grid},
+        )
         pareto_figure(data, staging)
         trade_off_figure(grid, scenario, controller.name, staging)
-    print(f"{scenario.name} {controller.name}: Pareto fronts at k = "
-          f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} weights each), "
-          f"{len(grid)} whole runs -> {out}/")
+    print(
+        f"{scenario.name} {controller.name}: Pareto fronts at k = "
+        f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} weights each), "
+        f"{len(grid)} whole runs -> {out}/"
+    )
     return 0
 
 
@@ -434,35 +440,77 @@ def build_parser() -> argparse.ArgumentParser:
     )
     solvers.set_defaults(func=cmd_solvers)
 
-    plot = sub.add_parser("plot", help="time series and workspace figures of the controllers",
-                          description="Figures of runs, from a scenario or a folder of emdm run.")
-    plot.add_argument("scenario", help="a preset, a scenario TOML file, or a folder written by emdm run")
-    plot.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
-                      help="override one scenario value (repeatable)")
-    plot.add_argument("--controller", action="append", metavar="NAME",
-                      help="controller to include (repeatable; default all four)")
-    plot.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario>-figures)")
+    plot = sub.add_parser(
+        "plot",
+        help="time series and workspace figures of the controllers",
+        description="Figures of runs, from a scenario or a folder of emdm run.",
+    )
+    plot.add_argument(
+        "scenario", help="a preset, a scenario TOML file, or a folder written by emdm run"
+    )
+    plot.add_argument(
+        "--set",
+        action="append",
+        metavar="SECTION.KEY=VALUE",
+        help="override one scenario value (repeatable)",
+    )
+    plot.add_argument(
+        "--controller",
+        action="append",
+        metavar="NAME",
+        help="controller to include (repeatable; default all four)",
+    )
+    plot.add_argument(
+        "--out", metavar="DIR", help="output folder (default results/<scenario>-figures)"
+    )
     plot.set_defaults(func=cmd_plot)
 
-    anim = sub.add_parser("animate", help="GIF/MP4 of the arm with its manipulability ellipse",
-                          description="Animate controller pairs side by side.")
-    anim.add_argument("scenario", help="a preset, a scenario TOML file, or a folder written by emdm run")
-    anim.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
-                      help="override one scenario value (repeatable)")
-    anim.add_argument("--pair", action="append", choices=["UC", "C", "all"],
-                      help="which controllers side by side (repeatable; default UC and C)")
+    anim = sub.add_parser(
+        "animate",
+        help="GIF/MP4 of the arm with its manipulability ellipse",
+        description="Animate controller pairs side by side.",
+    )
+    anim.add_argument(
+        "scenario", help="a preset, a scenario TOML file, or a folder written by emdm run"
+    )
+    anim.add_argument(
+        "--set",
+        action="append",
+        metavar="SECTION.KEY=VALUE",
+        help="override one scenario value (repeatable)",
+    )
+    anim.add_argument(
+        "--pair",
+        action="append",
+        choices=["UC", "C", "all"],
+        help="which controllers side by side (repeatable; default UC and C)",
+    )
     anim.add_argument("--speedup", type=float, default=1.0, help="playback speed-up (default 1)")
     anim.add_argument("--no-mp4", action="store_true", help="write the GIF only")
-    anim.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario>-animations)")
+    anim.add_argument(
+        "--out", metavar="DIR", help="output folder (default results/<scenario>-animations)"
+    )
     anim.set_defaults(func=cmd_animate)
 
-    par = sub.add_parser("pareto", help="Pareto fronts of effort against manipulability rate",
-                         description="Weight sweeps at four steps of a run, and over whole runs.")
+    par = sub.add_parser(
+        "pareto",
+        help="Pareto fronts of effort against manipulability rate",
+        description="Weight sweeps at four steps of a run, and over whole runs.",
+    )
     _add_scenario_args(par)
     par.add_argument("--controller", default="UC-EMDM", help="UC-EMDM (default) or C-EMDM")
-    par.add_argument("--grid", type=int, default=13, metavar="N",
-                     help="weight ratios in the whole-run sweep (default 13)")
-    par.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario>-pareto-<controller>)")
+    par.add_argument(
+        "--grid",
+        type=int,
+        default=13,
+        metavar="N",
+        help="weight ratios in the whole-run sweep (default 13)",
+    )
+    par.add_argument(
+        "--out",
+        metavar="DIR",
+        help="output folder (default results/<scenario>-pareto-<controller>)",
+    )
     par.set_defaults(func=cmd_pareto)
 
     show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")

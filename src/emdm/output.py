@@ -206,8 +206,9 @@ def read_run(folder: Path, controller: str) -> Run:
         delta=column("delta_x", "delta_y", last=False).reshape(K, 2),
         lo=np.array([[_float(d[f"lo{j}"]) for j in joints] for d in diag]).reshape(K, n),
         hi=np.array([[_float(d[f"hi{j}"]) for j in joints] for d in diag]).reshape(K, n),
-        active=np.array([[int(d[f"active{j}"]) for j in joints] for d in diag],
-                        dtype=np.int8).reshape(K, n),
+        active=np.array(
+            [[int(d[f"active{j}"]) for j in joints] for d in diag], dtype=np.int8
+        ).reshape(K, n),
         iterations=np.array([int(r["iterations"]) for r in rows[:-1]], dtype=np.int64),
         solve_time=column("solve_time", last=False).reshape(K),
         kkt=np.array([_float(d["kkt_residual"]) for d in diag]),

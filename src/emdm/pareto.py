@@ -53,20 +53,27 @@ def front_at(
         result = solve_chain(program.qp, [DEFAULT_SOLVER, *DEFAULT_FALLBACK])
         qd = result.x[: scenario.n]
         Jm = scenario.planar_arm.manipulability_jacobian(q)
-        points.append({
-            "w_effort": weights.effort, "w_manip": weights.manipulability,
-            "E": 0.5 * float(qd @ qd), "M": float(Jm @ qd), "qd": [float(x) for x in qd],
-            "alpha": program.alpha, "kkt": result.kkt.residual,
-        })
+        points.append(
+            {
+                "w_effort": weights.effort,
+                "w_manip": weights.manipulability,
+                "E": 0.5 * float(qd @ qd),
+                "M": float(Jm @ qd),
+                "qd": [float(x) for x in qd],
+                "alpha": program.alpha,
+                "kkt": result.kkt.residual,
+            }
+        )
     _mark_dominated(points)
     return points
 
 
-def _mark_dominated(points: list[dict[str, Any]], tol: float = 1e-12) -> None:
+def _mark_dominated(points: list[dict[str, Any]]) -> None:
+    """Mark points with another of no more effort and no less rate, one strictly (exact values:
+    the points are certified optima, and E can differ by 1e-15 between neighbours near the goal)."""
     for p in points:
         p["dominated"] = any(
-            o is not p and o["E"] <= p["E"] + tol and o["M"] >= p["M"] - tol
-            and (o["E"] < p["E"] - tol or o["M"] > p["M"] + tol)
+            o["E"] <= p["E"] and o["M"] >= p["M"] and (o["E"] < p["E"] or o["M"] > p["M"])
             for o in points
         )
 
@@ -81,10 +88,22 @@ def pareto_study(
     nominal = scenario.weights.manipulability / scenario.weights.effort
     steps = []
     for k in pareto_steps(run):
-        steps.append({"k": k, "t": float(run.t[k]), "q": [float(x) for x in run.q[k]],
-                      "points": front_at(scenario, ctrl, run.q[k], sweep)})
-    data = {"scenario": scenario.name, "controller": ctrl.name, "T": run.steps,
-            "nominal_ratio": nominal, "ratios": [0.0, *map(float, sweep)], "steps": steps}
+        steps.append(
+            {
+                "k": k,
+                "t": float(run.t[k]),
+                "q": [float(x) for x in run.q[k]],
+                "points": front_at(scenario, ctrl, run.q[k], sweep),
+            }
+        )
+    data = {
+        "scenario": scenario.name,
+        "controller": ctrl.name,
+        "T": run.steps,
+        "nominal_ratio": nominal,
+        "ratios": [0.0, *map(float, sweep)],
+        "steps": steps,
+    }
     return data, run
 
 
@@ -100,14 +119,37 @@ def pareto_figure(data: dict[str, Any], out: Path) -> Path:
             M = np.array([p["M"] for p in pts])
             dominated = np.array([p["dominated"] for p in pts])
             ax.plot(M, E, color="grey", linewidth=0.6, zorder=1)
-            sc = ax.scatter(M[~dominated], E[~dominated],
-                            c=np.log10(np.maximum(np.array(ratio)[~dominated], 1e-4)),
-                            cmap="viridis", s=12, zorder=2)
-            ax.scatter(M[dominated], E[dominated], facecolors="none", edgecolors="black", s=14,
-                       linewidths=0.6, zorder=2, label="dominated")
-            near = int(np.argmin([abs(math.log10(max(r, 1e-12)) - math.log10(nominal)) for r in ratio]))
-            ax.scatter([M[near]], [E[near]], s=60, facecolors="none", edgecolors="#D55E00",
-                       linewidths=1.2, zorder=3, label=f"nominal w_M/w_E = {nominal:g}")
+            sc = ax.scatter(
+                M[~dominated],
+                E[~dominated],
+                c=np.log10(np.maximum(np.array(ratio)[~dominated], 1e-4)),
+                cmap="viridis",
+                s=12,
+                zorder=2,
+            )
+            ax.scatter(
+                M[dominated],
+                E[dominated],
+                facecolors="none",
+                edgecolors="black",
+                s=14,
+                linewidths=0.6,
+                zorder=2,
+                label="dominated",
+            )
+            near = int(
+                np.argmin([abs(math.log10(max(r, 1e-12)) - math.log10(nominal)) for r in ratio])
+            )
+            ax.scatter(
+                [M[near]],
+                [E[near]],
+                s=60,
+                facecolors="none",
+                edgecolors="#D55E00",
+                linewidths=1.2,
+                zorder=3,
+                label=f"nominal w_M/w_E = {nominal:g}",
+            )
             alpha = min(p["alpha"] for p in pts)
             scaled = f", alpha = {alpha:.2f}" if alpha < 1.0 else ""
             ax.set_title(f"k = {step['k']} (t = {step['t']:.2f} s{scaled})")
@@ -116,10 +158,13 @@ def pareto_figure(data: dict[str, Any], out: Path) -> Path:
             ax.tick_params(axis="x", labelrotation=30)
             ax.set_yscale("log")
         axes[0].set_ylabel("effort E (rad^2/s^2)")
-        fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2,
-                   fontsize=6)
+        fig.legend(
+            *axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=6
+        )
         fig.colorbar(sc, ax=axes, label="log10 w_M / w_E", shrink=0.9)
-        fig.suptitle(f"Pareto fronts, {data['scenario']} {data['controller']} (w_M = 0 at the far left)")
+        fig.suptitle(
+            f"Pareto fronts, {data['scenario']} {data['controller']} (w_M = 0 at the far left)"
+        )
     return stem
 
 
@@ -130,16 +175,32 @@ def weight_grid(
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     rows = []
     for w_e, w_m in grid:
-        sc = replace(scenario, weights=Weights(effort=w_e, manipulability=w_m,
-                                               slack=scenario.weights.slack))
+        sc = replace(
+            scenario, weights=Weights(effort=w_e, manipulability=w_m, slack=scenario.weights.slack)
+        )
         try:
             mt = metrics(simulate(sc, ctrl))
         except NoSolution as exc:
             rows.append({"w_effort": w_e, "w_manip": w_m, "error": str(exc)})
             continue
-        rows.append({"w_effort": w_e, "w_manip": w_m, **{key: mt[key] for key in (
-            "reached", "time_to_goal", "total_effort", "mean_manipulability",
-            "min_manipulability", "final_manipulability", "scaled_steps")}})
+        rows.append(
+            {
+                "w_effort": w_e,
+                "w_manip": w_m,
+                **{
+                    key: mt[key]
+                    for key in (
+                        "reached",
+                        "time_to_goal",
+                        "total_effort",
+                        "mean_manipulability",
+                        "min_manipulability",
+                        "final_manipulability",
+                        "scaled_steps",
+                    )
+                },
+            }
+        )
     return rows
 
 
@@ -153,8 +214,9 @@ def default_grid(scenario: Scenario, points: int = 13) -> list[tuple[float, floa
     return [(w_e, float(r * w_e)) for r in sorted(ratio_values)]
 
 
-def trade_off_figure(rows: list[dict[str, Any]], scenario: Scenario, controller: str,
-                     out: Path) -> Path:
+def trade_off_figure(
+    rows: list[dict[str, Any]], scenario: Scenario, controller: str, out: Path
+) -> Path:
     """Trajectory-level trade-off: total effort against mean manipulability, and time to goal."""
     stem = out / "trade_off"
     ok = [r for r in rows if "error" not in r]
@@ -167,8 +229,15 @@ def trade_off_figure(rows: list[dict[str, Any]], scenario: Scenario, controller:
         top.plot(mean_m, effort, color="grey", linewidth=0.6)
         s = top.scatter(mean_m, effort, c=np.log10(np.maximum(ratio, 1e-3)), cmap="viridis", s=14)
         nom = np.isclose(ratio, nominal)
-        top.scatter(mean_m[nom], effort[nom], s=60, facecolors="none", edgecolors="#D55E00",
-                    linewidths=1.2, label="nominal weights")
+        top.scatter(
+            mean_m[nom],
+            effort[nom],
+            s=60,
+            facecolors="none",
+            edgecolors="#D55E00",
+            linewidths=1.2,
+            label="nominal weights",
+        )
         top.set_yscale("log")
         top.set_xlabel("mean manipulability over the run")
         top.set_ylabel("total effort (rad^2/s)")

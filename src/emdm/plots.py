@@ -67,8 +67,13 @@ def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
                 }[quantity]
                 ax.step(_command_time(run), values, where="post", **style)
         if quantity == "error":
-            ax.axhline(runs[0].scenario.motion.tolerance, color="grey", linestyle=":",
-                       linewidth=0.8, label="tolerance")
+            ax.axhline(
+                runs[0].scenario.motion.tolerance,
+                color="grey",
+                linestyle=":",
+                linewidth=0.8,
+                label="tolerance",
+            )
         if quantity == "alpha":
             ax.set_ylim(-0.05, 1.05)
         ax.set_xlabel("time t (s)")
@@ -84,7 +89,8 @@ def joints_figure(runs: Sequence[Run], kind: str, stem: Path) -> Path:
     sc = runs[0].scenario
     n = sc.n
     with figure(stem, width=COLUMN, height=0.95 * n + 0.5, nrows=n, sharex=True, squeeze=False) as (
-        _, axes,
+        _,
+        axes,
     ):
         for j in range(n):
             ax = axes[j, 0]
@@ -118,17 +124,26 @@ def path_figure(runs: Sequence[Run], stem: Path) -> Path:
     sc = runs[0].scenario
     arm = sc.planar_arm
     with figure(stem, width=COLUMN, height=3.0) as (_, ax):
-        ax.add_patch(Circle((0, 0), arm.reach, color="grey", alpha=0.10, linewidth=0,
-                            label="reachable"))
+        ax.add_patch(
+            Circle((0, 0), arm.reach, color="grey", alpha=0.10, linewidth=0, label="reachable")
+        )
         if arm.inner_reach > 0:
             ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
         for i, run in enumerate(runs):
             ax.plot(run.p[:, 0], run.p[:, 1], **_style(run, i))
         start = arm.joint_positions(sc.motion.q0)
-        ax.plot(start[:, 0], start[:, 1], color="black", linewidth=1.5, marker="o", markersize=3,
-                label="arm at start")
-        ax.plot(*sc.motion.goal, marker="*", color="black", markersize=9, linestyle="none",
-                label="goal")
+        ax.plot(
+            start[:, 0],
+            start[:, 1],
+            color="black",
+            linewidth=1.5,
+            marker="o",
+            markersize=3,
+            label="arm at start",
+        )
+        ax.plot(
+            *sc.motion.goal, marker="*", color="black", markersize=9, linestyle="none", label="goal"
+        )
         ax.set_aspect("equal")
         ax.set_xlim(-arm.reach * 1.05, arm.reach * 1.05)
         ax.set_ylim(-arm.reach * 1.05, arm.reach * 1.05)

@@ -45,7 +45,6 @@ RC: Any = {
     "grid.linewidth": 0.5,
     "axes.prop_cycle": cycler(color=OKABE_ITO),
     "savefig.dpi": 200,
-    "savefig.bbox": "tight",
     "figure.constrained_layout.use": True,
     "svg.fonttype": "none",
     "pdf.fonttype": 42,

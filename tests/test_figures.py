@@ -1,0 +1,275 @@
+"""Figures, animations and Pareto fronts: checked against the mathematics and read back."""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import emdm
+from emdm.animate import Animator, animate, ellipse_points, frame_schedule
+from emdm.cli import main
+from emdm.controllers import program_at
+from emdm.output import read_run
+from emdm.pareto import front_at, pareto_steps, pareto_study, ratios
+from emdm.plots import run_figures
+
+
+@pytest.fixture(scope="module")
+def task2_runs():
+    sc = emdm.load_scenario("task2", {"motion.max_time": 4.0})
+    return {c: emdm.simulate(sc, c) for c in emdm.CONTROLLERS}
+
+
+def test_read_run_is_exact(tmp_path):
+    assert main(["run", "task1", "--out", str(tmp_path)]) == 0
+    sc = emdm.load_scenario("task1")
+    for name in emdm.CONTROLLERS:
+        again, run = read_run(tmp_path, name), emdm.simulate(sc, name)
+        for field in (
+            "t",
+            "q",
+            "p",
+            "e",
+            "v",
+            "m",
+            "qd",
+            "effort",
+            "manip_rate",
+            "alpha",
+            "delta",
+            "lo",
+            "hi",
+            "active",
+            "kkt",
+            "bound_excess",
+            "fallback",
+            "iterations",
+        ):
+            assert np.array_equal(getattr(again, field), getattr(run, field)), (name, field)
+        assert again.reached == run.reached and again.solver == run.solver
+
+
+def test_run_figures_cover_every_group_in_three_formats(tmp_path, task2_runs):
+    stems = run_figures(task2_runs, tmp_path)
+    names = {(s.parent.name, s.name) for s in stems}
+    for group in ("UC", "C", "all"):
+        for figure_name in (
+            "effort",
+            "manipulability",
+            "manip_rate",
+            "error",
+            "joint_velocities",
+            "joint_positions",
+            "path",
+        ):
+            assert (group, figure_name) in names
+    assert ("C", "slack") in names  # the non-redundant EMDM uses its slack
+    for stem in stems:
+        for suffix in (".png", ".pdf", ".svg"):
+            assert stem.with_suffix(suffix).stat().st_size > 2000
+        with Image.open(stem.with_suffix(".png")) as image:
+            width_in = image.size[0] / 200  # saved at 200 dpi
+            assert width_in == pytest.approx(3.5, abs=0.01), stem  # one IEEE column
+
+
+def test_plot_command_from_a_run_folder_and_bad_folders(tmp_path, capsys):
+    run_dir = tmp_path / "run"
+    assert (
+        main(
+            [
+                "run",
+                "task2",
+                "--controller",
+                "C-EMDM",
+                "--controller",
+                "C-IVKC",
+                "--set",
+                "motion.max_time=2",
+                "--out",
+                str(run_dir),
+            ]
+        )
+        == 0
+    )
+    assert main(["plot", str(run_dir), "--out", str(tmp_path / "figs")]) == 0
+    assert (tmp_path / "figs" / "C" / "path.png").exists()
+    assert not (tmp_path / "figs" / "UC").exists()  # only what was run
+    capsys.readouterr()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["plot", str(empty), "--out", str(tmp_path / "x")]) == 2
+    assert "not a run folder" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
+# ---------------------------------------------------------------------------------- animations
+def test_frame_schedule_is_true_to_dt():
+    indices, stride = frame_schedule(100, 0.05, 1.0, 20.0)
+    assert stride == 1 and indices == list(range(101))
+    # at 4x, one step lasts 12.5 ms: too fast and not whole centiseconds; 4 steps make 50 ms
+    indices, stride = frame_schedule(100, 0.05, 4.0, 20.0)
+    assert stride == 4 and stride * 0.05 / 4.0 == pytest.approx(0.05)
+    assert indices[-1] == 100
+    indices, stride = frame_schedule(10, 0.03, 1.0, 40.0)  # 30 ms frames, 33 fps <= 40
+    assert stride == 1
+    assert frame_schedule(10, 0.03, 1.0, 30.0)[1] == 2  # 33 fps > 30: every other state
+
+
+@pytest.mark.parametrize("speedup", [1.0, 2.0])
+def test_gif_read_back_matches_the_run(tmp_path, task2_runs, speedup):
+    runs = [task2_runs["C-IVKC"], task2_runs["C-EMDM"]]
+    written = animate(runs, tmp_path / "anim", speedup=speedup, mp4=False)
+    steps = max(r.steps for r in runs)
+    dt = runs[0].scenario.motion.dt
+    indices, _ = frame_schedule(steps, dt, speedup, 20.0)
+    with Image.open(written[0]) as gif:
+        assert gif.n_frames == len(indices)
+        durations = []
+        for i in range(gif.n_frames):
+            gif.seek(i)
+            durations.append(gif.info["duration"])
+    expected = [round((b - a) * dt / speedup * 1000) for a, b in itertools.pairwise(indices)]
+    assert durations[:-1] == expected
+    assert durations[-1] == 1000  # the final state is held for a second
+    assert sum(durations[:-1]) == pytest.approx(steps * dt / speedup * 1000, abs=1)
+
+
+def test_ellipse_drawn_matches_the_eigen_decomposition(task2_runs):
+    runs = [task2_runs["UC-EMDM"]]
+    animator = Animator(runs)
+    try:
+        run = runs[0]
+        arm = run.scenario.planar_arm
+        for frame in (0, len(animator.indices) // 2, len(animator.indices) - 1):
+            k = animator.indices[frame]
+            drawn = animator.ellipse_at(frame)
+            J = arm.jacobian(run.q[k])
+            lam, U = np.linalg.eigh(J @ J.T)
+            centred = drawn - run.p[k]
+            # every vertex lies on x^T (J J^T)^-1 x = scale^2 ...
+            quad = np.einsum("ij,jk,ik->i", centred, np.linalg.inv(J @ J.T), centred)
+            np.testing.assert_allclose(quad, animator.scale**2, rtol=1e-9)
+            # ... and the extent along each eigenvector is scale * sqrt(eigenvalue)
+            for i in range(2):
+                extent = np.abs(centred @ U[:, i]).max()
+                assert extent == pytest.approx(animator.scale * np.sqrt(lam[i]), rel=1e-3)
+    finally:
+        animator.close()
+
+
+def test_ellipse_points_for_a_known_jacobian():
+    J = np.array([[2.0, 0.0], [0.0, 0.5]])
+    pts = ellipse_points(J, np.array([1.0, -1.0]), 1.0)
+    assert np.abs(pts[:, 0] - 1.0).max() == pytest.approx(2.0)
+    assert np.abs(pts[:, 1] + 1.0).max() == pytest.approx(0.5)
+
+
+def test_animate_command_writes_gif_and_mp4(tmp_path):
+    out = tmp_path / "anim"
+    assert (
+        main(
+            [
+                "animate",
+                "task2",
+                "--set",
+                "motion.max_time=1",
+                "--pair",
+                "C",
+                "--speedup",
+                "2",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    assert (out / "C-IVKC_vs_C-EMDM.gif").stat().st_size > 10_000
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    mp4 = out / "C-IVKC_vs_C-EMDM.mp4"
+    frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(mp4))
+    assert frames >= 10 and seconds == pytest.approx(1.0 / 2 + 1.0, abs=0.15)
+
+
+def test_animate_rejects_bad_speedup(tmp_path, capsys):
+    assert main(["animate", "task2", "--speedup", "0", "--out", str(tmp_path / "a")]) == 2
+    assert "--speedup must be > 0" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------------- Pareto
+@pytest.fixture(scope="module")
+def task1_pareto():
+    return pareto_study(emdm.load_scenario("task1"), "UC-EMDM")
+
+
+def test_uc_emdm_front_lies_on_the_analytic_parabola(task1_pareto):
+    data, run = task1_pareto
+    sc = run.scenario
+    assert [s["k"] for s in data["steps"]] == pareto_steps(run) == [0, 48, 96, 144]
+    assert data["ratios"][0] == 0.0 and data["ratios"][-1] / data["ratios"][1] >= 1e6
+    for step in data["steps"]:
+        q = np.asarray(step["q"])
+        kin = sc.planar_arm.kinematics(q)
+        v = sc.motion.kp * (sc.motion.goal - kin.p)
+        Jp = np.linalg.pinv(kin.J)
+        N = np.eye(3) - Jp @ kin.J
+        q0 = Jp @ v
+        E0, M0 = 0.5 * q0 @ q0, kin.Jm @ q0
+        curvature = 2 * np.linalg.norm(N @ kin.Jm) ** 2
+        for point in step["points"]:
+            expected_E = E0 + (point["M"] - M0) ** 2 / curvature
+            assert point["E"] == pytest.approx(expected_E, rel=1e-9, abs=1e-12)
+            # and each point is the exact optimum for its weights (closed form)
+            r = point["w_manip"] / point["w_effort"]
+            np.testing.assert_allclose(point["qd"], q0 + r * N @ kin.Jm, rtol=1e-10, atol=1e-12)
+            assert point["kkt"] <= 1e-9
+
+
+def test_on_the_parabola_nothing_right_of_the_vertex_is_dominated(task1_pareto):
+    data, _ = task1_pareto
+    for step in data["steps"]:
+        # qd(r) = J^+ v + r N Jm with J^+ v orthogonal to N Jm: both E and M grow with r >= 0,
+        # so no point of the sweep dominates another
+        assert not any(p["dominated"] for p in step["points"])
+
+
+def test_constrained_front_points_are_optimal(rng):
+    sc = emdm.load_scenario("task2")
+    ctrl = emdm.get_controller("C-EMDM")
+    from conftest import reference_solve
+
+    q = np.array([0.4, 1.1])
+    for point in front_at(sc, ctrl, q, ratios(decades=6, per_decade=1)):
+        weights = emdm.scenario.Weights(point["w_effort"], point["w_manip"], sc.weights.slack)
+        qp = program_at(ctrl, sc, q, weights=weights).qp
+        ref = reference_solve(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
+        np.testing.assert_allclose(point["qd"], ref[:2], atol=1e-8)
+
+
+def test_dominance_marking():
+    from emdm.pareto import _mark_dominated
+
+    pts = [{"E": 1.0, "M": 1.0}, {"E": 2.0, "M": 0.5}, {"E": 2.0, "M": 2.0}, {"E": 1.0, "M": 1.0}]
+    _mark_dominated(pts)
+    assert [p["dominated"] for p in pts] == [False, True, False, False]
+
+
+def test_pareto_command(tmp_path, capsys):
+    out = tmp_path / "par"
+    assert (
+        main(["pareto", "task1", "--controller", "C-EMDM", "--grid", "4", "--out", str(out)]) == 0
+    )
+    data = json.loads((out / "pareto.json").read_text())
+    assert data["controller"] == "C-EMDM" and len(data["steps"]) == 4
+    point = data["steps"][1]["points"][0]
+    assert set(point) >= {"w_effort", "w_manip", "E", "M", "qd", "dominated"}
+    grid = json.loads((out / "weight_grid.json").read_text())
+    assert len(grid["runs"]) >= 4 and all("total_effort" in r for r in grid["runs"])
+    for stem in ("pareto_front", "trade_off"):
+        assert (out / f"{stem}.png").stat().st_size > 5000
+    capsys.readouterr()
+    assert main(["pareto", "task1", "--controller", "C-IVKC", "--out", str(tmp_path / "no")]) == 2
+    assert "must be UC-EMDM or C-EMDM" in capsys.readouterr().err
