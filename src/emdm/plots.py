@@ -44,7 +44,7 @@ def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
     ``error`` (||e||, m, log scale), ``alpha`` (task scale) or ``slack`` (||delta||, m/s).
     """
     labels = {
-        "effort": "effort E = ||qd||^2 / 2 (rad^2/s^2)",
+        "effort": "effort E (rad^2/s^2)",
         "manipulability": "manipulability m",
         "manip_rate": "manipulability rate M (1/s)",
         "error": "tracking error ||e|| (m)",
@@ -66,6 +66,8 @@ def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
                     "slack": np.linalg.norm(run.delta, axis=1),
                 }[quantity]
                 ax.step(_command_time(run), values, where="post", **style)
+        if quantity == "effort":
+            ax.set_yscale("log")  # spans many decades: the UC start spikes, the goal tends to 0
         if quantity == "error":
             ax.axhline(
                 runs[0].scenario.motion.tolerance,
