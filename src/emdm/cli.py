@@ -44,14 +44,29 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     return scenario
 
 
-def _add_scenario_args(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help=f"a preset ({', '.join(PRESETS)}) or a scenario TOML file")
+def _add_scenario_args(
+    parser: argparse.ArgumentParser, *, run_dir: bool = False, default: str | None = None
+) -> None:
+    """The scenario argument (a preset or TOML file, optionally a run folder) and ``--set``."""
+    what = "a preset (" + ", ".join(PRESETS) + ") or a scenario TOML file"
+    if run_dir:
+        what += ", or a folder written by emdm run"
+    if default is None:
+        parser.add_argument("scenario", help=what)
+    else:
+        parser.add_argument(
+            "scenario", nargs="?", default=default, help=f"{what} (default {default})"
+        )
     parser.add_argument(
         "--set",
         action="append",
         metavar="SECTION.KEY=VALUE",
         help="override one scenario value (repeatable), e.g. --set weights.effort=0.2",
     )
+
+
+def _add_out(parser: argparse.ArgumentParser, default: str) -> None:
+    parser.add_argument("--out", metavar="DIR", help=f"output folder (default {default})")
 
 
 def _fallback(text: str | None) -> list[str]:
@@ -368,101 +383,78 @@ def build_parser() -> argparse.ArgumentParser:
         "--solver",
         default=DEFAULT_SOLVER,
         metavar="NAME",
-        help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see 'emdm list')",
+        help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see emdm list)",
     )
     run.add_argument(
         "--fallback",
         metavar="A,B",
-        help=f"fallback chain when the solver fails (default {','.join(DEFAULT_FALLBACK)})",
+        help=f"fallback chain when it fails (default {','.join(DEFAULT_FALLBACK)})",
     )
-    run.add_argument("--out", metavar="DIR", help="output folder (default results/<scenario name>)")
+    _add_out(run, "results/<scenario name>")
     run.set_defaults(func=cmd_run)
 
-    solvers = sub.add_parser(
+    lab = sub.add_parser(
         "solvers",
         help="compare solvers on a controller's per-step programs (the solver lab)",
-        description="Run the controller with each solver in closed loop, and re-solve the programs "
-        "along the exact trajectory with each, against the exact optimum.",
+        description="Run the controller with each solver in closed loop, and re-solve the "
+        "programs along the exact trajectory with each, against the exact optimum.",
     )
-    solvers.add_argument(
-        "scenario",
-        nargs="?",
-        default="task2",
-        help="a preset or a scenario TOML file (default task2)",
-    )
-    solvers.add_argument(
-        "--set",
-        action="append",
-        metavar="SECTION.KEY=VALUE",
-        help="override one scenario value (repeatable)",
-    )
-    solvers.add_argument(
+    _add_scenario_args(lab, default="task2")
+    lab.add_argument(
         "--controller",
         default="C-EMDM",
         metavar="NAME",
         help="controller whose programs are solved (default C-EMDM)",
     )
-    solvers.add_argument(
+    lab.add_argument(
         "--solvers",
         metavar="A,B,...",
         help="solvers to compare (default: every installed one of the standard set)",
     )
-    solvers.add_argument(
+    lab.add_argument(
         "--sample",
         type=int,
         default=100,
         metavar="N",
         help="re-solve N evenly spaced steps (0: every step; default 100)",
     )
-    solvers.add_argument(
+    lab.add_argument(
         "--repeats",
         type=int,
         default=5,
         metavar="R",
         help="timing repeats per step, median taken (default 5)",
     )
-    solvers.add_argument(
+    lab.add_argument(
         "--budget",
         type=int,
         metavar="N",
         help="evaluation budget of the gradient-free methods (default 2000)",
     )
-    solvers.add_argument(
+    lab.add_argument(
         "--workers",
         type=int,
         default=2,
         metavar="W",
         help="processes to spread the solvers over (default 2)",
     )
-    solvers.add_argument("--no-figures", action="store_true", help="skip the figures")
-    solvers.add_argument(
-        "--out", metavar="DIR", help="output folder (default results/<scenario>-solvers)"
-    )
-    solvers.set_defaults(func=cmd_solvers)
+    lab.add_argument("--no-figures", action="store_true", help="skip the figures")
+    _add_out(lab, "results/<scenario>-solvers")
+    lab.set_defaults(func=cmd_solvers)
 
     plot = sub.add_parser(
         "plot",
         help="time series and workspace figures of the controllers",
         description="Figures of runs, from a scenario or a folder of emdm run.",
     )
-    plot.add_argument(
-        "scenario", help="a preset, a scenario TOML file, or a folder written by emdm run"
-    )
-    plot.add_argument(
-        "--set",
-        action="append",
-        metavar="SECTION.KEY=VALUE",
-        help="override one scenario value (repeatable)",
-    )
+    _add_scenario_args(plot, run_dir=True)
     plot.add_argument(
         "--controller",
         action="append",
         metavar="NAME",
         help="controller to include (repeatable; default all four)",
     )
-    plot.add_argument(
-        "--out", metavar="DIR", help="output folder (default results/<scenario>-figures)"
-    )
+    _add_out(plot, "results/<scenario>-figures")
     plot.set_defaults(func=cmd_plot)
 
     anim = sub.add_parser(
@@ -470,15 +462,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="GIF/MP4 of the arm with its manipulability ellipse",
         description="Animate controller pairs side by side.",
     )
-    anim.add_argument(
-        "scenario", help="a preset, a scenario TOML file, or a folder written by emdm run"
-    )
-    anim.add_argument(
-        "--set",
-        action="append",
-        metavar="SECTION.KEY=VALUE",
-        help="override one scenario value (repeatable)",
-    )
+    _add_scenario_args(anim, run_dir=True)
     anim.add_argument(
         "--pair",
         action="append",
@@ -487,9 +471,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     anim.add_argument("--speedup", type=float, default=1.0, help="playback speed-up (default 1)")
     anim.add_argument("--no-mp4", action="store_true", help="write the GIF only")
-    anim.add_argument(
-        "--out", metavar="DIR", help="output folder (default results/<scenario>-animations)"
-    )
+    _add_out(anim, "results/<scenario>-animations")
     anim.set_defaults(func=cmd_animate)
 
     par = sub.add_parser(
@@ -506,20 +488,16 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="weight ratios in the whole-run sweep (default 13)",
     )
-    par.add_argument(
-        "--out",
-        metavar="DIR",
-        help="output folder (default results/<scenario>-pareto-<controller>)",
-    )
+    _add_out(par, "results/<scenario>-pareto-<controller>")
     par.set_defaults(func=cmd_pareto)
 
     show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
     _add_scenario_args(show)
-    show.add_argument("--out", metavar="DIR", help="unused; accepted for uniformity")
+    _add_out(show, "none: prints to the terminal")
     show.set_defaults(func=cmd_scenario)
 
     lst = sub.add_parser("list", help="list controllers, presets and solvers")
-    lst.add_argument("--out", metavar="DIR", help="unused; accepted for uniformity")
+    _add_out(lst, "none: prints to the terminal")
     lst.set_defaults(func=cmd_list)
     return parser
 
