@@ -50,12 +50,12 @@ class Run:
     delta: Matrix
     lo: Matrix
     hi: Matrix
-    active: NDArray_int
-    iterations: NDArray_int
+    active: np.ndarray
+    iterations: np.ndarray
     solve_time: Vector
     kkt: Vector
     bound_excess: Vector
-    fallback: NDArray_bool
+    fallback: np.ndarray
     solver: list[str] = field(default_factory=list)
     status: list[str] = field(default_factory=list)
     attempts: list[str] = field(default_factory=list)
@@ -76,10 +76,6 @@ class Run:
     def time_to_goal(self) -> float | None:
         """``t_K`` when the goal was reached, else ``None``."""
         return float(self.t[-1]) if self.reached else None
-
-
-NDArray_int = np.ndarray
-NDArray_bool = np.ndarray
 
 
 def simulate(
