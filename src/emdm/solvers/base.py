@@ -88,9 +88,17 @@ def kkt_report(qp: QP, x: Vector, *, active_tol: float = 1e-9) -> KKTReport:
     m = qp.A.shape[0]
     mu_lo = z[2 * m : 2 * m + int(at_lo.sum())]
     mu_hi = z[2 * m + int(at_lo.sum()) :]
-    scale_g = max(1.0, float(np.abs(qp.P @ x).max()), float(np.abs(qp.c).max()))
+    # Relative to the magnitudes that meet in each condition (a backward error): rounding in
+    # A x is eps |A| |x|, and the terms of P x + c = A^T lam + mu cancel at their own size.
+    scale_g = max(
+        1.0,
+        float(np.abs(qp.P @ x).max()),
+        float(np.abs(qp.c).max()),
+        float(np.abs(M * z).max(initial=0.0)),
+    )
     stationarity = float(np.abs(g - M @ z).max()) / scale_g
-    equality = float(np.abs(qp.A @ x - qp.b).max()) / max(1.0, float(np.abs(qp.b).max()))
+    scale_eq = max(1.0, float(np.abs(qp.b).max()), float((np.abs(qp.A) @ np.abs(x)).max()))
+    equality = float(np.abs(qp.A @ x - qp.b).max()) / scale_eq
     gap_lo = (x - qp.lb)[at_lo]
     gap_hi = (qp.ub - x)[at_hi]
     comp = float(
