@@ -17,16 +17,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 study: $(STAMP)
-	$(BIN)/emdm run task1 --out $(OUT)/task1
-	$(BIN)/emdm run task2 --out $(OUT)/task2
-	$(BIN)/emdm solvers task2 --controller C-EMDM --out $(OUT)/task2-solvers
-	$(BIN)/emdm solvers task1 --controller C-EMDM --solvers active-set,interior-point,admm,daqp,quadprog,slsqp --out $(OUT)/task1-solvers
-	$(BIN)/emdm plot $(OUT)/task1 --out $(OUT)/task1/figures
-	$(BIN)/emdm plot $(OUT)/task2 --out $(OUT)/task2/figures
-	$(BIN)/emdm animate $(OUT)/task1 --out $(OUT)/task1/animations
-	$(BIN)/emdm animate $(OUT)/task2 --out $(OUT)/task2/animations
-	$(BIN)/emdm pareto task1 --controller UC-EMDM --out $(OUT)/task1-pareto-UC-EMDM
-	$(BIN)/emdm pareto task1 --controller C-EMDM --out $(OUT)/task1-pareto-C-EMDM
+	$(BIN)/emdm report --out $(OUT)/report
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests

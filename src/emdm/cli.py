@@ -344,6 +344,23 @@ def cmd_pareto(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_report(args: argparse.Namespace) -> int:
+    from .report import build_report
+
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    out = Path(args.out or "results/report")
+    start = time.perf_counter()
+
+    def progress(message: str) -> None:
+        print(f"  {message}", file=sys.stderr, flush=True)
+
+    print(f"emdm report ({'quick' if args.quick else 'full'}) -> {out}/", file=sys.stderr)
+    build_report(out, quick=args.quick, workers=args.workers, progress=progress)
+    print(f"report written in {time.perf_counter() - start:.1f} s: {out / 'index.html'}")
+    return 0
+
+
 def cmd_scenario(args: argparse.Namespace) -> int:
     print(_scenario(args).to_toml(), end="")
     return 0
@@ -490,6 +507,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_out(par, "results/<scenario>-pareto-<controller>")
     par.set_defaults(func=cmd_pareto)
+
+    rep = sub.add_parser(
+        "report",
+        help="the whole study of the brief: HTML, LaTeX and data",
+        description="Run every experiment of the brief and write index.html, "
+        "latex/ and the data behind every number.",
+    )
+    rep.add_argument(
+        "--quick", action="store_true", help="a reduced study in about 20 s (demos, tests)"
+    )
+    rep.add_argument(
+        "--workers",
+        type=int,
+        metavar="W",
+        help="processes to spread the work over (default: up to 2)",
+    )
+    _add_out(rep, "results/report")
+    rep.set_defaults(func=cmd_report)
 
     show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
     _add_scenario_args(show)

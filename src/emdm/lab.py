@@ -81,6 +81,13 @@ class SolverStudy:
     closed_loop: Run | None = None
     closed_loop_error: str | None = None
 
+    def __getstate__(self) -> dict[str, Any]:
+        # solver functions may be closures: pickle the solver by name (the registry restores it)
+        return {**self.__dict__, "spec": self.spec.name}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update({**state, "spec": get_solver(state["spec"])})
+
     def summary(self) -> dict[str, Any]:
         """The solver's row of ``solvers.json``."""
         times = np.array([s.time for s in self.solves])
@@ -419,3 +426,24 @@ def lab_rows(lab: LabResult, name: str) -> list[list[Any]]:
             ]
         )
     return rows
+
+
+def merge_labs(parts: Sequence[LabResult]) -> LabResult:
+    """One lab from labs of the same scenario, controller and steps run for different solvers."""
+    first = parts[0]
+    for part in parts[1:]:
+        if part.steps != first.steps or part.controller != first.controller:
+            raise ValueError("only labs of the same controller and steps can be merged")
+    studies: dict[str, SolverStudy] = {}
+    for part in parts:
+        studies.update(part.studies)
+    return LabResult(
+        first.scenario,
+        first.controller,
+        first.reference,
+        first.steps,
+        first.representative,
+        studies,
+        first.optimum,
+        first.features,
+    )

@@ -51,6 +51,21 @@ RC: Any = {
 }
 
 
+FORMATS: tuple[str, ...] = (".png", ".pdf", ".svg")
+"""Formats every figure is saved in; :func:`formats` changes them for a block (the report skips SVG)."""
+
+
+@contextmanager
+def formats(suffixes: tuple[str, ...]) -> Iterator[None]:
+    """Save figures in ``suffixes`` (e.g. ``(".png", ".pdf")``) inside the block."""
+    global FORMATS
+    saved, FORMATS = FORMATS, suffixes
+    try:
+        yield
+    finally:
+        FORMATS = saved
+
+
 def color(index: int) -> str:
     """The ``index``-th palette colour (cycling)."""
     return OKABE_ITO[index % len(OKABE_ITO)]
@@ -60,13 +75,13 @@ def color(index: int) -> str:
 def figure(
     path_stem: Path, width: float = COLUMN, height: float = 2.4, **subplots: Any
 ) -> Iterator[tuple[Any, Any]]:
-    """Create a styled figure; on exit save ``<stem>.png``, ``.pdf`` and ``.svg`` and close it."""
+    """Create a styled figure; on exit save it in every format of :data:`FORMATS` and close it."""
     with plt.rc_context(RC):
         fig, axes = plt.subplots(figsize=(width, height), **subplots)
         try:
             yield fig, axes
             path_stem.parent.mkdir(parents=True, exist_ok=True)
-            for suffix in (".png", ".pdf", ".svg"):
+            for suffix in FORMATS:
                 fig.savefig(path_stem.with_suffix(suffix))
         finally:
             plt.close(fig)
