@@ -61,8 +61,6 @@ from .simulate import Run, simulate
 from .solvers import available_solvers
 from .style import formats
 
-FIGURE_FORMATS = (".png", ".pdf")
-
 
 @dataclass(frozen=True)
 class ReportConfig:
@@ -78,6 +76,7 @@ class ReportConfig:
     grid: int
     animation_seconds: float
     mp4: bool
+    figure_formats: tuple[str, ...] = (".png", ".pdf")
 
 
 FULL = ReportConfig(
@@ -103,6 +102,7 @@ QUICK = ReportConfig(
     grid=4,
     animation_seconds=4.0,
     mp4=False,
+    figure_formats=(".png",),  # LaTeX then includes the PNGs
 )
 PAIRS = {"UC": ("UC-EMDM", "UC-IVKC"), "C": ("C-EMDM", "C-IVKC")}
 
@@ -129,7 +129,7 @@ def _job_lab_written(
     fig_dir: Path,
 ) -> str:
     """A whole lab, its data and figures written by the worker (no result to ship back)."""
-    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir)
+    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir, cfg)
     return controller
 
 
@@ -145,15 +145,15 @@ def _job_pareto(
         data_dir / "weight_grid.json",
         {"scenario": scenario.name, "controller": controller, "runs": grid},
     )
-    with formats(FIGURE_FORMATS):
+    with formats(cfg.figure_formats):
         pareto_figure(data, fig_dir)
         trade_off_figure(grid, scenario, controller, fig_dir)
     return {"task": task, "controller": controller}
 
 
-def _job_figures(runs: dict[str, Run], fig_dir: Path) -> list[str]:
+def _job_figures(runs: dict[str, Run], fig_dir: Path, cfg: ReportConfig) -> list[str]:
     stems = []
-    with formats(FIGURE_FORMATS):
+    with formats(cfg.figure_formats):
         for group, (emdm_name, ivkc_name) in PAIRS.items():
             pair = [runs[ivkc_name], runs[emdm_name]]
             folder = fig_dir / group
@@ -592,8 +592,20 @@ def challenge_findings(data: Data, file: str) -> list[list[Cell]]:
 def fallback_findings(data: Data, file: str, controller: str) -> list[list[Cell]]:
     rows = data.value(file, "solvers")
     out = []
+    never = [
+        n for n, r in rows.items() if r.get("closed_loop_fallback_steps") == 0 and not r["failures"]
+    ]
+    if never:
+        out.append(
+            [
+                Cell(
+                    f"First in the chain, {', '.join(never)} never needed the fallback in "
+                    f"closed loop and answered every re-solved program of {controller}."
+                )
+            ]
+        )
     for name, r in rows.items():
-        if "closed_loop_fallback_steps" not in r:
+        if "closed_loop_fallback_steps" not in r or name in never:
             continue
         sentence = [
             Cell(f"With {name} first in the chain, {controller} needed the fallback in "),
@@ -796,7 +808,7 @@ def build_report(
                 )
             for task in ("task1", "task2"):
                 futures[f"figures:{task}"] = pool.submit(
-                    _job_figures, runs[task], stage / "figures" / task
+                    _job_figures, runs[task], stage / "figures" / task, cfg
                 )
                 for group, (emdm_name, ivkc_name) in PAIRS.items():
                     pair = [runs[task][ivkc_name], runs[task][emdm_name]]
@@ -808,7 +820,9 @@ def build_report(
                 say(f"{key} done ({time.perf_counter() - start:.1f} s)")
 
         lab2 = merge_labs([results[f"lab2:{name}"] for name in solvers2])
-        _write_lab(stage / "data" / "task2-lab-C-EMDM", lab2, stage / "figures" / "task2" / "lab")
+        _write_lab(
+            stage / "data" / "task2-lab-C-EMDM", lab2, stage / "figures" / "task2" / "lab", cfg
+        )
         wall = time.perf_counter() - start
         prov = provenance(cfg, wall)
         write_json(stage / "provenance.json", prov)
@@ -840,7 +854,7 @@ def _write_runs(folder: Path, scenario: Scenario, runs: dict[str, Run]) -> None:
     )
 
 
-def _write_lab(folder: Path, lab: LabResult, fig_dir: Path) -> None:
+def _write_lab(folder: Path, lab: LabResult, fig_dir: Path, cfg: ReportConfig) -> None:
     write_json(folder / "solvers.json", lab_json(lab))
     for name in lab.studies:
         write_csv(
@@ -848,7 +862,7 @@ def _write_lab(folder: Path, lab: LabResult, fig_dir: Path) -> None:
             lab_header(lab),
             ([cell(v) for v in row] for row in lab_rows(lab, name)),
         )
-    with formats(FIGURE_FORMATS):
+    with formats(cfg.figure_formats):
         lab_figures(lab, fig_dir)
 
 
@@ -1062,10 +1076,12 @@ def _write_documents(stage: Path, prov: dict[str, Any], cfg: ReportConfig) -> No
     latex = stage / "latex"
     (latex / "figures").mkdir(parents=True, exist_ok=True)
     figure_names: dict[str, str] = {}
-    for pdf in sorted((stage / "figures").rglob("*.pdf")):
-        name = "_".join(pdf.relative_to(stage / "figures").with_suffix("").parts)
-        shutil.copyfile(pdf, latex / "figures" / f"{name}.pdf")
-        figure_names[str(pdf.relative_to(stage).with_suffix(".png"))] = name
+    vector = ".pdf" in cfg.figure_formats
+    for png in sorted((stage / "figures").rglob("*.png")):
+        source = png.with_suffix(".pdf") if vector else png
+        name = "_".join(png.relative_to(stage / "figures").with_suffix("").parts)
+        shutil.copyfile(source, latex / "figures" / f"{name}{source.suffix}")
+        figure_names[str(png.relative_to(stage))] = name
     for sec in sections:
         for table in sec.tables:
             (latex / "tables").mkdir(exist_ok=True)
