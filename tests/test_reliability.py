@@ -66,8 +66,15 @@ def scenarios(draw: st.DrawFn) -> emdm.Scenario:
 @given(scenarios())
 def test_runs_hold_every_invariant(sc):
     overshoot = np.any(sc.motion.dt >= sc.damper.gain * (sc.damper.influence - sc.damper.stop))
+    assert overshoot == any("overshoot" in w for w in sc.warnings)
     for name in CONTROLLERS:
-        run = emdm.simulate(sc, name)
+        try:
+            run = emdm.simulate(sc, name)
+        except NoSolution as exc:
+            # only an overshooting damper (warned about) can push a joint into its stop zone,
+            # where the forced motion may conflict with the task: a clean, explained stop
+            assert overshoot and name.startswith("C-") and "stop zone" in str(exc), exc
+            continue
         for array in (run.q, run.qd, run.p, run.m, run.alpha, run.delta, run.effort):
             assert np.all(np.isfinite(array)), name
         assert run.kkt.max(initial=0.0) <= 1e-9 and run.bound_excess.max(initial=0.0) <= 1e-12

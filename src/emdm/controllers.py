@@ -136,6 +136,15 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
     )
     if policy == "scale":
         if alpha is None:
+            forced = np.flatnonzero((qp.lb[: qp.n_joints] > 0) | (qp.ub[: qp.n_joints] < 0))
+            if forced.size:
+                j = int(forced[0])
+                raise NoSolution(
+                    f"{where}joint {j + 1} is inside a stop zone: its damper forces a speed in "
+                    f"[{qp.lb[j]:.3g}, {qp.ub[j]:.3g}] rad/s that no task scale in [0, 1] allows "
+                    "(dt >= gain * (influence - stop) lets the damper overshoot)",
+                    problem=qp,
+                )
             raise NoSolution(
                 f"{where}the program is infeasible even with the task scaled to zero "
                 "(the joint bounds exclude every motion that keeps the task direction)",
