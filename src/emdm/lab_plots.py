@@ -75,7 +75,7 @@ def times_figure(lab: LabResult, out: Path) -> Path:
     """Distribution of per-step solve times, one box per solver, coloured by family."""
     stem = out / "solve_times"
     names = list(lab.studies)
-    with figure(stem, width=COLUMN, height=0.22 * len(names) + 0.8) as (_, ax):
+    with figure(stem, width=COLUMN, height=0.22 * len(names) + 0.8) as (fig, ax):
         data = [np.array([s.time for s in lab.studies[n].solves]) * 1e3 for n in names]
         box = ax.boxplot(
             data,
@@ -93,7 +93,7 @@ def times_figure(lab: LabResult, out: Path) -> Path:
         ax.invert_yaxis()
         ax.set_title(f"{lab.scenario.name} {lab.controller.name}: time per solve")
         families = [Patch(facecolor=c, alpha=0.7, label=f) for f, c in FAMILY_COLOR.items()]
-        ax.legend(handles=families, loc="lower right", fontsize=6)
+        fig.legend(handles=families, loc="outside lower center", ncols=3, fontsize=6)
     return stem
 
 
