@@ -125,7 +125,7 @@ def test_fuzzed_scenario_data_gives_a_scenario_or_one_line_error(data):
             warnings.simplefilter("ignore")
             scenario_from_dict(base, source="fuzz")
     except ScenarioError as exc:
-        assert str(exc).startswith("fuzz") and "\n" not in str(exc)
+        assert str(exc).startswith("fuzz") and "\n" not in str(exc) and str(exc).isprintable()
 
 
 @settings(max_examples=200, deadline=None)
@@ -136,7 +136,7 @@ def test_fuzzed_files_give_a_scenario_or_one_line_error(tmp_path_factory, text):
     try:
         load_scenario(path)
     except ScenarioError as exc:
-        assert "\n" not in str(exc).rstrip("\n") or "not a valid TOML" in str(exc)
+        assert str(exc).isprintable()  # one line, whatever the file held
 
 
 # ------------------------------------------------------------------------------- adversarial

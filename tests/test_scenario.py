@@ -195,3 +195,15 @@ def test_public_api_is_explicit():
     assert "simulate" in emdm.__all__ and "PlanarArm" in emdm.__all__
     for name in emdm.__all__:
         assert hasattr(emdm, name)
+
+
+def test_strange_keys_stay_on_one_line():
+    base = load_scenario("task1").to_dict()
+    base["arm"]["bad\nkey"] = 1
+    with pytest.raises(ScenarioError) as info:
+        scenario_from_dict(base, source="s.toml")
+    text = str(info.value)
+    assert "\n" not in text and text.startswith("s.toml: arm.'bad\\nkey': unknown key")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario("task1", {"motion.\tgoal": 1})
+    assert str(info.value).isprintable()

@@ -197,7 +197,13 @@ class Scenario:
                 continue
             if section not in SCHEMA or key not in SCHEMA[section]:
                 known = ", ".join(f"{s}.{k}" for s in SCHEMA for k in SCHEMA[s])
-                raise ScenarioError("--set", dotted, f"unknown key (known: name, {known})")
+                raise ScenarioError(
+                    "--set",
+                    _name(dotted)
+                    if not all(part.isidentifier() for part in dotted.split("."))
+                    else dotted,
+                    f"unknown key (known: name, {known})",
+                )
             data[section][key] = value
         return scenario_from_dict(data, source=self.source)
 
@@ -253,6 +259,12 @@ class _Checker:
         raise self.fail(key, f"must be a list of {size} numbers, got {_show(value)}")
 
 
+def _name(key: Any) -> str:
+    """A key as written in messages: plain when it looks like one, else quoted (repr)."""
+    text = str(key)
+    return text if text.isidentifier() else repr(key)
+
+
 def _show(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
@@ -272,14 +284,15 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
             if not isinstance(value, str) or not value:
                 raise check.fail("name", f"must be a non-empty string, got {_show(value)}")
         elif key not in SCHEMA:
-            raise check.fail(key, f"unknown section (known: name, {', '.join(SCHEMA)})")
+            raise check.fail(_name(key), f"unknown section (known: name, {', '.join(SCHEMA)})")
         elif not isinstance(value, Mapping):
             raise check.fail(key, f"must be a table ([{key}]), got {_show(value)}")
         else:
             for sub in value:
                 if sub not in SCHEMA[key]:
                     raise check.fail(
-                        f"{key}.{sub}", f"unknown key (known in [{key}]: {', '.join(SCHEMA[key])})"
+                        f"{key}.{_name(sub)}",
+                        f"unknown key (known in [{key}]: {', '.join(SCHEMA[key])})",
                     )
 
     raw_lengths = data.get("arm", {}).get("lengths")
