@@ -9,6 +9,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 __version__ = "0.1.0"
 
 from .analysis import metrics
@@ -27,6 +29,20 @@ from .problem import QP, Objective
 from .scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
 from .simulate import Run, simulate
 from .solvers import available_solvers, get_solver, kkt_report, solve_chain
+
+
+def simulate_batch(
+    scenario: Scenario,
+    controller: str | Controller,
+    *,
+    goals: Any = None,
+    q0s: Any = None,
+) -> dict[str, Any]:
+    """Many runs on the compiled fast path (see :func:`emdm.fast.simulate_batch`)."""
+    from .fast import simulate_batch as batch
+
+    return batch(scenario, controller, goals=goals, q0s=q0s)
+
 
 __all__ = [
     "CONTROLLERS",
@@ -55,6 +71,7 @@ __all__ = [
     "metrics",
     "scenario_from_dict",
     "simulate",
+    "simulate_batch",
     "solve_chain",
     "step_program",
     "task_scale",
