@@ -11,6 +11,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from . import __version__
 from .analysis import metrics
 from .controllers import CONTROLLERS, get_controller
@@ -361,6 +363,52 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    import json as _json
+
+    from .bench import bench_table, run_bench
+
+    def progress(message: str) -> None:
+        print(f"  {message}", file=sys.stderr, flush=True)
+
+    data = run_bench(quick=args.quick, progress=progress)
+    table = bench_table(data)
+    if args.out:
+        out = Path(args.out)
+        with atomic_output(out) as staging:
+            write_json(staging / "bench.json", data)
+            (staging / "bench.md").write_text(table + "\n", encoding="utf-8")
+    print(_json.dumps(data, indent=2) if args.json else table)
+    return 0
+
+
+def cmd_study(args: argparse.Namespace) -> int:
+    from .study import run_study, study_table, workspace_maps
+
+    if args.runs < 1:
+        raise UsageError(f"--runs must be >= 1, got {args.runs}")
+    scenario = _scenario(args)
+    out = Path(args.out or f"results/{scenario.name}-study")
+    data = run_study(scenario, args.runs, args.seed)
+    table = study_table(data)
+    with atomic_output(out) as staging:
+        write_json(
+            staging / "study.json",
+            {k: v for k, v in data.items() if k not in ("goals", "q0s", "outcomes")},
+        )
+        np.savez_compressed(
+            staging / "runs.npz",
+            goals=data["goals"],
+            q0s=data["q0s"],
+            **{f"{c}__{k}": v for c, o in data["outcomes"].items() for k, v in o.items()},
+        )
+        (staging / "study.txt").write_text(table + "\n", encoding="utf-8")
+        workspace_maps(data, scenario, staging)
+    print(table)
+    print(f"-> {out}/")
+    return 0
+
+
 def cmd_scenario(args: argparse.Namespace) -> int:
     print(_scenario(args).to_toml(), end="")
     return 0
@@ -525,6 +573,29 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_out(rep, "results/report")
     rep.set_defaults(func=cmd_report)
+
+    study = sub.add_parser(
+        "study",
+        help="Monte-Carlo study over goals and starts (fast path)",
+        description="Every controller on the same random reachable goals and "
+        "starts: success, time to goal, manipulability gain, workspace maps.",
+    )
+    _add_scenario_args(study)
+    study.add_argument("--runs", type=int, default=1000, help="runs per controller (default 1000)")
+    study.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    _add_out(study, "results/<scenario>-study")
+    study.set_defaults(func=cmd_study)
+
+    bench = sub.add_parser(
+        "bench",
+        help="per-step cost against the standard stack; batch speed",
+        description="Benchmark the reference and fast paths against numpy + "
+        "qpsolvers (daqp, quadprog) in one process; medians over repeats.",
+    )
+    bench.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    bench.add_argument("--quick", action="store_true", help="one repeat, a small batch (tests)")
+    bench.add_argument("--out", metavar="DIR", help="also write bench.json and bench.md there")
+    bench.set_defaults(func=cmd_bench)
 
     show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
     _add_scenario_args(show)

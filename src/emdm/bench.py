@@ -1,0 +1,314 @@
+"""``emdm bench``: what a control step costs, on the reference path, the fast path and the standard
+stack a user would write today, measured in one process so every figure is also a ratio.
+
+Standard stack (the baseline): numpy kinematics written from the textbook formulas (J by columns,
+``m = sqrt(det(J J^T))``, ``Jm_j = m trace((J J^T)^-1 J H_j^T)``), the QP arrays built with numpy,
+and qpsolvers with daqp or quadprog, on the same programs (the same task scale) as emdm.
+
+Every time is the median over repeats, after a warm-up that is not counted.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from functools import partial
+from importlib import metadata
+from typing import Any
+
+import numpy as np
+
+from . import __version__
+from .controllers import CONTROLLERS, get_controller, program_at, state_at
+from .scenario import load_scenario
+from .simulate import simulate
+from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
+
+
+def _median_time(function: Callable[[], Any], repeats: int) -> float:
+    function()  # warm-up
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+# ---------------------------------------------------------------- the standard-stack baseline
+def textbook_kinematics(lengths: np.ndarray, q: np.ndarray) -> tuple[Any, Any, float, Any]:
+    """p, J, m, Jm as a user would write them from the textbook (numpy, no tricks)."""
+    n = q.size
+    th = np.cumsum(q)
+    p = np.array([np.sum(lengths * np.cos(th)), np.sum(lengths * np.sin(th))])
+    J = np.zeros((2, n))
+    for j in range(n):
+        J[0, j] = -np.sum(lengths[j:] * np.sin(th[j:]))
+        J[1, j] = np.sum(lengths[j:] * np.cos(th[j:]))
+    H = np.zeros((n, 2, n))
+    for j in range(n):
+        for k in range(n):
+            i0 = max(j, k)
+            H[j, 0, k] = -np.sum(lengths[i0:] * np.cos(th[i0:]))
+            H[j, 1, k] = -np.sum(lengths[i0:] * np.sin(th[i0:]))
+    JJt = J @ J.T
+    m = float(np.sqrt(np.linalg.det(JJt)))
+    inv = np.linalg.inv(JJt)
+    Jm = np.array([m * np.trace(inv @ J @ H[j].T) for j in range(n)])
+    return p, J, m, Jm
+
+
+def _baseline_step(sc: Any, q: np.ndarray, alpha: float, solver: str) -> dict[str, float]:
+    from qpsolvers import solve_qp
+
+    lengths = np.asarray(sc.arm.lengths)
+    t0 = time.perf_counter()
+    p, J, _, Jm = textbook_kinematics(lengths, q)
+    t1 = time.perf_counter()
+    n = q.size
+    e = sc.motion.goal - p
+    v = alpha * sc.motion.kp * e
+    P = sc.weights.effort * np.eye(n)
+    c = -sc.weights.manipulability * Jm
+    lo = np.array(sc.arm.qd_min, dtype=float)
+    hi = np.array(sc.arm.qd_max, dtype=float)
+    for j in range(n):
+        i, s, K = sc.damper.influence[j], sc.damper.stop[j], sc.damper.gain[j]
+        d_up, d_dn = sc.arm.q_max[j] - q[j], q[j] - sc.arm.q_min[j]
+        if d_up < i:
+            hi[j] = min(hi[j], (d_up - s) / (K * (i - s)))
+        if d_dn < i:
+            lo[j] = max(lo[j], -(d_dn - s) / (K * (i - s)))
+    t2 = time.perf_counter()
+    qd = solve_qp(P, c, None, None, J, v, lo, hi, solver=solver)
+    t3 = time.perf_counter()
+    failed = qd is None  # what this stack returns on programs it declines (a user's crash)
+    _ = q + (np.zeros(n) if failed else qd) * sc.motion.dt
+    t4 = time.perf_counter()
+    return {
+        "kinematics": t1 - t0,
+        "build": t2 - t1,
+        "solve": t3 - t2,
+        "integrate": t4 - t3,
+        "failed": float(failed),
+    }
+
+
+def _reference_step(sc: Any, ctrl: Any, q: np.ndarray) -> dict[str, float]:
+    t0 = time.perf_counter()
+    state = state_at(sc, q)
+    t1 = time.perf_counter()
+    program = program_at(ctrl, sc, q, state)
+    t2 = time.perf_counter()
+    result = solve_chain(program.qp, [DEFAULT_SOLVER, *DEFAULT_FALLBACK])
+    t3 = time.perf_counter()
+    _ = q + result.x[: q.size] * sc.motion.dt
+    t4 = time.perf_counter()
+    return {"kinematics": t1 - t0, "build": t2 - t1, "solve": t3 - t2, "integrate": t4 - t3}
+
+
+def _split(
+    step: Callable[[np.ndarray, float], dict[str, float]],
+    states: np.ndarray,
+    alphas: np.ndarray,
+    repeats: int,
+) -> dict[str, float]:
+    """Median over repeats of the per-step mean of each part (warm-up excluded)."""
+    step(states[0], alphas[0])
+    parts: dict[str, list[float]] = {}
+    failed = 0.0
+    for _ in range(repeats):
+        sums: dict[str, float] = {}
+        failed = 0.0
+        for q, a in zip(states, alphas, strict=True):
+            for key, value in step(q, a).items():
+                if key == "failed":
+                    failed += value
+                else:
+                    sums[key] = sums.get(key, 0.0) + value
+        for key, value in sums.items():
+            parts.setdefault(key, []).append(value / len(states))
+    out = {key: statistics.median(values) for key, values in parts.items()}
+    out["total"] = sum(out.values())
+    out["failed_steps"] = failed
+    return out
+
+
+def run_bench(
+    *,
+    repeats: int = 5,
+    batch_runs: int = 4000,
+    quick: bool = False,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Every measurement of the benchmark, as a JSON-friendly dict."""
+    from .fast import HAVE_NUMBA, run_fast, simulate_batch, warm_up
+
+    say = progress or (lambda _m: None)
+    if quick:
+        repeats, batch_runs = 1, 200
+    start = time.perf_counter()
+    compile_s = warm_up()
+    say(f"fast path ready ({compile_s:.1f} s: compile or cache load)")
+
+    sc = load_scenario("task1")
+    ctrl = get_controller("C-EMDM")
+    ref_run = simulate(sc, ctrl)
+    states, alphas = ref_run.q[:-1], ref_run.alpha
+    steps: dict[str, dict[str, float]] = {
+        "reference (emdm)": _split(
+            lambda q, a: _reference_step(sc, ctrl, q), states, alphas, repeats
+        ),
+        "standard stack, daqp": _split(
+            lambda q, a: _baseline_step(sc, q, a, "daqp"), states, alphas, repeats
+        ),
+        "standard stack, quadprog": _split(
+            lambda q, a: _baseline_step(sc, q, a, "quadprog"), states, alphas, repeats
+        ),
+    }
+    fast_run = _median_time(lambda: run_fast(sc, ctrl), max(repeats, 5) * 4)
+    steps["fast path (emdm)"] = {"total": fast_run / ref_run.steps}
+    say("per-step split done")
+
+    runs: dict[str, dict[str, Any]] = {}
+    for task in ("task1", "task2"):
+        scn = load_scenario(task)
+        for name in CONTROLLERS:
+            ref_t = _median_time(partial(simulate, scn, name), max(1, repeats // 2))
+            fast_t = _median_time(partial(run_fast, scn, name), repeats * 4)
+            k = run_fast(scn, name)["steps"]
+            runs[f"{task} {name}"] = {
+                "steps": k,
+                "reference_s": ref_t,
+                "fast_s": fast_t,
+                "fast_us_per_step": fast_t / max(k, 1) * 1e6,
+                "speedup": ref_t / fast_t,
+            }
+    say("whole runs done")
+
+    rng = np.random.default_rng(0)
+    arm = sc.planar_arm
+    targets = rng.uniform(sc.arm.q_min + 0.8, sc.arm.q_max - 0.8, (batch_runs, sc.n))
+    goals = np.array([arm.forward(t) for t in targets])
+    simulate_batch(sc, ctrl, goals=goals[:10])  # warm-up
+    times, total_steps = [], 0
+    for _ in range(max(1, repeats // 2)):
+        t0 = time.perf_counter()
+        out = simulate_batch(sc, ctrl, goals=goals)
+        times.append(time.perf_counter() - t0)
+        total_steps = int(out["steps"].sum())
+    batch_t = statistics.median(times)
+    say("batch done")
+
+    base = steps["standard stack, daqp"]["total"]
+    return {
+        "emdm_version": __version__,
+        "machine": {
+            "platform": platform.platform(),
+            "python": sys.version.split()[0],
+            "cpus": os.cpu_count(),
+            "numba": HAVE_NUMBA,
+            "packages": {
+                p: _version(p) for p in ("numpy", "scipy", "qpsolvers", "daqp", "quadprog", "numba")
+            },
+        },
+        "repeats": repeats,
+        "compile_or_load_s": compile_s,
+        "per_step": {
+            "scenario": "task1 C-EMDM",
+            "steps": ref_run.steps,
+            "seconds": steps,
+            "ratio_to_standard_stack_daqp": {k: base / v["total"] for k, v in steps.items()},
+        },
+        "runs": runs,
+        "batch": {
+            "scenario": "task1 C-EMDM, random reachable goals",
+            "runs": batch_runs,
+            "steps": total_steps,
+            "seconds": batch_t,
+            "steps_per_second": total_steps / batch_t,
+        },
+        "targets": {
+            "single run task1 C-EMDM <= 5 us/step": steps["fast path (emdm)"]["total"] * 1e6,
+            "speed-up over the standard stack >= 15x": base / steps["fast path (emdm)"]["total"],
+            "batch >= 1e6 steps/s": total_steps / batch_t,
+        },
+        "wall_time_s": time.perf_counter() - start,
+    }
+
+
+def _version(name: str) -> str | None:
+    try:
+        return metadata.version(name)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def bench_table(data: dict[str, Any]) -> str:
+    """The benchmark as Markdown tables (what the README shows)."""
+    per = data["per_step"]
+    lines = [
+        f"Per control step, {per['scenario']} ({per['steps']} steps; microseconds, medians "
+        f"over {data['repeats']} repeats):",
+        "",
+        "| path | kinematics | program build | solve | integration | total | vs standard stack |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for name, row in per["seconds"].items():
+        cells = [
+            f"{row[k] * 1e6:.2f}" if k in row else ""
+            for k in ("kinematics", "build", "solve", "integrate")
+        ]
+        ratio = per["ratio_to_standard_stack_daqp"][name]
+        failed = f" ({row['failed_steps']:.0f} steps declined)" if row.get("failed_steps") else ""
+        lines.append(
+            f"| {name}{failed} | "
+            + " | ".join(cells)
+            + f" | {row['total'] * 1e6:.2f} | {ratio:.1f}x |"
+        )
+    lines += [
+        "",
+        "Whole runs (median wall time):",
+        "",
+        "| run | steps | reference (ms) | fast (ms) | fast (us/step) | speed-up |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for name, r in data["runs"].items():
+        lines.append(
+            f"| {name} | {r['steps']} | {r['reference_s'] * 1e3:.1f} | "
+            f"{r['fast_s'] * 1e3:.3f} | {r['fast_us_per_step']:.2f} | {r['speedup']:.0f}x |"
+        )
+    b = data["batch"]
+    lines += [
+        "",
+        f"Batch ({b['scenario']}): {b['runs']} runs, {b['steps']} steps in "
+        f"{b['seconds']:.3f} s = {b['steps_per_second']:.3g} steps/s on "
+        f"{data['machine']['cpus']} CPUs.",
+        f"One-time compile or cache load: {data['compile_or_load_s']:.1f} s.",
+        "",
+        "| target | measured |",
+        "|---|---:|",
+    ]
+    t = data["targets"]
+    lines += [
+        f"| single run task1 C-EMDM <= 5 us/step | "
+        f"{t['single run task1 C-EMDM <= 5 us/step']:.2f} us/step |",
+        f"| speed-up over the standard stack >= 15x | "
+        f"{t['speed-up over the standard stack >= 15x']:.0f}x |",
+        f"| batch >= 1e6 steps/s | {t['batch >= 1e6 steps/s']:.3g} steps/s |",
+    ]
+    m = data["machine"]
+    lines += [
+        "",
+        f"Machine: {m['platform']}, Python {m['python']}, "
+        + ", ".join(f"{k} {v}" for k, v in m["packages"].items() if v)
+        + ".",
+    ]
+    return "\n".join(lines)
+
+
+__all__ = ["bench_table", "run_bench", "textbook_kinematics"]

@@ -1,0 +1,46 @@
+"""The benchmark harness runs and reports every figure (no timing is asserted)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+import emdm
+from emdm.bench import textbook_kinematics
+from emdm.cli import main
+
+
+def test_the_baseline_computes_the_same_kinematics(rng):
+    for n in (2, 3, 5):
+        arm = emdm.PlanarArm(rng.uniform(0.2, 1.0, n))
+        for q in rng.uniform(-2, 2, (10, n)):
+            p, J, m, Jm = textbook_kinematics(np.asarray(arm.lengths), q)
+            kin = arm.kinematics(q)
+            np.testing.assert_allclose(p, kin.p, atol=1e-14)
+            np.testing.assert_allclose(J, kin.J, atol=1e-14)
+            np.testing.assert_allclose(m, kin.m, atol=1e-12)
+            np.testing.assert_allclose(Jm, kin.Jm, atol=1e-10)
+
+
+def test_bench_quick_reports_every_figure(tmp_path, capsys):
+    assert main(["bench", "--quick", "--out", str(tmp_path)]) == 0
+    data = json.loads((tmp_path / "bench.json").read_text())
+    per = data["per_step"]["seconds"]
+    assert set(per) == {
+        "reference (emdm)",
+        "standard stack, daqp",
+        "standard stack, quadprog",
+        "fast path (emdm)",
+    }
+    for row in per.values():
+        assert row["total"] > 0
+    assert len(data["runs"]) == 8 and data["batch"]["steps"] > 0
+    assert set(data["targets"]) == {
+        "single run task1 C-EMDM <= 5 us/step",
+        "speed-up over the standard stack >= 15x",
+        "batch >= 1e6 steps/s",
+    }
+    table = (tmp_path / "bench.md").read_text()
+    assert "| fast path (emdm) |" in table and "steps/s" in table
+    assert "fast path" in capsys.readouterr().out
