@@ -383,25 +383,39 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    from .study import run_study, study_table, workspace_maps
+    from .study import BLOCK, Engine, run_study, study_json, study_table, workspace_maps
 
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1, got {args.runs}")
+    if args.chunk < 1:
+        raise UsageError(f"--chunk must be >= 1, got {args.chunk}")
+    if args.workers is not None and args.workers < 1:
+        raise UsageError(f"--workers must be >= 1, got {args.workers}")
+    if args.engine == "local" and (args.scheduler or args.workers):
+        raise UsageError("--scheduler and --workers go with --engine dask")
     scenario = _scenario(args)
+    engine = Engine(args.engine, args.scheduler, args.workers)
     out = Path(args.out or f"results/{scenario.name}-study")
-    data = run_study(scenario, args.runs, args.seed)
+    data = run_study(
+        scenario,
+        args.runs,
+        args.seed,
+        engine=engine,
+        chunk_blocks=max(1, -(-args.chunk // BLOCK)),
+        keep_runs=args.keep_runs,
+    )
     table = study_table(data)
     with atomic_output(out) as staging:
+        write_json(staging / "study.json", study_json(data))
         write_json(
-            staging / "study.json",
-            {k: v for k, v in data.items() if k not in ("goals", "q0s", "outcomes")},
+            staging / "timing.json",
+            {
+                k: data[k]
+                for k in ("wall_time_s", "steps_per_second", "engine", "chunk_runs", "chunks")
+            },
         )
-        np.savez_compressed(
-            staging / "runs.npz",
-            goals=data["goals"],
-            q0s=data["q0s"],
-            **{f"{c}__{k}": v for c, o in data["outcomes"].items() for k, v in o.items()},
-        )
+        if args.keep_runs:
+            np.savez_compressed(staging / "runs.npz", **data["records"])
         (staging / "study.txt").write_text(table + "\n", encoding="utf-8")
         workspace_maps(data, scenario, staging)
     print(table)
@@ -583,6 +597,35 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scenario_args(study)
     study.add_argument("--runs", type=int, default=1000, help="runs per controller (default 1000)")
     study.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    study.add_argument(
+        "--engine",
+        choices=["local", "dask"],
+        default="local",
+        help="local (this process, every core) or dask (default local)",
+    )
+    study.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (dask engine)",
+    )
+    study.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="workers of the LocalCluster started when no scheduler is given",
+    )
+    study.add_argument(
+        "--chunk",
+        type=int,
+        default=2048,
+        metavar="RUNS",
+        help="runs per task, rounded up to whole blocks of 256 (default 2048)",
+    )
+    study.add_argument(
+        "--keep-runs",
+        action="store_true",
+        help="also keep every run's outcome (runs.npz); memory grows with --runs",
+    )
     _add_out(study, "results/<scenario>-study")
     study.set_defaults(func=cmd_study)
 
