@@ -319,3 +319,21 @@ def test_random_scenarios_through_the_command_line(tmp_path):
             assert all(math.isfinite(float(r["m"])) for r in rows)
         shutil.rmtree(out)
     assert checked > 1000
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["run"],
+        ["run", "task1", "--bogus"],
+        ["frobnicate"],
+        ["animate", "task1", "--pair", "X"],
+        ["study", "task1", "--runs", "x"],
+    ],
+)
+def test_argument_errors_are_one_line(args, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(args)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error:" in err and "usage" not in err

@@ -1,52 +1,180 @@
-"""Monte-Carlo studies: reproducible draws, outcomes equal to the reference, files written."""
+"""Monte-Carlo studies: reproducible, equal to single runs, identical on any engine and split."""
 
 from __future__ import annotations
 
 import json
+import os
+import signal
 
 import numpy as np
+import pytest
 
 import emdm
 from emdm.cli import main
-from emdm.study import draw, run_study
+from emdm.study import BLOCK, Engine, draw, run_chunks, run_study, study_json
+
+
+def small(task: str = "task1") -> emdm.Scenario:
+    return emdm.load_scenario(task, {"motion.max_time": 6.0})
 
 
 def test_draws_are_reproducible_reachable_and_outside_stop_zones():
     sc = emdm.load_scenario("task1")
-    q0s, goals = draw(sc, 200, seed=7)
-    again_q0s, again_goals = draw(sc, 200, seed=7)
+    q0s, goals = draw(sc, 600, seed=7)
+    again_q0s, again_goals = draw(sc, 600, seed=7)
     assert np.array_equal(q0s, again_q0s) and np.array_equal(goals, again_goals)
-    assert not np.array_equal(goals, draw(sc, 200, seed=8)[1])
+    assert not np.array_equal(goals, draw(sc, 600, seed=8)[1])
+    assert np.array_equal(draw(sc, 300, seed=7)[1], goals[:300])  # a prefix of the same study
     margin = np.minimum(q0s - sc.arm.q_min, sc.arm.q_max - q0s)
     assert margin.min() > sc.damper.stop.min()
-    radius = np.hypot(goals[:, 0], goals[:, 1])
-    assert radius.max() <= sc.planar_arm.reach + 1e-12
+    assert np.hypot(goals[:, 0], goals[:, 1]).max() <= sc.planar_arm.reach + 1e-12
 
 
-def test_study_outcomes_equal_single_runs():
-    sc = emdm.load_scenario("task1", {"motion.max_time": 8.0})
-    data = run_study(sc, 30, seed=3, progress=False)
+def test_kept_records_equal_single_runs():
+    sc = small()
+    data = run_study(sc, 40, seed=3, keep_runs=True, progress=False)
+    rec = data["records"]
     for name in ("C-EMDM", "UC-IVKC"):
-        out = data["outcomes"][name]
-        for r in (0, 11, 29):
+        for r in (0, 17, 39):
             one = sc.with_overrides(
-                {"motion.goal": list(data["goals"][r]), "motion.q0": list(data["q0s"][r])}
+                {"motion.goal": list(rec["goals"][r]), "motion.q0": list(rec["q0s"][r])}
             )
             mt = emdm.metrics(emdm.simulate(one, name))
-            assert out["reached"][r] == mt["reached"] and out["steps"][r] == mt["steps"]
-            assert abs(out["mean_manipulability"][r] - mt["mean_manipulability"]) < 1e-12
-    summary = data["controllers"]["UC-IVKC"]
-    assert summary["success_rate"] == data["outcomes"]["UC-IVKC"]["reached"].mean()
+            assert rec[f"{name}__reached"][r] == mt["reached"]
+            assert rec[f"{name}__steps"][r] == mt["steps"]
+            assert abs(rec[f"{name}__mean_manipulability"][r] - mt["mean_manipulability"]) < 1e-12
+    assert data["controllers"]["UC-IVKC"]["success_rate"] == rec["UC-IVKC__reached"].mean()
+
+
+def test_results_do_not_depend_on_the_chunking():
+    sc = small()
+    runs = 3 * BLOCK + 17
+    reference = study_json(run_study(sc, runs, seed=5, chunk_blocks=4, progress=False))
+    for chunk_blocks in (1, 2):
+        again = study_json(run_study(sc, runs, seed=5, chunk_blocks=chunk_blocks, progress=False))
+        assert json.dumps(again, sort_keys=True) == json.dumps(reference, sort_keys=True)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as local:
+        yield local
+
+
+def test_dask_gives_the_same_json_as_local(cluster):
+    sc = small()
+    runs = 2 * BLOCK + 5
+    local = study_json(run_study(sc, runs, seed=11, chunk_blocks=2, progress=False))
+    engine = Engine("dask", scheduler=cluster.scheduler_address)
+    remote = study_json(run_study(sc, runs, seed=11, engine=engine, chunk_blocks=1, progress=False))
+    assert json.dumps(remote, sort_keys=True) == json.dumps(local, sort_keys=True)
+
+
+def test_a_worker_dying_mid_study_costs_a_retry_not_the_study(cluster):
+    from dask.distributed import Client
+
+    sc = small()
+    runs = 6 * BLOCK
+    expected = study_json(run_study(sc, runs, seed=13, chunk_blocks=1, progress=False))
+    with Client(cluster.scheduler_address) as client:
+        pids = list(client.run(os.getpid).values())
+    killed = []
+
+    def kill_one(done: int, total: int) -> None:
+        if done == 1 and not killed:
+            os.kill(pids[0], signal.SIGKILL)
+            killed.append(pids[0])
+
+    engine = Engine("dask", scheduler=cluster.scheduler_address)
+    parts = run_chunks(sc, runs, 13, engine, chunk_blocks=1, progress=kill_one)
+    from emdm.study import reduce_chunks
+
+    got = reduce_chunks(parts, runs)
+    assert killed
+    assert got["controllers"] == expected["controllers"]
+    assert got["manipulability_gain"] == expected["manipulability_gain"]
+
+
+def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
+    pytest.importorskip("dask.distributed")
+    code = main(
+        [
+            "study",
+            "task2",
+            "--runs",
+            "10",
+            "--engine",
+            "dask",
+            "--scheduler",
+            "tcp://127.0.0.1:9",
+            "--out",
+            str(tmp_path / "s"),
+        ]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err
+    assert err.count("\n") == 1 and not (tmp_path / "s").exists()
 
 
 def test_study_command(tmp_path, capsys):
     out = tmp_path / "study"
-    assert main(["study", "task2", "--runs", "40", "--seed", "1", "--out", str(out)]) == 0
+    assert (
+        main(["study", "task2", "--runs", "40", "--seed", "1", "--keep-runs", "--out", str(out)])
+        == 0
+    )
     data = json.loads((out / "study.json").read_text())
     assert data["runs"] == 40 and set(data["controllers"]) == set(emdm.CONTROLLERS)
     assert "C-EMDM over C-IVKC" in data["manipulability_gain"]
-    runs = np.load(out / "runs.npz")
-    assert runs["goals"].shape == (40, 2)
+    assert np.load(out / "runs.npz")["goals"].shape == (40, 2)
     assert (out / "workspace_maps.png").stat().st_size > 5000
     assert "success" in capsys.readouterr().out
     assert main(["study", "task2", "--runs", "0", "--out", str(tmp_path / "x")]) == 2
+    assert main(["study", "task2", "--workers", "2", "--out", str(tmp_path / "y")]) == 2
+
+
+def test_weight_and_scenario_sweep(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert (
+        main(
+            [
+                "study",
+                "task1",
+                "task2",
+                "--weights",
+                "0.1:0,0.1:5",
+                "--runs",
+                "30",
+                "--set",
+                "motion.max_time=4",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    sweep = json.loads((out / "sweep.json").read_text())
+    assert [(s["scenario"], s["weights"]["manipulability"]) for s in sweep] == [
+        ("task1", 0.0),
+        ("task1", 5.0),
+        ("task2", 0.0),
+        ("task2", 5.0),
+    ]
+    assert (out / "task2-wE0.1-wM5" / "study.json").exists()
+    assert (out / "trade_off-task1-C-EMDM" / "trade_off.png").exists()
+    # w_M = 0 makes EMDM minimise effort alone: the same commands as IVKC, scaled by w_E
+    zero = next(
+        s for s in sweep if s["scenario"] == "task1" and s["weights"]["manipulability"] == 0
+    )
+    gain = zero["manipulability_gain"]["UC-EMDM over UC-IVKC"]["mean_gain"]
+    assert abs(gain) < 1e-12
+    capsys.readouterr()
+
+
+def test_bad_weights_are_one_line(tmp_path, capsys):
+    assert main(["study", "task2", "--weights", "0.1:x", "--out", str(tmp_path / "a")]) == 2
+    assert main(["study", "task2", "--weights=-1:5", "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 2 and "--weights" in err and not (tmp_path / "a").exists()

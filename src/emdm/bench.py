@@ -241,6 +241,84 @@ def run_bench(
     }
 
 
+def run_dask_bench(
+    runs: int = 8000, progress: Callable[[str], None] | None = None
+) -> dict[str, Any]:
+    """Study throughput on 1- and 2-worker LocalClusters (started and warmed outside the timing)."""
+    from dask.distributed import LocalCluster
+
+    from .study import BLOCK, DEFAULT_CHUNK_BLOCKS, Engine, run_study
+
+    say = progress or (lambda _m: None)
+    sc = load_scenario("task1")
+    out: dict[str, Any] = {
+        "scenario": "task1 study",
+        "runs": runs,
+        "chunk_runs": DEFAULT_CHUNK_BLOCKS * BLOCK,
+        "chunk_reason": "2048 runs x 4 controllers, about 1.3e6 steps or 1 s on one core, "
+        "against 1-3 ms of scheduling per task",
+    }
+    local = run_study(sc, runs, 0, progress=False)
+    out["local"] = {
+        "seconds": local["wall_time_s"],
+        "steps": local["steps"],
+        "steps_per_second": local["steps_per_second"],
+    }
+    for workers in (1, 2):
+        with LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster:
+            engine = Engine("dask", scheduler=cluster.scheduler_address)
+            # warm-up, not timed: every worker loads the compiled kernels
+            run_study(sc, 2 * workers * BLOCK, 1, engine=engine, chunk_blocks=1, progress=False)
+            result = run_study(sc, runs, 0, engine=engine, progress=False)
+        overhead = 1.0 - result["compute_s"] / (result["wall_time_s"] * workers)
+        out[f"dask_{workers}"] = {
+            "seconds": result["wall_time_s"],
+            "steps": result["steps"],
+            "steps_per_second": result["steps_per_second"],
+            "compute_s": result["compute_s"],
+            "scheduling_overhead": overhead,
+        }
+        say(f"dask with {workers} worker(s) done")
+    one, two = out["dask_1"]["steps_per_second"], out["dask_2"]["steps_per_second"]
+    out["targets"] = {
+        "2 workers / (2 x 1 worker) >= 0.8": two / (2 * one),
+        "scheduling overhead (2 workers) < 5%": out["dask_2"]["scheduling_overhead"],
+    }
+    return out
+
+
+def dask_table(data: dict[str, Any]) -> str:
+    """The Dask benchmark as a Markdown table."""
+    lines = [
+        f"Study on Dask ({data['scenario']}, {data['runs']} runs per controller, chunks of "
+        f"{data['chunk_runs']} runs: {data['chunk_reason']}):",
+        "",
+        "| engine | steps | seconds | steps/s | scheduling overhead |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for key, label in (
+        ("local", "local (this process, numba on every core)"),
+        ("dask_1", "LocalCluster, 1 worker"),
+        ("dask_2", "LocalCluster, 2 workers"),
+    ):
+        r = data[key]
+        over = f"{r['scheduling_overhead']:.1%}" if "scheduling_overhead" in r else ""
+        lines.append(
+            f"| {label} | {r['steps']} | {r['seconds']:.2f} | "
+            f"{r['steps_per_second']:.3g} | {over} |"
+        )
+    t = data["targets"]
+    lines += [
+        "",
+        f"2 workers reach {t['2 workers / (2 x 1 worker) >= 0.8']:.2f} of twice the "
+        f"single-worker throughput (target >= 0.8); scheduling overhead "
+        f"{t['scheduling overhead (2 workers) < 5%']:.1%} (target < 5%).",
+    ]
+    return "\n".join(lines)
+
+
 def _version(name: str) -> str | None:
     try:
         return metadata.version(name)
@@ -311,4 +389,4 @@ def bench_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["bench_table", "run_bench", "textbook_kinematics"]
+__all__ = ["bench_table", "dask_table", "run_bench", "run_dask_bench", "textbook_kinematics"]

@@ -9,7 +9,7 @@ import time
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -36,6 +36,13 @@ class UsageError(EmdmError):
     """A command-line argument that is wrong."""
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``emdm: error: ...`` and exit status 2, no usage dump."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def _scenario(args: argparse.Namespace) -> Scenario:
     overrides = dict(parse_override(text) for text in args.set or [])
     with warnings.catch_warnings():
@@ -47,13 +54,19 @@ def _scenario(args: argparse.Namespace) -> Scenario:
 
 
 def _add_scenario_args(
-    parser: argparse.ArgumentParser, *, run_dir: bool = False, default: str | None = None
+    parser: argparse.ArgumentParser,
+    *,
+    run_dir: bool = False,
+    default: str | None = None,
+    many: bool = False,
 ) -> None:
     """The scenario argument (a preset or TOML file, optionally a run folder) and ``--set``."""
     what = "a preset (" + ", ".join(PRESETS) + ") or a scenario TOML file"
     if run_dir:
         what += ", or a folder written by emdm run"
-    if default is None:
+    if many:
+        parser.add_argument("scenario", nargs="+", help=f"{what}; several make a sweep")
+    elif default is None:
         parser.add_argument("scenario", help=what)
     else:
         parser.add_argument(
@@ -373,6 +386,11 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
     data = run_bench(quick=args.quick, progress=progress)
     table = bench_table(data)
+    if args.dask:
+        from .bench import dask_table, run_dask_bench
+
+        data["dask"] = run_dask_bench(runs=400 if args.quick else 8000, progress=progress)
+        table += "\n\n" + dask_table(data["dask"])
     if args.out:
         out = Path(args.out)
         with atomic_output(out) as staging:
@@ -383,7 +401,16 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    from .study import BLOCK, Engine, run_study, study_json, study_table, workspace_maps
+    from .study import (
+        BLOCK,
+        Engine,
+        parse_weights,
+        run_sweep,
+        study_json,
+        study_table,
+        sweep_trade_off,
+        workspace_maps,
+    )
 
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1, got {args.runs}")
@@ -393,32 +420,75 @@ def cmd_study(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.engine == "local" and (args.scheduler or args.workers):
         raise UsageError("--scheduler and --workers go with --engine dask")
-    scenario = _scenario(args)
+    overrides = dict(parse_override(text) for text in args.set or [])
+    scenarios = []
+    for name in args.scenario:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            scenarios.append(load_scenario(name, overrides))
+    weights = parse_weights(args.weights) if args.weights else None
     engine = Engine(args.engine, args.scheduler, args.workers)
-    out = Path(args.out or f"results/{scenario.name}-study")
-    data = run_study(
-        scenario,
+    out = Path(args.out or f"results/{scenarios[0].name}-study")
+    results = run_sweep(
+        scenarios,
+        weights,
         args.runs,
         args.seed,
-        engine=engine,
+        engine,
         chunk_blocks=max(1, -(-args.chunk // BLOCK)),
         keep_runs=args.keep_runs,
     )
-    table = study_table(data)
+    single = len(results) == 1
     with atomic_output(out) as staging:
-        write_json(staging / "study.json", study_json(data))
-        write_json(
-            staging / "timing.json",
-            {
-                k: data[k]
-                for k in ("wall_time_s", "steps_per_second", "engine", "chunk_runs", "chunks")
-            },
-        )
-        if args.keep_runs:
-            np.savez_compressed(staging / "runs.npz", **data["records"])
-        (staging / "study.txt").write_text(table + "\n", encoding="utf-8")
-        workspace_maps(data, scenario, staging)
-    print(table)
+        tables = []
+        for result in results:
+            scenario = next(s for s in scenarios if s.name == result["scenario"])
+            tag = (
+                ""
+                if single
+                else (
+                    f"{result['scenario']}-wE{result['weights']['effort']:g}"
+                    f"-wM{result['weights']['manipulability']:g}/"
+                )
+            )
+            folder = staging / tag if tag else staging
+            write_json(folder / "study.json", {**study_json(result), "weights": result["weights"]})
+            write_json(
+                folder / "timing.json",
+                {
+                    k: result[k]
+                    for k in (
+                        "wall_time_s",
+                        "steps_per_second",
+                        "engine",
+                        "chunk_runs",
+                        "chunks",
+                        "compute_s",
+                    )
+                },
+            )
+            workspace_maps(result, scenario, folder)
+            if args.keep_runs:
+                np.savez_compressed(folder / "runs.npz", **result["records"])
+            tables.append(
+                study_table(result) if single else f"[{tag.rstrip('/')}]\n" + study_table(result)
+            )
+        if not single:
+            write_json(
+                staging / "sweep.json",
+                [
+                    {
+                        "scenario": r["scenario"],
+                        "weights": r["weights"],
+                        "controllers": r["controllers"],
+                        "manipulability_gain": r["manipulability_gain"],
+                    }
+                    for r in results
+                ],
+            )
+            sweep_trade_off(results, scenarios, staging)
+        (staging / "study.txt").write_text("\n\n".join(tables) + "\n", encoding="utf-8")
+    print("\n\n".join(tables))
     print(f"-> {out}/")
     return 0
 
@@ -439,7 +509,7 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="emdm",
         description="Optimisation-based velocity control of planar manipulators (EMDM vs IVKC).",
     )
@@ -594,7 +664,12 @@ def build_parser() -> argparse.ArgumentParser:
         description="Every controller on the same random reachable goals and "
         "starts: success, time to goal, manipulability gain, workspace maps.",
     )
-    _add_scenario_args(study)
+    _add_scenario_args(study, many=True)
+    study.add_argument(
+        "--weights",
+        metavar="WE:WM,...",
+        help="sweep weight pairs, e.g. 0.1:0,0.1:0.5,0.1:5 (one study each)",
+    )
     study.add_argument("--runs", type=int, default=1000, help="runs per controller (default 1000)")
     study.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     study.add_argument(
@@ -637,6 +712,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--json", action="store_true", help="print JSON instead of tables")
     bench.add_argument("--quick", action="store_true", help="one repeat, a small batch (tests)")
+    bench.add_argument(
+        "--dask",
+        action="store_true",
+        help="also measure studies on 1- and 2-worker Dask LocalClusters",
+    )
     bench.add_argument("--out", metavar="DIR", help="also write bench.json and bench.md there")
     bench.set_defaults(func=cmd_bench)
 

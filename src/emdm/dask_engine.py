@@ -15,10 +15,21 @@ from .errors import EmdmError
 from .study import Engine, run_chunk
 
 
+def local_cluster(workers: int | None) -> Any:
+    """A LocalCluster of ``workers`` single-threaded worker processes (default 2)."""
+    try:
+        from dask.distributed import LocalCluster
+    except ImportError:
+        raise EmdmError("the dask engine needs pip install 'emdm[dask]'") from None
+    return LocalCluster(
+        n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=None
+    )
+
+
 def connect(engine: Engine) -> tuple[Any, Any]:
     """A Dask client for ``engine`` and the LocalCluster it started (``None`` for a scheduler)."""
     try:
-        from dask.distributed import Client, LocalCluster
+        from dask.distributed import Client
     except ImportError:
         raise EmdmError("the dask engine needs pip install 'emdm[dask]'") from None
     if engine.scheduler:
@@ -29,9 +40,7 @@ def connect(engine: Engine) -> tuple[Any, Any]:
             raise EmdmError(
                 f"cannot reach the Dask scheduler at {engine.scheduler}: {reason}"
             ) from None
-    cluster = LocalCluster(
-        n_workers=engine.workers or 2, threads_per_worker=1, processes=True, dashboard_address=None
-    )
+    cluster = local_cluster(engine.workers)
     return Client(cluster), cluster
 
 

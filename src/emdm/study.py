@@ -41,12 +41,16 @@ DEFAULT_CHUNK_BLOCKS = 8
 def draw_block(
     scenario: Scenario, seed: int, block: int, runs: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Starts (runs x n) and reachable goals (runs x 2) of block ``block``."""
+    """Starts (runs x n) and reachable goals (runs x 2): the first ``runs`` of block ``block``.
+
+    A block always draws all its :data:`BLOCK` runs, so run ``r`` gets the same draw in every
+    study of the same seed, whatever its size (a smaller study is a prefix of a larger one).
+    """
     rng = np.random.default_rng(np.random.SeedSequence([seed, block]))
     arm, stop = scenario.arm, scenario.damper.stop
     lo, hi = np.asarray(arm.q_min) + 1.01 * stop, np.asarray(arm.q_max) - 1.01 * stop
-    q0s = rng.uniform(lo, hi, (runs, scenario.n))
-    targets = rng.uniform(arm.q_min, arm.q_max, (runs, scenario.n))
+    q0s = rng.uniform(lo, hi, (BLOCK, scenario.n))[:runs]
+    targets = rng.uniform(arm.q_min, arm.q_max, (BLOCK, scenario.n))[:runs]
     planar = scenario.planar_arm
     goals = np.array([planar.forward(t) for t in targets]).reshape(runs, 2)
     return q0s, goals
@@ -80,6 +84,7 @@ def run_chunk(
     """
     from .fast import simulate_batch
 
+    started = time.perf_counter()
     if threads is not None:
         try:
             import numba
@@ -118,7 +123,11 @@ def run_chunk(
             )
         )
         lo = hi
-    out: dict[str, Any] = {"first_block": first_block, "blocks": reduced}
+    out: dict[str, Any] = {
+        "first_block": first_block,
+        "blocks": reduced,
+        "compute_s": time.perf_counter() - started,
+    }
     if keep_runs:
         out["records"] = {
             "goals": goals,
@@ -299,6 +308,7 @@ def run_study(
         engine=engine.kind,
         chunk_runs=chunk_blocks * BLOCK,
         chunks=len(parts),
+        compute_s=math.fsum(p["compute_s"] for p in parts),
     )
     if keep_runs:
         keys = parts[0]["records"].keys()
@@ -308,7 +318,16 @@ def run_study(
 
 def study_json(result: dict[str, Any]) -> dict[str, Any]:
     """The study's JSON: everything but the engine-specific timings and the arrays."""
-    skip = {"maps", "records", "wall_time_s", "steps_per_second", "engine", "chunk_runs", "chunks"}
+    skip = {
+        "maps",
+        "records",
+        "wall_time_s",
+        "steps_per_second",
+        "engine",
+        "chunk_runs",
+        "chunks",
+        "compute_s",
+    }
     out = {k: v for k, v in result.items() if k not in skip}
     out["maps"] = {
         k: [[None if math.isnan(x) else x for x in row] for row in v.reshape(GRID, GRID).tolist()]
@@ -362,3 +381,95 @@ def workspace_maps(data: dict[str, Any], scenario: Scenario, out: Path) -> Path:
             ax.set_title(f"{title}, per cell", fontsize=7)
             ax.figure.colorbar(mesh, ax=ax)
     return stem
+
+
+def parse_weights(text: str) -> list[tuple[float, float]]:
+    """``"0.1:0,0.1:5"`` -> ``[(0.1, 0.0), (0.1, 5.0)]`` (w_E:w_M pairs)."""
+    pairs = []
+    for item in text.split(","):
+        effort, sep, manip = item.partition(":")
+        try:
+            pair = (float(effort), float(manip))
+        except ValueError:
+            raise EmdmError(f"--weights: {item!r} is not w_E:w_M (e.g. 0.1:5)") from None
+        if not sep or not all(math.isfinite(v) for v in pair) or pair[0] <= 0 or pair[1] < 0:
+            raise EmdmError(f"--weights: {item!r} needs w_E > 0 and w_M >= 0, finite")
+        pairs.append(pair)
+    return pairs
+
+
+def run_sweep(
+    scenarios: Sequence[Scenario],
+    weights: Sequence[tuple[float, float]] | None,
+    runs: int,
+    seed: int,
+    engine: Engine,
+    *,
+    chunk_blocks: int = DEFAULT_CHUNK_BLOCKS,
+    keep_runs: bool = False,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """A study for every scenario and weight pair, on one engine (one cluster for all)."""
+    cluster = None
+    if engine.kind == "dask" and not engine.scheduler:
+        from .dask_engine import local_cluster
+
+        cluster = local_cluster(engine.workers)
+        engine = Engine("dask", scheduler=cluster.scheduler_address)
+    try:
+        results = []
+        for scenario in scenarios:
+            pairs: list[tuple[float, float] | None] = list(weights) if weights else [None]
+            for pair in pairs:
+                sc = (
+                    scenario
+                    if pair is None
+                    else scenario.with_overrides(
+                        {"weights.effort": pair[0], "weights.manipulability": pair[1]}
+                    )
+                )
+                result = run_study(
+                    sc,
+                    runs,
+                    seed,
+                    engine=engine,
+                    chunk_blocks=chunk_blocks,
+                    keep_runs=keep_runs,
+                    progress=progress,
+                )
+                result["weights"] = {
+                    "effort": sc.weights.effort,
+                    "manipulability": sc.weights.manipulability,
+                }
+                results.append(result)
+        return results
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def sweep_trade_off(
+    results: Sequence[dict[str, Any]], scenarios: Sequence[Scenario], out: Path
+) -> list[Path]:
+    """Whole-run trade-off figures (emdm.pareto.trade_off_figure) from a weight sweep."""
+    from .pareto import trade_off_figure
+
+    stems = []
+    for scenario in scenarios:
+        rows_of = [r for r in results if r["scenario"] == scenario.name]
+        if len(rows_of) < 2:
+            continue
+        for controller in ("UC-EMDM", "C-EMDM"):
+            rows = [
+                {
+                    "w_effort": r["weights"]["effort"],
+                    "w_manip": r["weights"]["manipulability"],
+                    "total_effort": r["controllers"][controller]["mean_total_effort"],
+                    "mean_manipulability": r["controllers"][controller]["mean_manipulability"],
+                    "time_to_goal": r["controllers"][controller]["mean_time_to_goal"],
+                }
+                for r in rows_of
+            ]
+            folder = out / f"trade_off-{scenario.name}-{controller}"
+            stems.append(trade_off_figure(rows, scenario, f"{controller} (study means)", folder))
+    return stems
