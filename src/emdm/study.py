@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -199,75 +199,95 @@ def run_chunks(
     chunk_blocks: int = DEFAULT_CHUNK_BLOCKS,
     keep_runs: bool = False,
     progress: Callable[[int, int], None] | None = None,
-) -> list[dict[str, Any]]:
-    """Every chunk's reduction, in block order, computed on ``engine``."""
+) -> Iterator[dict[str, Any]]:
+    """Every chunk's reduction, yielded in block order as soon as it can be.
+
+    Chunks that finish early wait in a buffer until the chunks before them are in, so memory is
+    bounded by how far out of order the engine completes them, not by the study's size.
+    """
     data = scenario.to_dict()
     chunks = _chunks(runs, chunk_blocks)
-    results: dict[int, dict[str, Any]] = {}
+    order = [first for first, _ in chunks]
     if engine.kind == "local":
-        for first, last in chunks:
-            results[first] = run_chunk(data, seed, first, last, runs, keep_runs)
-            if progress:
-                progress(len(results), len(chunks))
+        source: Iterator[tuple[int, dict[str, Any]]] = (
+            (first, run_chunk(data, seed, first, last, runs, keep_runs)) for first, last in chunks
+        )
     elif engine.kind == "dask":
         from .dask_engine import submit_chunks
 
-        for first, result in submit_chunks(engine, data, seed, chunks, runs, keep_runs):
-            results[first] = result
-            if progress:
-                progress(len(results), len(chunks))
+        source = submit_chunks(engine, data, seed, chunks, runs, keep_runs)
     else:
         raise EmdmError(f"unknown engine {engine.kind!r} (local or dask)")
-    return [results[first] for first, _ in chunks]
+    pending: dict[int, dict[str, Any]] = {}
+    position = done = 0
+    for first, result in source:
+        pending[first] = result
+        done += 1
+        if progress:
+            progress(done, len(chunks))
+        while position < len(order) and order[position] in pending:
+            yield pending.pop(order[position])
+            position += 1
 
 
-def reduce_chunks(parts: Sequence[dict[str, Any]], runs: int) -> dict[str, Any]:
-    """Combine chunk reductions into the study's results, block by block in block order."""
-    blocks = [b for p in parts for b in p["blocks"]]
-    acc: dict[str, dict[str, Any]] = {}
-    for block in blocks:
-        for name, row in block["controllers"].items():
-            into = acc.setdefault(name, {})
-            for key, value in row.items():
-                into[key] = into[key] + value if key in into else value
-        for prefix, row in block["gains"].items():
-            into = acc.setdefault("gain " + prefix, {})
-            for key, value in row.items():
-                into[key] = into[key] + value if key in into else value
-    summary: dict[str, Any] = {}
-    maps: dict[str, np.ndarray] = {}
-    for name in CONTROLLERS:
-        r = acc[name]
-        summary[name] = {
-            "success_rate": r["reached"] / runs,
-            "mean_time_to_goal": r["time_to_goal"] / r["reached"] if r["reached"] else None,
-            "mean_manipulability": r["mean_manipulability"] / runs,
-            "mean_min_manipulability": r["min_manipulability"] / runs,
-            "mean_total_effort": r["total_effort"] / runs,
-            "mean_final_error": r["final_error"] / runs,
-            "steps": r["steps"],
+class Accumulator:
+    """Sums, counts and map cells of a study, added block by block in block order."""
+
+    def __init__(self) -> None:
+        self.acc: dict[str, dict[str, Any]] = {}
+
+    def add(self, part: dict[str, Any]) -> None:
+        for block in part["blocks"]:
+            for group, rows in (("", block["controllers"]), ("gain ", block["gains"])):
+                for name, row in rows.items():
+                    into = self.acc.setdefault(group + name, {})
+                    for key, value in row.items():
+                        into[key] = into[key] + value if key in into else value
+
+    def result(self, runs: int) -> dict[str, Any]:
+        acc = self.acc
+        summary: dict[str, Any] = {}
+        maps: dict[str, np.ndarray] = {}
+        for name in CONTROLLERS:
+            r = acc[name]
+            summary[name] = {
+                "success_rate": r["reached"] / runs,
+                "mean_time_to_goal": r["time_to_goal"] / r["reached"] if r["reached"] else None,
+                "mean_manipulability": r["mean_manipulability"] / runs,
+                "mean_min_manipulability": r["min_manipulability"] / runs,
+                "mean_total_effort": r["total_effort"] / runs,
+                "mean_final_error": r["final_error"] / runs,
+                "steps": r["steps"],
+            }
+            with np.errstate(invalid="ignore", divide="ignore"):
+                maps[f"{name} time to goal"] = np.where(
+                    r["map_time_count"] > 0, r["map_time_sum"] / r["map_time_count"], np.nan
+                )
+        gains = {}
+        for prefix in ("UC-", "C-"):
+            r = acc["gain " + prefix]
+            gains[f"{prefix}EMDM over {prefix}IVKC"] = {
+                "mean_gain": r["sum"] / runs,
+                "share_of_runs_improved": r["improved"] / runs,
+            }
+            with np.errstate(invalid="ignore", divide="ignore"):
+                maps[f"{prefix}EMDM gain over {prefix}IVKC"] = np.where(
+                    r["map_count"] > 0, r["map_sum"] / r["map_count"], np.nan
+                )
+        return {
+            "controllers": summary,
+            "manipulability_gain": gains,
+            "steps": sum(s["steps"] for s in summary.values()),
+            "maps": maps,
         }
-        with np.errstate(invalid="ignore", divide="ignore"):
-            maps[f"{name} time to goal"] = np.where(
-                r["map_time_count"] > 0, r["map_time_sum"] / r["map_time_count"], np.nan
-            )
-    gains = {}
-    for prefix in ("UC-", "C-"):
-        r = acc["gain " + prefix]
-        gains[f"{prefix}EMDM over {prefix}IVKC"] = {
-            "mean_gain": r["sum"] / runs,
-            "share_of_runs_improved": r["improved"] / runs,
-        }
-        with np.errstate(invalid="ignore", divide="ignore"):
-            maps[f"{prefix}EMDM gain over {prefix}IVKC"] = np.where(
-                r["map_count"] > 0, r["map_sum"] / r["map_count"], np.nan
-            )
-    return {
-        "controllers": summary,
-        "manipulability_gain": gains,
-        "steps": sum(s["steps"] for s in summary.values()),
-        "maps": maps,
-    }
+
+
+def reduce_chunks(parts: Iterable[dict[str, Any]], runs: int) -> dict[str, Any]:
+    """Combine chunk reductions, given in block order, into the study's results."""
+    acc = Accumulator()
+    for part in parts:
+        acc.add(part)
+    return acc.result(runs)
 
 
 def run_study(
@@ -294,11 +314,20 @@ def run_study(
                 flush=True,
             )
 
-    parts = run_chunks(
+    acc = Accumulator()
+    records: list[dict[str, np.ndarray]] = []
+    compute = 0.0
+    chunks = 0
+    for part in run_chunks(
         scenario, runs, seed, engine, chunk_blocks=chunk_blocks, keep_runs=keep_runs, progress=bar
-    )
+    ):
+        acc.add(part)  # the part is then dropped: memory stays bounded by the chunk
+        compute += part["compute_s"]
+        chunks += 1
+        if keep_runs:
+            records.append(part["records"])
     elapsed = time.perf_counter() - start
-    result = reduce_chunks(parts, runs)
+    result = acc.result(runs)
     result.update(
         scenario=scenario.name,
         runs=runs,
@@ -307,12 +336,11 @@ def run_study(
         steps_per_second=result["steps"] / elapsed,
         engine=engine.kind,
         chunk_runs=chunk_blocks * BLOCK,
-        chunks=len(parts),
-        compute_s=math.fsum(p["compute_s"] for p in parts),
+        chunks=chunks,
+        compute_s=compute,
     )
     if keep_runs:
-        keys = parts[0]["records"].keys()
-        result["records"] = {k: np.concatenate([p["records"][k] for p in parts]) for k in keys}
+        result["records"] = {k: np.concatenate([r[k] for r in records]) for k in records[0]}
     return result
 
 
