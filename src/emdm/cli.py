@@ -14,19 +14,9 @@ from typing import Any, NoReturn
 import numpy as np
 
 from . import __version__
-from .analysis import metrics
 from .controllers import CONTROLLERS, get_controller
 from .errors import EmdmError, NoSolution
-from .output import (
-    atomic_output,
-    cell,
-    diagnostics_header,
-    diagnostics_rows,
-    trajectory_header,
-    trajectory_rows,
-    write_csv,
-    write_json,
-)
+from .output import atomic_output, cell, write_csv, write_json, write_run_folder
 from .scenario import PRESETS, Scenario, load_scenario, parse_override
 from .simulate import Run, simulate
 from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, registered_solvers
@@ -158,28 +148,9 @@ def cmd_run(args: argparse.Namespace) -> int:
             scenario, controller, solver=args.solver, fallback=_fallback(args.fallback)
         )
     elapsed = time.perf_counter() - start
-    results = {name: metrics(run) for name, run in runs.items()}
     with atomic_output(out) as staging:
-        for name, run in runs.items():
-            write_csv(
-                staging / "trajectories" / f"{name}.csv",
-                trajectory_header(scenario.n),
-                trajectory_rows(run),
-            )
-            write_csv(
-                staging / "diagnostics" / f"{name}.csv",
-                diagnostics_header(scenario.n),
-                diagnostics_rows(run),
-            )
-        write_json(
-            staging / "metrics.json",
-            {
-                "scenario": scenario.to_dict(),
-                "solver": args.solver,
-                "fallback": _fallback(args.fallback),
-                "emdm_version": __version__,
-                "controllers": results,
-            },
+        results = write_run_folder(
+            staging, scenario, runs, solver=args.solver, fallback=_fallback(args.fallback)
         )
     print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
     print(summary_table(results))
@@ -403,6 +374,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 def cmd_study(args: argparse.Namespace) -> int:
     from .study import (
         BLOCK,
+        TIMING,
         Engine,
         parse_weights,
         run_sweep,
@@ -453,20 +425,7 @@ def cmd_study(args: argparse.Namespace) -> int:
             )
             folder = staging / tag if tag else staging
             write_json(folder / "study.json", {**study_json(result), "weights": result["weights"]})
-            write_json(
-                folder / "timing.json",
-                {
-                    k: result[k]
-                    for k in (
-                        "wall_time_s",
-                        "steps_per_second",
-                        "engine",
-                        "chunk_runs",
-                        "chunks",
-                        "compute_s",
-                    )
-                },
-            )
+            write_json(folder / "timing.json", {k: result[k] for k in TIMING})
             workspace_maps(result, scenario, folder)
             if args.keep_runs:
                 np.savez_compressed(folder / "runs.npz", **result["records"])

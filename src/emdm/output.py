@@ -220,3 +220,36 @@ def read_run(folder: Path, controller: str) -> Run:
         policy=[d["policy"] for d in diag],
         reached=bool(meta["controllers"][controller]["reached"]),
     )
+
+
+def write_run_folder(
+    folder: Path, scenario: Any, runs: dict[str, Run], **meta: Any
+) -> dict[str, dict[str, Any]]:
+    """What ``emdm run`` writes: trajectories and diagnostics CSVs, and metrics.json.
+
+    Returns the metrics of every run (as written)."""
+    from . import __version__
+    from .analysis import metrics
+
+    for name, run in runs.items():
+        write_csv(
+            folder / "trajectories" / f"{name}.csv",
+            trajectory_header(scenario.n),
+            trajectory_rows(run),
+        )
+        write_csv(
+            folder / "diagnostics" / f"{name}.csv",
+            diagnostics_header(scenario.n),
+            diagnostics_rows(run),
+        )
+    results = {name: metrics(run) for name, run in runs.items()}
+    write_json(
+        folder / "metrics.json",
+        {
+            "scenario": scenario.to_dict(),
+            **meta,
+            "emdm_version": __version__,
+            "controllers": results,
+        },
+    )
+    return results

@@ -31,7 +31,6 @@ from pathlib import Path
 from typing import Any
 
 from . import __version__
-from .analysis import metrics
 from .animate import animate
 from .controllers import CONTROLLERS
 from .lab import (
@@ -44,19 +43,10 @@ from .lab import (
     run_lab,
 )
 from .lab_plots import lab_figures
-from .output import (
-    atomic_output,
-    cell,
-    diagnostics_header,
-    diagnostics_rows,
-    trajectory_header,
-    trajectory_rows,
-    write_csv,
-    write_json,
-)
+from .output import atomic_output, cell, write_csv, write_json, write_run_folder
 from .pareto import default_grid, pareto_figure, pareto_study, ratios, trade_off_figure, weight_grid
 from .plots import joints_figure, path_figure, series_figure
-from .scenario import Scenario, load_scenario
+from .scenario import load_scenario
 from .simulate import Run, simulate
 from .solvers import available_solvers
 from .style import formats
@@ -777,7 +767,7 @@ def build_report(
         scenarios = {task: load_scenario(task) for task in ("task1", "task2")}
         runs = {task: {c: simulate(sc, c) for c in CONTROLLERS} for task, sc in scenarios.items()}
         for task, task_runs in runs.items():
-            _write_runs(stage / "data" / task, scenarios[task], task_runs)
+            write_run_folder(stage / "data" / task, scenarios[task], task_runs, solver="active-set")
         say(f"closed-loop runs done ({time.perf_counter() - start:.1f} s)")
 
         solvers2 = [s for s in cfg.lab_solvers if s in available_solvers()]
@@ -829,29 +819,6 @@ def build_report(
         _write_documents(stage, prov, cfg)
         say(f"report written ({time.perf_counter() - start:.1f} s)")
     return prov
-
-
-def _write_runs(folder: Path, scenario: Scenario, runs: dict[str, Run]) -> None:
-    for name, run in runs.items():
-        write_csv(
-            folder / "trajectories" / f"{name}.csv",
-            trajectory_header(scenario.n),
-            trajectory_rows(run),
-        )
-        write_csv(
-            folder / "diagnostics" / f"{name}.csv",
-            diagnostics_header(scenario.n),
-            diagnostics_rows(run),
-        )
-    write_json(
-        folder / "metrics.json",
-        {
-            "scenario": scenario.to_dict(),
-            "solver": "active-set",
-            "emdm_version": __version__,
-            "controllers": {name: metrics(run) for name, run in runs.items()},
-        },
-    )
 
 
 def _write_lab(folder: Path, lab: LabResult, fig_dir: Path, cfg: ReportConfig) -> None:

@@ -344,18 +344,13 @@ def run_study(
     return result
 
 
+TIMING = ("wall_time_s", "steps_per_second", "engine", "chunk_runs", "chunks", "compute_s")
+"""What depends on where a study ran: kept out of study.json (which must not), in timing.json."""
+
+
 def study_json(result: dict[str, Any]) -> dict[str, Any]:
     """The study's JSON: everything but the engine-specific timings and the arrays."""
-    skip = {
-        "maps",
-        "records",
-        "wall_time_s",
-        "steps_per_second",
-        "engine",
-        "chunk_runs",
-        "chunks",
-        "compute_s",
-    }
+    skip = {"maps", "records", *TIMING}
     out = {k: v for k, v in result.items() if k not in skip}
     out["maps"] = {
         k: [[None if math.isnan(x) else x for x in row] for row in v.reshape(GRID, GRID).tolist()]
