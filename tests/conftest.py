@@ -2,7 +2,7 @@
 
 ``reference_program`` rebuilds the program of DESIGN.md section 1 from first principles (its own
 Jacobian by finite differences of the end-effector position, its own damper formula), so checks
-against it do not share code with emdm.controllers, emdm.limits or emdm.problem.
+against it do not share code with emdm.core.controllers, emdm.core.limits or emdm.core.problem.
 """
 
 from __future__ import annotations

@@ -7,8 +7,8 @@ import json
 import numpy as np
 
 import emdm
-from emdm.bench import textbook_kinematics
 from emdm.cli import main
+from emdm.studies.bench import textbook_kinematics
 
 
 def test_the_baseline_computes_the_same_kinematics(rng):

@@ -224,7 +224,7 @@ def test_interrupted_run_keeps_previous_results(tmp_path, monkeypatch, capsys):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("emdm.output.write_json", interrupted)
+    monkeypatch.setattr("emdm.outputs.records.write_json", interrupted)
     assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 130
     assert snapshot(out) == before
     assert [p.name for p in tmp_path.iterdir()] == ["out"]

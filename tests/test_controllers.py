@@ -8,7 +8,7 @@ from scipy.optimize import linprog
 
 import emdm
 from emdm import NoSolution, admissible, get_controller, solve_chain, step_program
-from emdm.controllers import slack_weight
+from emdm.core.controllers import slack_weight
 
 
 def _program(sc, name, q):
@@ -75,7 +75,7 @@ def test_weights_override_the_scenario():
     q = np.asarray(sc.motion.q0)
     kin = sc.planar_arm.kinematics(q)
     e = sc.motion.goal - kin.p
-    weights = emdm.scenario.Weights(effort=1.0, manipulability=0.0, slack=1.0)
+    weights = emdm.core.scenario.Weights(effort=1.0, manipulability=0.0, slack=1.0)
     a = step_program(get_controller("UC-EMDM"), sc, q, kin, e, 1.0, weights=weights)
     b = step_program(get_controller("UC-IVKC"), sc, q, kin, e, 1.0)
     np.testing.assert_allclose(_solve(a), _solve(b), atol=1e-13)

@@ -7,7 +7,7 @@ import pytest
 
 import emdm
 from emdm import NoSolution
-from emdm.fast import run_fast, simulate_batch
+from emdm.sim.fast import run_fast, simulate_batch
 
 CONTROLLERS = ["UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"]
 
@@ -39,7 +39,7 @@ def test_presets_match_the_reference_without_help(task, controller):
 
 def assert_every_step_exact(sc, controller):
     """At every state the fast path visits, its command is the reference optimum of that state."""
-    from emdm.controllers import program_at
+    from emdm.core.controllers import program_at
     from emdm.solvers import solve_chain
 
     fast = run_fast(sc, controller)

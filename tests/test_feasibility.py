@@ -65,7 +65,7 @@ def test_task_scale_and_feasible_point_match_lp(rng):
 
 def test_brief_task1_start_is_infeasible_with_scale_about_018():
     from emdm import load_scenario
-    from emdm.controllers import joint_bounds
+    from emdm.core.controllers import joint_bounds
 
     sc = load_scenario("task1")
     q0 = np.asarray(sc.motion.q0)

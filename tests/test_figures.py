@@ -10,12 +10,12 @@ import pytest
 from PIL import Image
 
 import emdm
-from emdm.animate import Animator, animate, ellipse_points, frame_schedule
 from emdm.cli import main
-from emdm.controllers import program_at
-from emdm.output import read_run
-from emdm.pareto import front_at, pareto_steps, pareto_study, ratios
-from emdm.plots import run_figures
+from emdm.core.controllers import program_at
+from emdm.outputs.animate import Animator, animate, ellipse_points, frame_schedule
+from emdm.outputs.plots import run_figures
+from emdm.outputs.records import read_run
+from emdm.studies.pareto import front_at, pareto_steps, pareto_study, ratios
 
 
 @pytest.fixture(scope="module")
@@ -54,8 +54,8 @@ def test_read_run_is_exact(tmp_path):
 
 
 def test_run_figures_cover_every_group_in_three_formats(tmp_path, task2_runs):
-    from emdm.plots import path_figure
-    from emdm.style import formats
+    from emdm.outputs.plots import path_figure
+    from emdm.outputs.style import formats
 
     # every figure as PNG (its size is checked below); PDF and SVG on one of them
     with formats((".png",)):
@@ -250,14 +250,14 @@ def test_constrained_front_points_are_optimal(rng):
 
     q = np.array([0.4, 1.1])
     for point in front_at(sc, ctrl, q, ratios(decades=6, per_decade=1)):
-        weights = emdm.scenario.Weights(point["w_effort"], point["w_manip"], sc.weights.slack)
+        weights = emdm.core.scenario.Weights(point["w_effort"], point["w_manip"], sc.weights.slack)
         qp = program_at(ctrl, sc, q, weights=weights).qp
         ref = reference_solve(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
         np.testing.assert_allclose(point["qd"], ref[:2], atol=1e-8)
 
 
 def test_dominance_marking():
-    from emdm.pareto import _mark_dominated
+    from emdm.studies.pareto import _mark_dominated
 
     pts = [{"E": 1.0, "M": 1.0}, {"E": 2.0, "M": 0.5}, {"E": 2.0, "M": 2.0}, {"E": 1.0, "M": 1.0}]
     _mark_dominated(pts)

@@ -14,9 +14,9 @@ from test_solvers import random_qp
 import emdm
 from emdm import QP
 from emdm.cli import main
-from emdm.controllers import program_at
-from emdm.lab import lab_json, run_lab
+from emdm.core.controllers import program_at
 from emdm.solvers import available_solvers, get_solver, kkt_report
+from emdm.studies.lab import lab_json, run_lab
 
 # solvers whose answers are exact to 1e-8 (measured; piqp and highs reach about 1e-7, osqp 1e-2)
 EXACT = [

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from emdm.cli import main
-from emdm.report import format_value
+from emdm.outputs.report import format_value
 
 
 class Page(HTMLParser):

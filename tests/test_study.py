@@ -11,7 +11,7 @@ import pytest
 
 import emdm
 from emdm.cli import main
-from emdm.study import BLOCK, Engine, draw, run_chunks, run_study, study_json
+from emdm.studies.montecarlo import BLOCK, Engine, draw, run_chunks, run_study, study_json
 
 
 def small(task: str = "task1") -> emdm.Scenario:
@@ -90,7 +90,7 @@ def test_a_worker_dying_mid_study_costs_a_retry_not_the_study(cluster):
 
     engine = Engine("dask", scheduler=cluster.scheduler_address)
     parts = run_chunks(sc, runs, 13, engine, chunk_blocks=1, progress=kill_one)
-    from emdm.study import reduce_chunks
+    from emdm.studies.montecarlo import reduce_chunks
 
     got = reduce_chunks(parts, runs)
     assert killed

@@ -13,9 +13,8 @@ from typing import Any
 
 __version__ = "0.1.0"
 
-from .analysis import metrics
-from .arm import Kinematics, PlanarArm
-from .controllers import (
+from .core.arm import Kinematics, PlanarArm
+from .core.controllers import (
     CONTROLLERS,
     Controller,
     admissible,
@@ -23,11 +22,12 @@ from .controllers import (
     joint_bounds,
     step_program,
 )
+from .core.feasibility import feasible_point, task_scale
+from .core.problem import QP, Objective
+from .core.scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
-from .feasibility import feasible_point, task_scale
-from .problem import QP, Objective
-from .scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
-from .simulate import Run, simulate
+from .sim.loop import Run, simulate
+from .sim.metrics import metrics
 from .solvers import available_solvers, get_solver, kkt_report, solve_chain
 
 
@@ -39,7 +39,7 @@ def simulate_batch(
     q0s: Any = None,
 ) -> dict[str, Any]:
     """Many runs on the compiled fast path (see :func:`emdm.fast.simulate_batch`)."""
-    from .fast import simulate_batch as batch
+    from .sim.fast import simulate_batch as batch
 
     return batch(scenario, controller, goals=goals, q0s=q0s)
 

@@ -24,9 +24,9 @@ import time
 
 import numpy as np
 
-from ..arm import Matrix, Vector
-from ..feasibility import RANK_TOL, feasible_point
-from ..problem import QP
+from ..core.arm import Matrix, Vector
+from ..core.feasibility import RANK_TOL, feasible_point
+from ..core.problem import QP
 from .base import SolverResult, kkt_report
 
 

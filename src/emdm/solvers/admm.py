@@ -20,7 +20,7 @@ import time
 import numpy as np
 import scipy.linalg
 
-from ..problem import QP
+from ..core.problem import QP
 from .active_set import independent_rows
 from .base import SolverResult, infeasible
 

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 from scipy.optimize import nnls
 
-from ..arm import Vector
+from ..core.arm import Vector
+from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
-from ..problem import QP
 
 KKT_TOL = 1e-9
 """Largest relative KKT residual accepted as optimal."""
@@ -165,7 +165,7 @@ def infeasible(qp: QP) -> bool:
     The iterative and general-purpose solvers call this first (their phase 1), so an infeasible
     program is reported infeasible, never answered with a wrong point.
     """
-    from ..feasibility import feasible_point
+    from ..core.feasibility import feasible_point
 
     return feasible_point(qp.A, qp.b, qp.lb, qp.ub) is None
 

@@ -26,8 +26,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..arm import Matrix, Vector
-from ..problem import QP
+from ..core.arm import Matrix, Vector
+from ..core.problem import QP
 from .active_set import independent_rows
 from .base import SolverResult, infeasible
 

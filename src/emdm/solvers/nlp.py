@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, differential_evolution, linprog, minimize
 
-from ..arm import Matrix, Vector
-from ..problem import QP
+from ..core.arm import Matrix, Vector
+from ..core.problem import QP
 from .base import SolverResult, infeasible
 
 DEFAULT_BUDGET = 2000

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..problem import QP
+from ..core.problem import QP
 from .base import SolverResult, SolverSpec, register
 
 BACKENDS = {

@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from .controllers import CONTROLLERS
-from .errors import EmdmError
-from .scenario import Scenario, scenario_from_dict
-from .style import COLUMN, figure
+from ..core.controllers import CONTROLLERS
+from ..core.scenario import Scenario, scenario_from_dict
+from ..errors import EmdmError
+from ..outputs.style import COLUMN, figure
 
 BLOCK = 256
 """Runs per random block: the unit of the draws (chunks are whole numbers of blocks)."""
@@ -82,7 +82,7 @@ def run_chunk(
     Plain data in and out (it runs on Dask workers). ``threads`` caps numba's threads (one per
     worker process on a cluster, so workers do not compete for cores).
     """
-    from .fast import simulate_batch
+    from ..sim.fast import simulate_batch
 
     started = time.perf_counter()
     if threads is not None:

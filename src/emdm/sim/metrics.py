@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .simulate import Run
+from .loop import Run
 
 
 def metrics(run: Run) -> dict[str, Any]:

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
-from .errors import EmdmError, NoSolution
 from .feasibility import task_scale
 from .limits import Bounds, position_damper, velocity_box
 from .problem import QP, effort, manipulability_rate, slack_penalty, task_program

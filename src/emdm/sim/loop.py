@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .arm import Matrix, Vector
-from .controllers import Controller, get_controller, program_at, state_at
-from .errors import NoSolution
-from .scenario import Scenario
-from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, solve_chain
+from ..core.arm import Matrix, Vector
+from ..core.controllers import Controller, get_controller, program_at, state_at
+from ..core.scenario import Scenario
+from ..errors import NoSolution
+from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, solve_chain
 
 
 @dataclass(eq=False)

@@ -26,9 +26,9 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from PIL import Image
 
-from .arm import Matrix, PlanarArm
-from .scenario import Scenario
-from .simulate import Run
+from ..core.arm import Matrix, PlanarArm
+from ..core.scenario import Scenario
+from ..sim.loop import Run
 from .style import CONTROLLER_STYLE, RC, figure_canvas
 
 CIRCLE = np.stack((np.cos(np.linspace(0, 2 * np.pi, 73)), np.sin(np.linspace(0, 2 * np.pi, 73))))

@@ -718,8 +718,8 @@ def _arrays(scenario: Any) -> tuple[Any, ...]:
 def run_fast(scenario: Any, controller: Any) -> dict[str, Any]:
     """One closed-loop run on the fast path: ``q, qd, delta, alpha, m, steps, reached,
     reference_steps`` (the steps the reference path solved)."""
-    from .controllers import get_controller, program_at, state_at
-    from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
+    from ..core.controllers import get_controller, program_at, state_at
+    from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
 
     ctrl = controller if not isinstance(controller, str) else get_controller(controller)
     n, N = scenario.n, scenario.max_steps
@@ -767,7 +767,7 @@ def run_fast(scenario: Any, controller: Any) -> dict[str, Any]:
 
 def warm_up() -> float:
     """Compile (or load from the cache) every kernel; returns the seconds it took."""
-    from .scenario import load_scenario
+    from ..core.scenario import load_scenario
 
     start = time.perf_counter()
     for task in ("task1", "task2"):
@@ -804,7 +804,7 @@ def simulate_batch(
     ``time_to_goal`` NaN where not reached) and ``reference_runs``, the runs a step of which the
     reference path solved. The outcomes equal those of :func:`emdm.simulate` to 1e-12 (tested).
     """
-    from .controllers import get_controller
+    from ..core.controllers import get_controller
 
     ctrl = controller if not isinstance(controller, str) else get_controller(controller)
     n = scenario.n

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.patches import Patch
 
-from .lab import LabResult
+from ..studies.lab import LabResult
 from .style import COLUMN, DOUBLE, FAMILY_COLOR, color, figure
 
 FLOOR = 1e-17

@@ -13,13 +13,13 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from . import __version__
-from .controllers import CONTROLLERS, get_controller
-from .errors import EmdmError, NoSolution
-from .output import atomic_output, cell, write_csv, write_json, write_run_folder
-from .scenario import PRESETS, Scenario, load_scenario, parse_override
-from .simulate import Run, simulate
-from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, registered_solvers
+from .. import __version__
+from ..core.controllers import CONTROLLERS, get_controller
+from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
+from ..errors import EmdmError, NoSolution
+from ..outputs.records import atomic_output, cell, write_csv, write_json, write_run_folder
+from ..sim.loop import Run, simulate
+from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, registered_solvers
 
 
 class UsageError(EmdmError):
@@ -194,9 +194,9 @@ def lab_table(summary: dict[str, dict[str, Any]]) -> str:
 
 
 def cmd_solvers(args: argparse.Namespace) -> int:
-    from .lab import DEFAULT_LAB_SOLVERS, lab_header, lab_json, lab_rows, run_lab
-    from .lab_plots import lab_figures
-    from .solvers import available_solvers
+    from ..outputs.lab_plots import lab_figures
+    from ..solvers import available_solvers
+    from ..studies.lab import DEFAULT_LAB_SOLVERS, lab_header, lab_json, lab_rows, run_lab
 
     scenario = _scenario(args)
     controller = get_controller(args.controller)
@@ -246,7 +246,7 @@ def cmd_solvers(args: argparse.Namespace) -> int:
 
 def _runs(args: argparse.Namespace, names: Sequence[str]) -> tuple[Scenario, dict[str, Run]]:
     """The runs of ``names``: read from a folder written by ``emdm run``, or simulated."""
-    from .output import read_run
+    from ..outputs.records import read_run
 
     folder = Path(args.scenario)
     if folder.is_dir():
@@ -266,7 +266,7 @@ def _runs(args: argparse.Namespace, names: Sequence[str]) -> tuple[Scenario, dic
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from .plots import run_figures
+    from ..outputs.plots import run_figures
 
     names = [get_controller(n).name for n in (args.controller or list(CONTROLLERS))]
     scenario, runs = _runs(args, names)
@@ -278,8 +278,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
-    from .animate import animate
-    from .plots import GROUPS
+    from ..outputs.animate import animate
+    from ..outputs.plots import GROUPS
 
     if args.speedup <= 0:
         raise UsageError(f"--speedup must be > 0, got {args.speedup}")
@@ -299,7 +299,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
 
 
 def cmd_pareto(args: argparse.Namespace) -> int:
-    from .pareto import (
+    from ..studies.pareto import (
         default_grid,
         pareto_figure,
         pareto_study,
@@ -331,7 +331,7 @@ def cmd_pareto(args: argparse.Namespace) -> int:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from .report import build_report
+    from ..outputs.report import build_report
 
     if args.workers is not None and args.workers < 1:
         raise UsageError(f"--workers must be >= 1, got {args.workers}")
@@ -350,7 +350,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     import json as _json
 
-    from .bench import bench_table, run_bench
+    from ..studies.bench import bench_table, run_bench
 
     def progress(message: str) -> None:
         print(f"  {message}", file=sys.stderr, flush=True)
@@ -358,7 +358,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     data = run_bench(quick=args.quick, progress=progress)
     table = bench_table(data)
     if args.dask:
-        from .bench import dask_table, run_dask_bench
+        from ..studies.bench import dask_table, run_dask_bench
 
         data["dask"] = run_dask_bench(runs=400 if args.quick else 8000, progress=progress)
         table += "\n\n" + dask_table(data["dask"])
@@ -372,7 +372,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    from .study import (
+    from ..studies.montecarlo import (
         BLOCK,
         TIMING,
         Engine,
@@ -716,7 +716,3 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import ScenarioError
+from ..errors import ScenarioError
 
 Vector = NDArray[np.float64]
 Matrix = NDArray[np.float64]

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.patches import Circle
 
-from .simulate import Run
+from ..sim.loop import Run
 from .style import COLUMN, CONTROLLER_STYLE, color, figure
 
 GROUPS = {

@@ -30,10 +30,12 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from . import __version__
-from .animate import animate
-from .controllers import CONTROLLERS
-from .lab import (
+from .. import __version__
+from ..core.controllers import CONTROLLERS
+from ..core.scenario import load_scenario
+from ..sim.loop import Run, simulate
+from ..solvers import available_solvers
+from ..studies.lab import (
     DEFAULT_LAB_SOLVERS,
     LabResult,
     lab_header,
@@ -42,13 +44,18 @@ from .lab import (
     merge_labs,
     run_lab,
 )
+from ..studies.pareto import (
+    default_grid,
+    pareto_figure,
+    pareto_study,
+    ratios,
+    trade_off_figure,
+    weight_grid,
+)
+from .animate import animate
 from .lab_plots import lab_figures
-from .output import atomic_output, cell, write_csv, write_json, write_run_folder
-from .pareto import default_grid, pareto_figure, pareto_study, ratios, trade_off_figure, weight_grid
 from .plots import joints_figure, path_figure, series_figure
-from .scenario import load_scenario
-from .simulate import Run, simulate
-from .solvers import available_solvers
+from .records import atomic_output, cell, write_csv, write_json, write_run_folder
 from .style import formats
 
 

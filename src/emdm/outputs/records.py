@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .simulate import Run
+from ..sim.loop import Run
 
 
 def cell(value: Any) -> str:
@@ -172,8 +172,8 @@ def read_run(folder: Path, controller: str) -> Run:
 
     The CSVs hold every value at full precision, so the arrays equal the simulated ones exactly.
     """
-    from .controllers import get_controller
-    from .scenario import scenario_from_dict
+    from ..core.controllers import get_controller
+    from ..core.scenario import scenario_from_dict
 
     folder = Path(folder)
     meta = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
@@ -228,8 +228,8 @@ def write_run_folder(
     """What ``emdm run`` writes: trajectories and diagnostics CSVs, and metrics.json.
 
     Returns the metrics of every run (as written)."""
-    from . import __version__
-    from .analysis import metrics
+    from .. import __version__
+    from ..sim.metrics import metrics
 
     for name, run in runs.items():
         write_csv(

@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
-from .errors import ScenarioError
 
 PRESETS = ("task1", "task2")
 POLICIES = ("scale", "slack", "error")
@@ -446,7 +446,7 @@ def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None 
     """
     text_name = str(name_or_path)
     if text_name in PRESETS and not Path(text_name).exists():
-        text = resources.files("emdm").joinpath("scenarios", f"{text_name}.toml").read_text()
+        text = resources.files("emdm.core").joinpath("scenarios", f"{text_name}.toml").read_text()
         source = text_name
     else:
         path = Path(name_or_path)

@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__
-from .controllers import CONTROLLERS, get_controller, program_at, state_at
-from .scenario import load_scenario
-from .simulate import simulate
-from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
+from .. import __version__
+from ..core.controllers import CONTROLLERS, get_controller, program_at, state_at
+from ..core.scenario import load_scenario
+from ..sim.loop import simulate
+from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
 
 
 def _median_time(function: Callable[[], Any], repeats: int) -> float:
@@ -146,7 +146,7 @@ def run_bench(
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Every measurement of the benchmark, as a JSON-friendly dict."""
-    from .fast import HAVE_NUMBA, run_fast, simulate_batch, warm_up
+    from ..sim.fast import HAVE_NUMBA, run_fast, simulate_batch, warm_up
 
     say = progress or (lambda _m: None)
     if quick:
@@ -247,7 +247,7 @@ def run_dask_bench(
     """Study throughput on 1- and 2-worker LocalClusters (started and warmed outside the timing)."""
     from dask.distributed import LocalCluster
 
-    from .study import BLOCK, DEFAULT_CHUNK_BLOCKS, Engine, run_study
+    from .montecarlo import BLOCK, DEFAULT_CHUNK_BLOCKS, Engine, run_study
 
     say = progress or (lambda _m: None)
     sc = load_scenario("task1")

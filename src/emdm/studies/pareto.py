@@ -21,13 +21,13 @@ from typing import Any
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .analysis import metrics
-from .controllers import Controller, get_controller, program_at
-from .errors import NoSolution
-from .scenario import Scenario, Weights
-from .simulate import Run, simulate
-from .solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
-from .style import COLUMN, DOUBLE, color, figure
+from ..core.controllers import Controller, get_controller, program_at
+from ..core.scenario import Scenario, Weights
+from ..errors import NoSolution
+from ..outputs.style import COLUMN, DOUBLE, color, figure
+from ..sim.loop import Run, simulate
+from ..sim.metrics import metrics
+from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain
 
 
 def pareto_steps(run: Run) -> list[int]:

@@ -27,13 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from .arm import Vector
-from .controllers import Controller, get_controller, program_at
-from .errors import NoSolution
-from .problem import QP
-from .scenario import Scenario
-from .simulate import Run, simulate
-from .solvers import SolverResult, SolverSpec, available_solvers, get_solver
+from ..core.arm import Vector
+from ..core.controllers import Controller, get_controller, program_at
+from ..core.problem import QP
+from ..core.scenario import Scenario
+from ..errors import NoSolution
+from ..sim.loop import Run, simulate
+from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",

@@ -11,8 +11,8 @@ import uuid
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from .errors import EmdmError
-from .study import Engine, run_chunk
+from ..errors import EmdmError
+from .montecarlo import Engine, run_chunk
 
 
 def local_cluster(workers: int | None) -> Any:

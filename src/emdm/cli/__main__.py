@@ -1,0 +1,7 @@
+"""``python -m emdm.cli``: the same as the ``emdm`` command."""
+
+import sys
+
+from .main import main
+
+sys.exit(main())
