@@ -28,19 +28,20 @@ def test_bench_quick_reports_every_figure(tmp_path, capsys):
     data = json.loads((tmp_path / "bench.json").read_text())
     per = data["per_step"]["seconds"]
     assert set(per) == {
-        "reference (emdm)",
+        "per-step API (state_at, program_at, solve_chain)",
         "standard stack, daqp",
         "standard stack, quadprog",
-        "fast path (emdm)",
+        "emdm.simulate (full record, certified)",
     }
     for row in per.values():
         assert row["total"] > 0
     assert len(data["runs"]) == 8 and data["batch"]["steps"] > 0
     assert set(data["targets"]) == {
-        "single run task1 C-EMDM <= 5 us/step",
-        "speed-up over the standard stack >= 15x",
-        "batch >= 1e6 steps/s",
+        "emdm.simulate task1 C-EMDM <= 5 us/step",
+        "emdm.simulate vs the standard stack >= 20x",
+        "batch >= 1.5e6 steps/s",
     }
+    assert data["first_use"]["cache_load_s"] > 0
     table = (tmp_path / "bench.md").read_text()
-    assert "| fast path (emdm) |" in table and "steps/s" in table
-    assert "fast path" in capsys.readouterr().out
+    assert "| emdm.simulate (full record, certified) |" in table and "steps/s" in table
+    assert "emdm.simulate" in capsys.readouterr().out

@@ -9,8 +9,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 __version__ = "0.1.0"
 
 from .core.arm import Kinematics, PlanarArm
@@ -26,28 +24,16 @@ from .core.feasibility import feasible_point, task_scale
 from .core.problem import QP, Objective
 from .core.scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
+from .sim.batch import BatchResult, simulate_batch
 from .sim.loop import Run, simulate
 from .sim.metrics import metrics
 from .solvers import available_solvers, get_solver, kkt_report, solve_chain
-
-
-def simulate_batch(
-    scenario: Scenario,
-    controller: str | Controller,
-    *,
-    goals: Any = None,
-    q0s: Any = None,
-) -> dict[str, Any]:
-    """Many runs on the compiled fast path (see :func:`emdm.fast.simulate_batch`)."""
-    from .sim.fast import simulate_batch as batch
-
-    return batch(scenario, controller, goals=goals, q0s=q0s)
-
 
 __all__ = [
     "CONTROLLERS",
     "PRESETS",
     "QP",
+    "BatchResult",
     "Controller",
     "EmdmError",
     "Kinematics",

@@ -40,3 +40,6 @@ class NoSolution(EmdmError):
         super().__init__(message)
         self.problem = problem
         self.result = result
+        self.run: Any = None  # the run up to the failing step, set by emdm.simulate
+        self.controller: str | None = None
+        self.step: int | None = None

@@ -35,11 +35,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
+from .jit import plain
+from .kernels import kin_work
+from .kernels import kinematics as _kinematics
 
 Vector = NDArray[np.float64]
 Matrix = NDArray[np.float64]
-
-SINGULAR_RELATIVE = 1e-14
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,17 +69,12 @@ class PlanarArm:
             raise ScenarioError(
                 "PlanarArm", "lengths", f"must be finite and > 0, got {lengths_arr}"
             )
+        self._kernel_lengths = lengths_arr.copy()  # writable: one compiled signature
         lengths_arr.setflags(write=False)
         self.lengths: Vector = lengths_arr
         self.n: int = int(lengths_arr.size)
-        n = self.n
-        pairs_i, pairs_k = np.triu_indices(n, 1)
-        joints = np.arange(n)
-        self._pi, self._pk = pairs_i, pairs_k
-        self._max_kj = np.maximum(pairs_k[:, None], joints[None, :])
-        self._max_ij = np.maximum(pairs_i[:, None], joints[None, :])
+        joints = np.arange(self.n)
         self._max_jk = np.maximum(joints[:, None], joints[None, :])
-        self._singular_m = SINGULAR_RELATIVE * float(lengths_arr.sum()) ** 2
 
     def __repr__(self) -> str:
         return f"PlanarArm(lengths={self.lengths.tolist()})"
@@ -121,13 +117,11 @@ class PlanarArm:
 
     def forward(self, q: ArrayLike) -> Vector:
         """End-effector position ``p = f(q)`` (m), brief eq. (1)."""
-        p: Vector = self.link_vectors(q).sum(axis=1)
-        return p
+        return self.kinematics(q).p
 
     def jacobian(self, q: ArrayLike) -> Matrix:
         """Manipulator Jacobian ``J = dp/dq`` (2 x n, m/rad), brief eq. (3)."""
-        r = self.tip_vectors(q)
-        return np.stack((-r[1], r[0]))
+        return self.kinematics(q).J
 
     def hessian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Hessian slices ``H[j] = dJ/dq_j`` (n x 2 x n): column k of ``H[j]`` is ``-r_max(j,k)``."""
@@ -143,28 +137,9 @@ class PlanarArm:
         return self.kinematics(q).Jm
 
     def kinematics(self, q: ArrayLike) -> Kinematics:
-        """Position, Jacobian, manipulability and its Jacobian, computed together (shared work)."""
-        r = self.tip_vectors(q)
-        p = r[:, 0].copy()
-        J = np.stack((-r[1], r[0]))
-        ri, rk = r[:, self._pi], r[:, self._pk]
-        minors = ri[0] * rk[1] - ri[1] * rk[0]
-        m = float(np.sqrt(minors @ minors))
-        gram = r.T @ r
-        G = gram[self._pi[:, None], self._max_kj] - gram[self._max_ij, self._pk[:, None]]
-        if m > self._singular_m:
-            Jm = (G.T @ minors) / m
-        else:
-            Jm = _steepest_ascent(G)
+        """Position, Jacobian, manipulability and its Jacobian, computed together by the compiled
+        kernel :func:`emdm.core.kernels.kinematics` (the one implementation of these formulas)."""
+        q_arr = np.ascontiguousarray(self._check_q(q))
+        p, J, Jm = np.empty(2), np.empty((2, self.n)), np.empty(self.n)
+        m = _kinematics(self._kernel_lengths, q_arr, p, J, Jm, plain(kin_work)(self.n))
         return Kinematics(p=p, J=J, m=m, Jm=Jm)
-
-
-def _steepest_ascent(G: Matrix) -> Vector:
-    """``s1 v1`` for the leading singular pair of G, signed so its largest component is positive."""
-    _, s, vt = np.linalg.svd(G)
-    if s.size == 0 or s[0] == 0.0:
-        return np.zeros(G.shape[1])
-    v1 = vt[0]
-    if v1[np.argmax(np.abs(v1))] < 0:
-        v1 = -v1
-    return np.asarray(s[0] * v1, dtype=float) + 0.0  # + 0.0 turns -0.0 into 0.0

@@ -23,31 +23,60 @@ into its bounds after the fact.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
 from .feasibility import task_scale
-from .limits import Bounds, position_damper, velocity_box
-from .problem import QP, effort, manipulability_rate, slack_penalty, task_program
+from .kernels import ERROR_FLOOR, ProgramData, build_program
+from .kernels import joint_bounds as _joint_bounds
+from .limits import Bounds
+from .problem import QP
 from .scenario import Scenario, Weights
 
-ERROR_FLOOR = 1e-9
-"""Smallest ``||e||`` (m) used in ``w_S = c_S / ||e||``."""
+
+class Method(StrEnum):
+    """The objective of a controller: inverse velocity kinematics or effort/dexterity (EMDM)."""
+
+    IVKC = "IVKC"
+    EMDM = "EMDM"
 
 
 @dataclass(frozen=True)
 class Controller:
-    """One of the four controllers: ``IVKC`` or ``EMDM``, constrained (``C-``) or not (``UC-``)."""
+    """One of the four controllers: ``IVKC`` or ``EMDM``, constrained (``C-``) or not (``UC-``).
+
+    A controller is data: :meth:`program_data` turns it and a scenario into the numbers of the
+    compiled program builder (:func:`emdm.core.kernels.build_program`), so adding a controller
+    means adding a :class:`Method` and its line in :meth:`program_data`, in this module only.
+    """
 
     name: str
-    method: str
+    method: Method
     constrained: bool
+
+    def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
+        """The weights, slack and bounds of this controller's program on ``scenario``."""
+        w = weights or scenario.weights
+        if self.method is Method.IVKC:  # min E s.t. J qd = v (= J^+ v)
+            w_e, w_m, slack = 1.0, 0.0, False
+        else:  # min w_E E - w_M M s.t. J qd = v; the slack program on a non-redundant arm
+            w_e, w_m, slack = w.effort, w.manipulability, not scenario.redundant
+        return ProgramData(
+            float(w_e),
+            float(w_m),
+            float(w.slack),
+            slack,
+            self.constrained,
+            np.asarray(scenario.slack.min, dtype=float),
+            np.asarray(scenario.slack.max, dtype=float),
+        )
 
 
 CONTROLLERS: dict[str, Controller] = {
-    name: Controller(name, name.split("-")[1], name.startswith("C-"))
+    name: Controller(name, Method(name.split("-")[1]), name.startswith("C-"))
     for name in ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM")
 }
 
@@ -62,15 +91,9 @@ def get_controller(name: str) -> Controller:
 
 def joint_bounds(scenario: Scenario, q: Vector) -> Bounds:
     """The velocity box intersected with the position dampers at ``q`` (the C- bounds)."""
-    arm, damper = scenario.arm, scenario.damper
-    return velocity_box(arm.qd_min, arm.qd_max) & position_damper(
-        q,
-        q_min=arm.q_min,
-        q_max=arm.q_max,
-        influence=damper.influence,
-        stop=damper.stop,
-        gain=damper.gain,
-    )
+    lo, hi = np.empty(scenario.n), np.empty(scenario.n)
+    _joint_bounds(scenario.arm_data, np.asarray(q, dtype=float), lo, hi)
+    return Bounds(lo, hi)
 
 
 def slack_weight(scenario: Scenario, error_norm: float, weights: Weights | None = None) -> float:
@@ -90,24 +113,27 @@ def step_program(
     weights: Weights | None = None,
 ) -> QP:
     """The program of ``controller`` at configuration ``q`` for the desired velocity ``v``."""
-    w = weights or scenario.weights
-    n = q.size
-    bounds = joint_bounds(scenario, q) if controller.constrained else Bounds.free(n)
-    if controller.method == "IVKC":
-        return task_program(effort(n), kin.J, v, bounds.lo, bounds.hi)
-    objective = effort(n, w.effort) + manipulability_rate(kin.Jm, w.manipulability)
-    if scenario.redundant:
-        return task_program(objective, kin.J, v, bounds.lo, bounds.hi)
-    return task_program(
-        objective,
+    data = controller.program_data(scenario, weights)
+    n = scenario.n
+    nx = n + 2 if data.slack else n
+    P, c, A = np.empty((nx, nx)), np.empty(nx), np.zeros((2, nx))
+    b, lb, ub = np.empty(2), np.empty(nx), np.empty(nx)
+    build_program(
+        scenario.arm_data,
+        data,
+        np.asarray(q, dtype=float),
         kin.J,
-        v,
-        bounds.lo,
-        bounds.hi,
-        slack=slack_penalty(slack_weight(scenario, error_norm, w)),
-        slack_lo=np.asarray(scenario.slack.min),
-        slack_hi=np.asarray(scenario.slack.max),
+        kin.Jm,
+        np.asarray(v, dtype=float),
+        float(error_norm),
+        P,
+        c,
+        A,
+        b,
+        lb,
+        ub,
     )
+    return QP(P, c, A, b, lb, ub, n_joints=n)
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,10 +23,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernels
 from .arm import Matrix, Vector
+from .jit import plain
+from .kernels import FEASIBILITY_TOL, RANK_TOL
 
-RANK_TOL = 1e-12
-FEASIBILITY_TOL = 1e-10
+__all__ = ["FEASIBILITY_TOL", "RANK_TOL", "feasible_point", "task_scale"]
+
+
+def _contiguous(*arrays: Vector) -> tuple[Vector, ...]:
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
 
 
 def _perp(w: Matrix) -> Matrix:
@@ -101,8 +107,16 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
     """Largest ``alpha`` in [0, 1] such that ``A x = alpha b``, ``lb <= x <= ub`` is feasible.
 
     Returns 1.0 for a feasible program and ``None`` when no ``alpha`` in [0, 1] works (for instance a
-    box that excludes ``x = 0`` and cannot reach the task direction either).
+    box that excludes ``x = 0`` and cannot reach the task direction either). Two-row programs go
+    to the compiled kernel; the numpy projection below handles what it leaves (unbounded variables
+    whose columns have rank < 2, more task rows).
     """
+    if A.shape[0] == 2:
+        nx = A.shape[1]
+        Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
+        alpha = kernels.task_scale(Ac, bc, lbc, ubc, plain(kernels.feas_work)(nx))
+        if alpha != -2.0:
+            return None if alpha == -1.0 else alpha
     Q, G, bounded = _project(A, lb, ub)
     if Q.shape[1] == 0:
         return 1.0
@@ -115,6 +129,12 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
 
 def feasible_point(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> Vector | None:
     """Some ``x`` with ``A x = b`` and ``lb <= x <= ub`` (exact up to rounding), or ``None``."""
+    if A.shape[0] == 2:
+        x = np.empty(A.shape[1])
+        Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
+        code, _ = kernels.feasible_point(Ac, bc, lbc, ubc, x, plain(kernels.feas_work)(x.size))
+        if code != kernels.NEEDS_REFERENCE:
+            return x if code == kernels.OK else None
     Q, G, bounded = _project(A, lb, ub)
     lbb, ubb = lb[bounded], ub[bounded]
     x = np.zeros(A.shape[1])

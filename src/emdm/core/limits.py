@@ -6,8 +6,10 @@ bounds are applied on each side independently, only inside the influence zone:
     qd_j <=  (1/K_safe) (d+ - s) / (i - s)     when d+ < i
     qd_j >= -(1/K_safe) (d- - s) / (i - s)     when d- < i
 
-With ``dt < K_safe (i - s)`` a joint that starts outside its stop zone never enters it: every step
-multiplies ``d - s`` by at least ``1 - dt / (K_safe (i - s)) > 0``.
+A joint that starts outside its stop zone never enters it when two conditions hold: inside the
+influence zone, ``dt < K_safe (i - s)`` (every step multiplies ``d - s`` by at least
+``1 - dt / (K_safe (i - s)) > 0``); outside it, ``max |qd| dt <= i - s`` (one step at the velocity
+limit cannot jump over the zone). The scenario loader warns when either fails.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arm import Vector
+from .kernels import damper_bounds
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -44,9 +47,12 @@ def velocity_box(qd_min: Vector, qd_max: Vector) -> Bounds:
 def position_damper(
     q: Vector, *, q_min: Vector, q_max: Vector, influence: Vector, stop: Vector, gain: Vector
 ) -> Bounds:
-    """Velocity bounds from the joint-position dampers (brief eq. 11), both sides independently."""
-    d_up, d_down = q_max - q, q - q_min
-    span = gain * (influence - stop)
-    hi = np.where(d_up < influence, (d_up - stop) / span, np.inf)
-    lo = np.where(d_down < influence, -(d_down - stop) / span, -np.inf)
+    """Velocity bounds from the joint-position dampers (brief eq. 11), both sides independently
+    (the compiled :func:`emdm.core.kernels.damper_bounds`)."""
+    q_arr = np.ascontiguousarray(q, dtype=float)
+    lo, hi = np.empty(q_arr.size), np.empty(q_arr.size)
+    q_lo, q_hi, inf, stp, gn = (
+        np.array(a, dtype=float) for a in (q_min, q_max, influence, stop, gain)
+    )
+    damper_bounds(q_arr, q_lo, q_hi, inf, stp, gn, lo, hi)
     return Bounds(lo, hi)

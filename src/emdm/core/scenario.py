@@ -13,6 +13,7 @@ import tomllib
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -22,9 +23,20 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
+from .kernels import ArmData
 
 PRESETS = ("task1", "task2")
-POLICIES = ("scale", "slack", "error")
+
+
+class Policy(StrEnum):
+    """What a step does when its task is infeasible under the joint bounds."""
+
+    SCALE = "scale"  # the largest feasible task scale alpha in [0, 1] (SNS task scaling)
+    SLACK = "slack"  # an unbounded task slack, weighted like the slack program's
+    ERROR = "error"  # stop the run, naming the step
+
+
+POLICIES = tuple(Policy)
 
 
 class ScenarioWarning(UserWarning):
@@ -132,7 +144,7 @@ class Damper:
 class ControllerSettings:
     """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (DESIGN.md section 1)."""
 
-    on_infeasible: str
+    on_infeasible: Policy
 
 
 @dataclass(frozen=True, eq=False)
@@ -163,6 +175,26 @@ class Scenario:
     def planar_arm(self) -> PlanarArm:
         """The kinematic model of this scenario's arm."""
         return PlanarArm(self.arm.lengths)
+
+    @cached_property
+    def arm_data(self) -> ArmData:
+        """The arm, its limits and dampers as input of the compiled kernels."""
+        a, d = self.arm, self.damper
+        return ArmData(
+            *(
+                np.array(x, dtype=float)
+                for x in (
+                    a.lengths,
+                    a.q_min,
+                    a.q_max,
+                    a.qd_min,
+                    a.qd_max,
+                    d.influence,
+                    d.stop,
+                    d.gain,
+                )
+            )
+        )
 
     @property
     def max_steps(self) -> int:
@@ -323,6 +355,7 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                 parsed[section][key] = value
 
     warnings_found = _check_consistency(check, parsed, n)
+    parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
     name = data.get("name") or Path(source).stem or "scenario"
     sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
     return Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
@@ -411,6 +444,12 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
         found.append(
             "damper: dt >= gain * (influence - stop): the position damper can overshoot into the "
             "stop zone in one step"
+        )
+    step = np.maximum(arm["qd_max"], -arm["qd_min"]) * motion["dt"]
+    if np.any(step > damper["influence"] - damper["stop"]):
+        found.append(
+            "damper: max |qd| * dt > influence - stop: a joint outside its influence zone can "
+            "cross the zone and the stop distance in one step"
         )
     lengths = arm["lengths"]
     radius = float(np.hypot(*motion["goal"]))

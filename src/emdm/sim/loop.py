@@ -1,31 +1,227 @@
-"""The control loop (brief Algorithm 1) and its complete record.
+"""The control loop (brief Algorithm 1), compiled, and its complete record.
 
 At each state ``k`` (time ``t_k = k dt``): ``p_k = f(q_k)``, ``e_k = p_goal - p_k``, ``v_k = Kp e_k``;
 the run stops when ``||e_k|| < tolerance`` (reached) or when ``t_k`` reaches ``max_time``; otherwise
-the controller's program is built, made admissible by the infeasibility policy, solved through the
-solver chain (the answer certified by its KKT residuals) and ``q_{k+1} = q_k + qd_k dt``.
+the controller's program is built, made admissible by the infeasibility policy, solved, its answer
+certified by its KKT residuals, and ``q_{k+1} = q_k + qd_k dt``.
+
+One compiled kernel, :func:`run_kernel`, does all of that and records every quantity of a step. It
+hands a step back to Python (and resumes after it) only when the step leaves what it settles
+exactly: a policy other than ``scale`` on an infeasible task, no feasible task scale, dependent
+task rows, a solver other than ``active-set``, or an answer its certificate does not accept. Python
+then solves that step through the solver chain (:func:`emdm.solvers.solve_chain`), certified by
+the same compiled KKT check, and records which solver answered. The record grows in chunks, so a
+run allocates for the steps it takes, not for ``max_time / dt``.
 
 The :class:`Run` holds ``K + 1`` states and ``K`` commands (row ``k`` of a command array is the
-command computed at state ``k``). All arrays are allocated once, for ``max_time / dt`` steps.
+command computed at state ``k``).
 """
 
 from __future__ import annotations
 
+import math
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
-from ..core.controllers import Controller, get_controller, program_at, state_at
-from ..core.scenario import Scenario
+from ..core.controllers import Controller, admissible, get_controller, slack_weight
+from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
+from ..core.kernels import (
+    ArmData,
+    KinWork,
+    ProgramData,
+    build_program,
+    kin_work,
+    kinematics,
+    task_scale,
+)
+from ..core.problem import QP
+from ..core.scenario import Policy, Scenario
 from ..errors import NoSolution
-from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, solve_chain
+from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
+from ..solvers.kernels import OK, QPWork, active_set, qp_work
+
+F64 = NDArray[np.float64]
+
+FIRST_CHUNK = 256
+"""Steps the record holds at first; it grows fourfold whenever a run needs more."""
+
+
+class Exit(IntEnum):
+    """Why :func:`run_kernel` returned."""
+
+    REACHED = 0  # ||e_k|| < tolerance at state k
+    TIMEOUT = 1  # t_k reached max_time
+    HANDOFF = 2  # step k is for the solver chain (its nominal program is in the StepWork)
+    FULL = 3  # the record has no room for step k
+
+
+class Motion(NamedTuple):
+    """The task as kernel input: goal (m), gain (1/s, per axis), dt (s), tolerance (m), steps."""
+
+    goal: F64
+    kp: F64
+    dt: float
+    tolerance: float
+    n_steps: int
+
+
+class Record(NamedTuple):
+    """Every recorded quantity, preallocated: states ``0..cap`` and commands ``0..cap-1``."""
+
+    q: F64
+    p: F64
+    e: F64
+    v: F64
+    m: F64
+    qd: F64
+    effort: F64
+    manip: F64
+    delta: F64
+    alpha: F64
+    lo: F64
+    hi: F64
+    active: NDArray[np.int8]
+    iterations: NDArray[np.int64]
+    ticks: NDArray[np.int64]
+    kkt: F64
+    excess: F64
+
+
+class StepWork(NamedTuple):
+    """One step's buffers: kinematics, the program ``(P, c, A, b, lb, ub)``, answer and residuals."""
+
+    kin: KinWork
+    qp: QPWork
+    J: F64
+    Jm: F64
+    P: F64
+    c: F64
+    A: F64
+    b: F64
+    lb: F64
+    ub: F64
+    x: F64
+    res: F64
+
+
+@kernel
+def new_record(cap: int, n: int) -> Record:
+    """A record with room for ``cap`` commands of an ``n``-joint arm."""
+    return Record(
+        np.empty((cap + 1, n)),
+        np.empty((cap + 1, 2)),
+        np.empty((cap + 1, 2)),
+        np.empty((cap + 1, 2)),
+        np.empty(cap + 1),
+        np.empty((cap, n)),
+        np.empty(cap),
+        np.empty(cap),
+        np.zeros((cap, 2)),
+        np.empty(cap),
+        np.empty((cap, n)),
+        np.empty((cap, n)),
+        np.zeros((cap, n), dtype=np.int8),
+        np.zeros(cap, dtype=np.int64),
+        np.zeros(cap, dtype=np.int64),
+        np.empty(cap),
+        np.empty(cap),
+    )
+
+
+@kernel
+def step_work(n: int, nx: int) -> StepWork:
+    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables."""
+    return StepWork(
+        kin_work(n),
+        qp_work(nx),
+        np.empty((2, n)),
+        np.empty(n),
+        np.empty((nx, nx)),
+        np.empty(nx),
+        np.zeros((2, nx)),
+        np.empty(2),
+        np.empty(nx),
+        np.empty(nx),
+        np.empty(nx),
+        np.empty(4),
+    )
+
+
+@kernel
+def run_kernel(
+    arm: ArmData,
+    motion: Motion,
+    prog: ProgramData,
+    scale_policy: bool,
+    solve: bool,
+    rec: Record,
+    k0: int,
+    w: StepWork,
+) -> tuple[int, int]:
+    """Run from state ``k0`` (``rec.q[k0]`` set) until an :class:`Exit`; returns ``(exit, k)``."""
+    n = arm.lengths.size
+    cap = rec.qd.shape[0]
+    for k in range(k0, cap + 1):
+        m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
+        rec.m[k] = m
+        ex = motion.goal[0] - rec.p[k, 0]
+        ey = motion.goal[1] - rec.p[k, 1]
+        rec.e[k, 0], rec.e[k, 1] = ex, ey
+        rec.v[k, 0], rec.v[k, 1] = motion.kp[0] * ex, motion.kp[1] * ey
+        err = math.hypot(ex, ey)
+        if err < motion.tolerance:
+            return Exit.REACHED, k
+        if k >= motion.n_steps:
+            return Exit.TIMEOUT, k
+        if k == cap:
+            return Exit.FULL, k
+        build_program(arm, prog, rec.q[k], w.J, w.Jm, rec.v[k], err, w.P, w.c, w.A, w.b, w.lb, w.ub)
+        for j in range(n):
+            rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
+        if not solve:
+            return Exit.HANDOFF, k
+        alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
+        if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
+            return Exit.HANDOFF, k
+        w.b[0] *= alpha
+        w.b[1] *= alpha
+        start = ticks()
+        code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+        stop = ticks()
+        if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
+            w.b[0], w.b[1] = rec.v[k, 0], rec.v[k, 1]  # the nominal program, for the chain
+            return Exit.HANDOFF, k
+        effort = 0.0
+        manip = 0.0
+        for j in range(n):
+            qd = w.x[j]
+            rec.qd[k, j] = qd
+            rec.active[k, j] = -1 if qd <= w.lb[j] else (1 if qd >= w.ub[j] else 0)
+            rec.q[k + 1, j] = rec.q[k, j] + qd * motion.dt
+            effort += qd * qd
+            manip += w.Jm[j] * qd
+        rec.effort[k] = 0.5 * effort
+        rec.manip[k] = manip
+        if prog.slack:
+            rec.delta[k, 0], rec.delta[k, 1] = w.x[n], w.x[n + 1]
+        rec.alpha[k] = alpha
+        rec.iterations[k] = iterations
+        rec.ticks[k] = stop - start
+        rec.kkt[k] = max(w.res[0], w.res[1], w.res[2])
+        rec.excess[k] = w.res[3]
+    return Exit.FULL, cap
 
 
 @dataclass(eq=False)
 class Run:
-    """The record of one closed-loop run (DESIGN.md section 2).
+    """The record of one closed-loop run.
 
     States (``K + 1`` rows): ``t`` (s), ``q`` (rad), ``p``, ``e`` (m), ``v`` (m/s), ``m``.
     Commands (``K`` rows): ``qd`` (rad/s), ``effort`` ``E = 1/2 ||qd||^2``, ``manip_rate``
@@ -78,6 +274,56 @@ class Run:
         return float(self.t[-1]) if self.reached else None
 
 
+def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
+    """The scenario's task as kernel input (``goal`` replaces the scenario's when given)."""
+    mo = scenario.motion
+    return Motion(
+        np.array(mo.goal if goal is None else goal, dtype=float),
+        np.array(mo.kp, dtype=float),
+        float(mo.dt),
+        float(mo.tolerance),
+        scenario.max_steps,
+    )
+
+
+_local = threading.local()
+
+
+def _work(n: int, nx: int) -> StepWork:
+    """This thread's step buffers for the shape ``(n, nx)``, built once (they hold no result)."""
+    cache: dict[tuple[int, int], StepWork] = _local.__dict__.setdefault("work", {})
+    if (n, nx) not in cache:
+        cache[n, nx] = step_work(n, nx)
+    return cache[n, nx]
+
+
+def _grow(rec: Record, cap: int, n: int) -> Record:
+    bigger = plain(new_record)(cap, n)
+    for old, new in zip(rec, bigger, strict=True):
+        old_arr, new_arr = np.asarray(old), np.asarray(new)
+        new_arr[: old_arr.shape[0]] = old_arr
+    return bigger
+
+
+class _Steps:
+    """Per-step text fields of a run: kernel steps share one value, chain steps get their own."""
+
+    def __init__(self) -> None:
+        self.solver: dict[int, str] = {}
+        self.status: dict[int, str] = {}
+        self.attempts: dict[int, str] = {}
+        self.policy: dict[int, str] = {}
+        self.time: dict[int, float] = {}
+        self.fallback: set[int] = set()
+
+    def column(self, values: dict[int, str], default: str, K: int) -> list[str]:
+        out = [default] * K
+        for k, value in values.items():
+            if k < K:
+                out[k] = value
+        return out
+
+
 def simulate(
     scenario: Scenario,
     controller: str | Controller,
@@ -88,103 +334,147 @@ def simulate(
 ) -> Run:
     """Run ``controller`` on ``scenario`` from ``q0`` until the goal or ``max_time``.
 
-    ``solver`` is tried first at every step, then each of ``fallback`` in order; the first answer
-    whose KKT report is optimal is used; with ``certify=False`` the first finite answer is used
-    as it is (to study inexact solvers in closed loop; its KKT residual is recorded).
-    Raises :class:`~emdm.errors.NoSolution` when a step has no admissible command
-    (``on_infeasible = "error"``, or no solver succeeds).
+    With the default ``solver="active-set"`` every step runs in the compiled loop; a step it cannot
+    settle goes through ``[solver, *fallback]``, the first answer whose KKT report is optimal being
+    used. Another ``solver`` is tried first at every step, then each of ``fallback`` in order; with
+    ``certify=False`` the first finite answer is used as it is (to study inexact solvers in
+    closed loop; its KKT residual is recorded). Raises :class:`~emdm.errors.NoSolution` when a step
+    has no admissible command (``on_infeasible = "error"``, or no solver succeeds); the exception
+    carries the partial run (``.run``), the controller and the step.
     """
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     chain = [solver, *[f for f in fallback if f != solver]]
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
-    n, N = scenario.n, scenario.max_steps
-    motion = scenario.motion
-
-    t = np.arange(N + 1, dtype=float) * motion.dt
-    q, p, e, v = (
-        np.empty((N + 1, n)),
-        np.empty((N + 1, 2)),
-        np.empty((N + 1, 2)),
-        np.empty((N + 1, 2)),
-    )
-    m = np.empty(N + 1)
-    qd, delta = np.empty((N, n)), np.zeros((N, 2))
-    lo, hi = np.empty((N, n)), np.empty((N, n))
-    effort_, manip, alpha = np.empty(N), np.empty(N), np.empty(N)
-    active = np.zeros((N, n), dtype=np.int8)
-    iterations = np.zeros(N, dtype=np.int64)
-    solve_time, kkt, excess = np.empty(N), np.empty(N), np.empty(N)
-    fallback_used = np.zeros(N, dtype=bool)
-    solvers_used: list[str] = []
-    statuses: list[str] = []
-    attempts: list[str] = []
-    policies: list[str] = []
-
-    q[0] = motion.q0
-    reached = False
+    ensure_compiled(_warm_up)
+    n = scenario.n
+    prog = ctrl.program_data(scenario)
+    nx = n + 2 if prog.slack else n
+    arm, motion = scenario.arm_data, motion_data(scenario)
+    policy = scenario.controller.on_infeasible
+    in_kernel = solver == DEFAULT_SOLVER
+    cap = min(motion.n_steps, FIRST_CHUNK)
+    rec = plain(new_record)(cap, n)
+    rec.q[0] = scenario.motion.q0
+    work = _work(n, nx)
+    steps = _Steps()
     k = 0
     while True:
-        state = state_at(scenario, q[k])
-        kin = state.kin
-        p[k], m[k], e[k], v[k] = kin.p, kin.m, state.e, state.v
-        if state.error_norm < motion.tolerance:
-            reached = True
+        code, k = run_kernel(arm, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work)
+        if code == Exit.FULL:
+            cap = min(motion.n_steps, 4 * cap)
+            rec = _grow(rec, cap, n)
+            continue
+        if code != Exit.HANDOFF:
             break
-        if k >= N:
-            break
-        program = program_at(ctrl, scenario, q[k], state, step=k)
-        result = solve_chain(
-            program.qp, chain, context=f"step {k} (t = {t[k]:g} s): ", certify=certify
-        )
-        x = result.x
-        qd[k] = x[:n]
-        if program.qp.n_slack:
-            delta[k] = x[n : n + 2]
-        lo[k], hi[k] = program.qp.lb[:n], program.qp.ub[:n]
-        active[k] = np.where(qd[k] <= lo[k], -1, np.where(qd[k] >= hi[k], 1, 0))
-        effort_[k] = 0.5 * float(qd[k] @ qd[k])
-        manip[k] = float(kin.Jm @ qd[k])
-        alpha[k] = program.alpha
-        iterations[k], solve_time[k] = result.iterations, result.time
-        kkt[k], excess[k] = result.kkt.residual, result.kkt.bound_excess
-        fallback_used[k] = result.fallback
-        solvers_used.append(result.solver)
-        statuses.append(result.status)
-        attempts.append("; ".join(f"{s}: {o}" for s, o in result.attempts))
-        policies.append(program.policy or "")
-        q[k + 1] = q[k] + qd[k] * motion.dt
+        try:
+            _chain_step(scenario, ctrl, chain, certify, rec, k, work, steps)
+        except NoSolution as exc:
+            exc.run = _run(scenario, ctrl, rec, k, steps, reached=False)
+            exc.controller, exc.step = ctrl.name, k
+            raise
         k += 1
+    return _run(scenario, ctrl, rec, k, steps, reached=code == Exit.REACHED)
 
-    K = k
+
+def _chain_step(
+    scenario: Scenario,
+    ctrl: Controller,
+    chain: list[str],
+    certify: bool,
+    rec: Record,
+    k: int,
+    w: StepWork,
+    steps: _Steps,
+) -> None:
+    """Step ``k`` through the policy and the solver chain; its nominal program is in ``w``."""
+    n = scenario.n
+    nominal = QP(w.P.copy(), w.c.copy(), w.A.copy(), w.b.copy(), w.lb.copy(), w.ub.copy(), n)
+    error_norm = float(math.hypot(rec.e[k, 0], rec.e[k, 1]))
+    t = k * scenario.motion.dt
+    program = admissible(
+        nominal,
+        scenario.controller.on_infeasible,
+        slack_weight=slack_weight(scenario, error_norm),
+        step=k,
+    )
+    result = solve_chain(program.qp, chain, context=f"step {k} (t = {t:g} s): ", certify=certify)
+    x = result.x
+    rec.qd[k] = x[:n]
+    rec.delta[k] = x[n : n + 2] if program.qp.n_slack else 0.0
+    rec.active[k] = np.where(x[:n] <= rec.lo[k], -1, np.where(x[:n] >= rec.hi[k], 1, 0))
+    rec.effort[k] = 0.5 * float(rec.qd[k] @ rec.qd[k])
+    rec.manip[k] = float(w.Jm @ rec.qd[k])
+    rec.alpha[k] = program.alpha
+    rec.iterations[k] = result.iterations
+    rec.kkt[k], rec.excess[k] = result.kkt.residual, result.kkt.bound_excess
+    rec.q[k + 1] = rec.q[k] + rec.qd[k] * scenario.motion.dt
+    steps.solver[k], steps.status[k] = result.solver, result.status
+    steps.attempts[k] = "; ".join(f"{s}: {o}" for s, o in result.attempts)
+    steps.policy[k] = program.policy or ""
+    steps.time[k] = result.time
+    if result.fallback:
+        steps.fallback.add(k)
+
+
+def _run(
+    scenario: Scenario, ctrl: Controller, rec: Record, K: int, steps: _Steps, *, reached: bool
+) -> Run:
+    """The :class:`Run` of states ``0..K`` and commands ``0..K-1`` of ``rec``."""
+    solve_time: Vector = rec.ticks[:K].astype(np.float64) * seconds_per_tick()
+    for k, seconds in steps.time.items():
+        if k < K:
+            solve_time[k] = seconds
+    fallback = np.zeros(K, dtype=bool)
+    fallback[[k for k in steps.fallback if k < K]] = True
+    policy = ["scale" if a < 1.0 else "" for a in rec.alpha[:K].tolist()]
+    for k, value in steps.policy.items():
+        if k < K:
+            policy[k] = value
     return Run(
         scenario=scenario,
         controller=ctrl,
-        t=t[: K + 1],
-        q=q[: K + 1],
-        p=p[: K + 1],
-        e=e[: K + 1],
-        v=v[: K + 1],
-        m=m[: K + 1],
-        qd=qd[:K],
-        effort=effort_[:K],
-        manip_rate=manip[:K],
-        alpha=alpha[:K],
-        delta=delta[:K],
-        lo=lo[:K],
-        hi=hi[:K],
-        active=active[:K],
-        iterations=iterations[:K],
-        solve_time=solve_time[:K],
-        kkt=kkt[:K],
-        bound_excess=excess[:K],
-        fallback=fallback_used[:K],
-        solver=solvers_used,
-        status=statuses,
-        attempts=attempts,
-        policy=policies,
+        t=np.arange(K + 1, dtype=float) * scenario.motion.dt,
+        q=rec.q[: K + 1],
+        p=rec.p[: K + 1],
+        e=rec.e[: K + 1],
+        v=rec.v[: K + 1],
+        m=rec.m[: K + 1],
+        qd=rec.qd[:K],
+        effort=rec.effort[:K],
+        manip_rate=rec.manip[:K],
+        alpha=rec.alpha[:K],
+        delta=rec.delta[:K],
+        lo=rec.lo[:K],
+        hi=rec.hi[:K],
+        active=rec.active[:K],
+        iterations=rec.iterations[:K],
+        solve_time=solve_time,
+        kkt=rec.kkt[:K],
+        bound_excess=rec.excess[:K],
+        fallback=fallback,
+        solver=steps.column(steps.solver, DEFAULT_SOLVER, K),
+        status=steps.column(steps.status, "optimal", K),
+        attempts=steps.column(steps.attempts, f"{DEFAULT_SOLVER}: optimal", K),
+        policy=policy,
         reached=reached,
     )
+
+
+def _warm_up() -> None:
+    """Compile (or load) every kernel of the loop: one short run of each kind of program."""
+    from ..core.scenario import load_scenario
+
+    seconds_per_tick()
+    for task in ("task1", "task2"):
+        sc = load_scenario(task, {"motion.max_time": 0.1})
+        for name in ("UC-IVKC", "C-EMDM"):
+            ctrl = get_controller(name)
+            prog = ctrl.program_data(sc)
+            nx = sc.n + 2 if prog.slack else sc.n
+            rec = new_record(2, sc.n)
+            rec.q[0] = sc.motion.q0
+            run_kernel(sc.arm_data, motion_data(sc), prog, True, True, rec, 0, step_work(sc.n, nx))
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

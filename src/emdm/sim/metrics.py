@@ -1,39 +1,95 @@
-"""Outcomes of a run, computed from its record only (never by separate code paths)."""
+"""Outcomes of a run, computed from its record only, by one compiled function for runs and batches.
+
+:func:`outcomes` reduces a record to the outcomes a study compares; :func:`metrics` adds what a
+single run's report needs (margins, slack, solvers, certificate) from the same :class:`Run`. The
+batch kernel of :mod:`emdm.sim.batch` calls :func:`outcomes` on its records, so a Monte-Carlo
+study and a single run can never disagree on what "mean manipulability" means.
+"""
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from ..core.jit import kernel
 from .loop import Run
+
+F64 = NDArray[np.float64]
+
+OUTCOMES = (
+    "steps",
+    "reached",
+    "time_to_goal",
+    "min_manipulability",
+    "mean_manipulability",
+    "total_effort",
+    "final_error",
+    "max_abs_qd",
+)
+"""The outcomes :func:`outcomes` writes, in order."""
+
+
+@kernel
+def outcomes(
+    m: F64, effort: F64, qd: F64, e: F64, K: int, reached: bool, dt: float, out: F64
+) -> None:
+    """``out[:8]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
+
+    ``time_to_goal = K dt`` (NaN when not reached); ``total_effort = sum_k E(qd_k) dt``
+    (rad^2/s); ``final_error = ||e_K||`` (m); manipulability over the states ``0..K``.
+    """
+    mmin, msum = math.inf, 0.0
+    for k in range(K + 1):
+        mmin = min(mmin, m[k])
+        msum += m[k]
+    total = 0.0
+    qmax = 0.0
+    for k in range(K):
+        total += effort[k]
+        for j in range(qd.shape[1]):
+            qmax = max(qmax, abs(qd[k, j]))
+    out[0] = K
+    out[1] = 1.0 if reached else 0.0
+    out[2] = K * dt if reached else math.nan
+    out[3] = mmin
+    out[4] = msum / (K + 1)
+    out[5] = total * dt
+    out[6] = math.hypot(e[K, 0], e[K, 1])
+    out[7] = qmax
 
 
 def metrics(run: Run) -> dict[str, Any]:
-    """The metrics of DESIGN.md section 3 and a few more, all from the run's record.
+    """Every outcome of a run, all from its record.
 
-    ``total_effort`` is ``sum_k E(qd_k) dt`` (rad^2/s); ``min_joint_margin`` the smallest distance of
-    any joint to its position limit over the run (rad); ``min_stop_margin`` the same minus the stop
-    distance (negative only if a joint entered its stop zone); ``scaled_steps`` the steps whose task
-    was scaled (``alpha < 1``); ``fallback_steps`` the steps solved by a fallback solver.
+    The :data:`OUTCOMES`, plus: ``final_manipulability``; ``min_joint_margin``, the smallest
+    distance of any joint to its position limit over the run (rad); ``min_stop_margin``, the same
+    minus the stop distance (negative only if a joint entered its stop zone); ``scaled_steps``, the
+    steps whose task was scaled (``alpha < 1``); ``fallback_steps``, the steps a fallback solver
+    answered; the solvers used, the largest KKT residual and bound excess, and solve statistics.
     """
     sc = run.scenario
-    dt = sc.motion.dt
+    K = run.steps
+    out = np.empty(len(OUTCOMES))
+    outcomes(run.m, run.effort, run.qd, run.e, K, run.reached, sc.motion.dt, out)
+    base = dict(zip(OUTCOMES, out.tolist(), strict=True))
     margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
-    has_cmd = run.steps > 0
-    out: dict[str, Any] = {
+    has_cmd = K > 0
+    return {
         "reached": run.reached,
-        "steps": run.steps,
+        "steps": K,
         "time_to_goal": run.time_to_goal,
         "final_time": float(run.t[-1]),
-        "final_error": float(run.error_norm[-1]),
-        "min_manipulability": float(run.m.min()),
-        "mean_manipulability": float(run.m.mean()),
+        "final_error": base["final_error"],
+        "min_manipulability": base["min_manipulability"],
+        "mean_manipulability": base["mean_manipulability"],
         "final_manipulability": float(run.m[-1]),
-        "total_effort": float(run.effort.sum() * dt),
+        "total_effort": base["total_effort"],
         "mean_manip_rate": float(run.manip_rate.mean()) if has_cmd else 0.0,
-        "max_abs_qd": float(np.abs(run.qd).max()) if has_cmd else 0.0,
+        "max_abs_qd": base["max_abs_qd"],
         "min_joint_margin": float(margin.min()),
         "min_stop_margin": float((margin - sc.damper.stop).min()),
         "path_length": float(np.linalg.norm(np.diff(run.p, axis=0), axis=1).sum()),
@@ -49,4 +105,3 @@ def metrics(run: Run) -> dict[str, Any]:
         "median_iterations": float(np.median(run.iterations)) if has_cmd else 0.0,
         "final_q": [float(x) for x in run.q[-1]],
     }
-    return out

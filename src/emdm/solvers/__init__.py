@@ -12,7 +12,9 @@ from .base import (
     BOUND_TOL,
     KKT_TOL,
     ChainResult,
+    Family,
     KKTReport,
+    SolveFunction,
     SolverResult,
     SolverSpec,
     available_solvers,
@@ -32,7 +34,7 @@ DEFAULT_FALLBACK = ("daqp", "quadprog")
 register(
     SolverSpec(
         "active-set",
-        "exact",
+        Family.EXACT,
         solve_active_set,
         "primal active-set method (custom, exact, finite termination)",
     )
@@ -40,7 +42,7 @@ register(
 register(
     SolverSpec(
         "kkt",
-        "exact",
+        Family.EXACT,
         solve_kkt,
         "one KKT solve of the equality-constrained program (custom; ignores bounds)",
     )
@@ -48,7 +50,7 @@ register(
 register(
     SolverSpec(
         "interior-point",
-        "exact",
+        Family.EXACT,
         solve_interior_point,
         "primal-dual interior point, Mehrotra predictor-corrector (custom)",
     )
@@ -56,7 +58,7 @@ register(
 register(
     SolverSpec(
         "admm",
-        "gradient",
+        Family.GRADIENT,
         solve_admm,
         "ADMM operator splitting, first order (custom; OSQP's scheme)",
     )
@@ -64,13 +66,16 @@ register(
 register_backends()
 register(
     SolverSpec(
-        "slsqp", "gradient", solve_slsqp, "scipy SLSQP, exact gradients and constraint Jacobian"
+        "slsqp",
+        Family.GRADIENT,
+        solve_slsqp,
+        "scipy SLSQP, exact gradients and constraint Jacobian",
     )
 )
 register(
     SolverSpec(
         "trust-constr",
-        "gradient",
+        Family.GRADIENT,
         solve_trust_constr,
         "scipy trust-constr, exact gradient and Hessian",
     )
@@ -92,11 +97,11 @@ for _method, _text in (
     ("cobyla", "scipy COBYLA (linear models) on the reduced program, native constraints"),
     ("differential-evolution", "scipy differential evolution, native constraints, seeded"),
 ):
-    register(SolverSpec(_method, "gradient-free", gradient_free(_method), _text))
+    register(SolverSpec(_method, Family.GRADIENT_FREE, gradient_free(_method), _text))
 register(
     SolverSpec(
         "cma-es",
-        "gradient-free",
+        Family.GRADIENT_FREE,
         gradient_free("cma-es"),
         "CMA-ES (the cma package), bounds and l1 penalty, seeded",
         extra="lab",
@@ -110,7 +115,9 @@ __all__ = [
     "DEFAULT_SOLVER",
     "KKT_TOL",
     "ChainResult",
+    "Family",
     "KKTReport",
+    "SolveFunction",
     "SolverResult",
     "SolverSpec",
     "available_solvers",

@@ -26,7 +26,9 @@ import numpy as np
 
 from ..core.arm import Matrix, Vector
 from ..core.feasibility import RANK_TOL, feasible_point
+from ..core.jit import plain
 from ..core.problem import QP
+from . import kernels
 from .base import SolverResult, kkt_report
 
 
@@ -86,8 +88,25 @@ def solve_kkt(qp: QP, *, history: bool = False) -> SolverResult:
 
 
 def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = False) -> SolverResult:
-    """Exact optimum of ``qp`` by the primal active-set method (see the module notes)."""
+    """Exact optimum of ``qp`` by the primal active-set method (see the module notes).
+
+    Two-row programs run the compiled kernel (:func:`emdm.solvers.kernels.active_set`, the one the
+    control loop uses); the numpy method below serves what the kernel leaves (dependent task rows),
+    other shapes, an iteration limit, and per-iteration histories.
+    """
     start = time.perf_counter()
+    if qp.A.shape[0] == 2 and max_iter is None and not history:
+        x = np.empty(qp.n)
+        P, c, A, b, lb, ub = (
+            np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
+        )
+        buffers = plain(kernels.qp_work)(qp.n)
+        code, iterations = kernels.active_set(P, c, A, b, lb, ub, x, buffers, np.empty(4))
+        if code == kernels.OK:
+            return SolverResult(x, "optimal", iterations, time.perf_counter() - start)
+        if code == kernels.INFEASIBLE:
+            return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
+        start = time.perf_counter()  # the kernel left this program to the numpy method
     x0 = feasible_point(qp.A, qp.b, qp.lb, qp.ub)
     if x0 is None:
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)

@@ -15,22 +15,18 @@ hands the program to the next solver in the chain, and the record says so.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from enum import StrEnum
+from typing import Protocol
 
 import numpy as np
-from scipy.optimize import nnls
 
 from ..core.arm import Vector
+from ..core.jit import plain
 from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
-
-KKT_TOL = 1e-9
-"""Largest relative KKT residual accepted as optimal."""
-BOUND_TOL = 1e-12
-"""Largest bound excess accepted (rad/s or m/s)."""
+from .kernels import BOUND_TOL, KKT_TOL, certify, qp_work
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,11 +43,6 @@ class SolverResult:
     time: float
     history: tuple[dict[str, float], ...] = ()
     evaluations: int = 0
-
-    @property
-    def found(self) -> bool:
-        """True when the solver returned a finite point and claims it optimal."""
-        return self.status == "optimal" and self.x is not None and bool(np.all(np.isfinite(self.x)))
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,42 +64,36 @@ class KKTReport:
         return self.residual <= tol and self.bound_excess <= bound_tol
 
 
-def kkt_report(qp: QP, x: Vector, *, active_tol: float = 1e-9) -> KKTReport:
-    """Measure how far ``x`` is from the optimum of ``qp``, with the best sign-feasible multipliers."""
+def kkt_report(qp: QP, x: Vector) -> KKTReport:
+    """Measure how far ``x`` is from the optimum of ``qp``, with the best sign-feasible multipliers.
+
+    The compiled certificate (:func:`emdm.solvers.kernels.certify`): non-negative least squares
+    over the bounds active at ``x`` finds the multipliers, so nothing the solver claims is used.
+    """
     if not np.all(np.isfinite(x)):
         return KKTReport(math.inf, math.inf, math.inf, math.inf)
-    g = qp.P @ x + qp.c
-    with np.errstate(invalid="ignore"):
-        at_lo = np.isfinite(qp.lb) & (x - qp.lb <= active_tol * (1.0 + np.abs(qp.lb)))
-        at_hi = np.isfinite(qp.ub) & (qp.ub - x <= active_tol * (1.0 + np.abs(qp.ub)))
-    eye = np.eye(qp.n)
-    # g = A^T lam + sum_lo mu e_j - sum_hi mu e_j with mu >= 0; lam = lam+ - lam-.
-    M = np.hstack((qp.A.T, -qp.A.T, eye[:, at_lo], -eye[:, at_hi]))
-    z, _ = nnls(M, g, maxiter=50 * M.shape[1])
-    m = qp.A.shape[0]
-    mu_lo = z[2 * m : 2 * m + int(at_lo.sum())]
-    mu_hi = z[2 * m + int(at_lo.sum()) :]
-    # Relative to the magnitudes that meet in each condition (a backward error): rounding in
-    # A x is eps |A| |x|, and the terms of P x + c = A^T lam + mu cancel at their own size.
-    scale_g = max(
-        1.0,
-        float(np.abs(qp.P @ x).max()),
-        float(np.abs(qp.c).max()),
-        float(np.abs(M * z).max(initial=0.0)),
+    P, c, A, b, lb, ub, xc = (
+        np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, x)
     )
-    stationarity = float(np.abs(g - M @ z).max()) / scale_g
-    scale_eq = max(1.0, float(np.abs(qp.b).max()), float((np.abs(qp.A) @ np.abs(x)).max()))
-    equality = float(np.abs(qp.A @ x - qp.b).max()) / scale_eq
-    gap_lo = (x - qp.lb)[at_lo]
-    gap_hi = (qp.ub - x)[at_hi]
-    comp = float(
-        max(np.abs(mu_lo * gap_lo).max(initial=0.0), np.abs(mu_hi * gap_hi).max(initial=0.0))
-    )
-    return KKTReport(stationarity, equality, comp / scale_g, qp.bound_excess(x))
+    out = np.empty(4)
+    certify(P, c, A, b, lb, ub, xc, plain(qp_work)(qp.n), out)
+    return KKTReport(*map(float, out))
 
 
 # --------------------------------------------------------------------------------- registry
-SolveFunction = Callable[[QP], SolverResult]
+class Family(StrEnum):
+    """How a solver searches: exactly (finite termination), with gradients, or without."""
+
+    EXACT = "exact"
+    GRADIENT = "gradient"
+    GRADIENT_FREE = "gradient-free"
+
+
+class SolveFunction(Protocol):
+    """A solver: the program in, a :class:`SolverResult` out; ``history=True`` asks for a
+    per-iteration trace. Gradient-free solvers also take ``budget`` (function evaluations)."""
+
+    def __call__(self, qp: QP, /, *, history: bool = ...) -> SolverResult: ...
 
 
 @dataclass(frozen=True)
@@ -116,7 +101,7 @@ class SolverSpec:
     """A registered solver: its name, family (exact, gradient, gradient-free) and how to get it."""
 
     name: str
-    family: str
+    family: Family
     solve: SolveFunction
     description: str
     extra: str | None = None
@@ -168,15 +153,6 @@ def infeasible(qp: QP) -> bool:
     from ..core.feasibility import feasible_point
 
     return feasible_point(qp.A, qp.b, qp.lb, qp.ub) is None
-
-
-def timed(
-    function: Callable[[], tuple[Vector | None, str, int]],
-) -> tuple[Vector | None, str, int, float]:
-    """Run ``function`` and add its wall time (s, ``time.perf_counter``)."""
-    start = time.perf_counter()
-    x, status, iterations = function()
-    return x, status, iterations, time.perf_counter() - start
 
 
 # ------------------------------------------------------------------------------ the chain
@@ -241,14 +217,3 @@ def solve_chain(
         )
     detail = "; ".join(f"{n}: {s}" for n, s in attempts)
     raise NoSolution(f"{context}no solver found the optimum ({detail})", problem=qp)
-
-
-def describe(spec: SolverSpec) -> dict[str, Any]:
-    """A JSON-friendly description of a solver."""
-    return {
-        "name": spec.name,
-        "family": spec.family,
-        "description": spec.description,
-        "available": spec.is_available(),
-        "extra": spec.extra,
-    }

@@ -7,6 +7,7 @@ Each backend that qpsolvers finds installed is registered under its own name (``
 
 from __future__ import annotations
 
+import functools
 import time
 import warnings
 from functools import partial
@@ -15,22 +16,22 @@ from typing import Any
 import numpy as np
 
 from ..core.problem import QP
-from .base import SolverResult, SolverSpec, register
+from .base import Family, SolverResult, SolverSpec, register
 
 BACKENDS = {
-    "daqp": ("exact", "dual active-set (DAQP), dense"),
+    "daqp": (Family.EXACT, "dual active-set (DAQP), dense"),
     "quadprog": (
-        "exact",
+        Family.EXACT,
         "Goldfarb-Idnani dual active-set (quadprog); declines some degenerate programs",
     ),
-    "proxqp": ("exact", "proximal augmented Lagrangian (ProxQP), eps 1e-12"),
+    "proxqp": (Family.EXACT, "proximal augmented Lagrangian (ProxQP), eps 1e-12"),
     "piqp": (
-        "exact",
+        Family.EXACT,
         "proximal interior point (PIQP), eps 1e-12; about 1e-7 accurate on these programs",
     ),
-    "clarabel": ("exact", "interior point (Clarabel), tolerances 1e-12"),
-    "osqp": ("gradient", "ADMM (OSQP), first order, default tolerances"),
-    "highs": ("exact", "HiGHS QP active set; about 1e-7 accurate on these programs"),
+    "clarabel": (Family.EXACT, "interior point (Clarabel), tolerances 1e-12"),
+    "osqp": (Family.GRADIENT, "ADMM (OSQP), first order, default tolerances"),
+    "highs": (Family.EXACT, "HiGHS QP active set; about 1e-7 accurate on these programs"),
 }
 TIGHT: dict[str, dict[str, Any]] = {
     "proxqp": {"eps_abs": 1e-12, "eps_rel": 0.0},
@@ -45,6 +46,7 @@ TIGHT: dict[str, dict[str, Any]] = {
 """Tolerances passed to the iterative backends so that they solve to the precision emdm certifies."""
 
 
+@functools.cache
 def _installed(name: str) -> bool:
     try:
         import qpsolvers

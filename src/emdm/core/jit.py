@@ -1,0 +1,136 @@
+"""The compiler behind every per-step formula: numba, with an on-disk cache and a cycle counter.
+
+Every kernel is compiled with ``cache=True``: the first process on a machine compiles them (about
+20 s, announced by :func:`ensure_compiled` in one line) and writes the machine code to a cache
+folder, where every later process, and every Dask worker on the same machine, loads it in a
+fraction of a second. The folder is ``$XDG_CACHE_HOME/emdm/kernels-<hash>`` (``~/.cache`` by
+default), the hash covering every source file of the package: numba checks only the file of a
+kernel itself, so a change to a kernel it calls would otherwise load stale machine code. Setting
+``NUMBA_CACHE_DIR`` chooses the folder instead.
+
+:func:`ticks` reads the processor's cycle counter from inside a kernel (``llvm.readcyclecounter``,
+the time-stamp counter on x86), so a compiled loop can time each solve without leaving compiled
+code; :func:`seconds_per_tick` converts ticks to seconds, calibrated once per process against
+``time.perf_counter``. Where the platform has no such counter, ticks are 0 and solve times NaN.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar, cast
+
+import numba
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def _cache_folder() -> None:
+    """Point numba's cache at a folder named after the package's sources (see the module notes)."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    package = Path(__file__).resolve().parent.parent
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode())
+        digest.update(path.read_bytes())
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    folder = base / "emdm" / f"kernels-{digest.hexdigest()[:16]}"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:  # no writable home: numba's own choice (beside the sources) stands
+        return
+    numba.config.CACHE_DIR = str(folder)
+
+
+_cache_folder()  # before any kernel below (or in other modules) is decorated
+
+
+def kernel(function: F) -> F:
+    """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel)."""
+    return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
+
+
+def parallel_kernel(function: F) -> F:
+    """:func:`kernel` whose ``numba.prange`` loops run on every core (numba's thread pool)."""
+    return cast(F, numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")(function))
+
+
+@intrinsic
+def _read_cycle_counter(typingctx: Any) -> Any:
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        fn = builder.module.declare_intrinsic(
+            "llvm.readcyclecounter", fnty=ir.FunctionType(ir.IntType(64), [])
+        )
+        return builder.call(fn, [])
+
+    return types.int64(), codegen
+
+
+@kernel
+def ticks() -> int:
+    """The processor's cycle counter (an arbitrary origin; 0 where the platform has none)."""
+    return _read_cycle_counter()  # type: ignore[call-arg]
+
+
+@functools.cache
+def seconds_per_tick() -> float:
+    """Seconds per :func:`ticks` unit, measured over 2 ms against ``time.perf_counter`` (NaN: no counter)."""
+    ticks()  # compile or load before timing
+    t0, c0 = time.perf_counter(), ticks()
+    while time.perf_counter() - t0 < 2e-3:
+        pass
+    t1, c1 = time.perf_counter(), ticks()
+    return (t1 - t0) / (c1 - c0) if c1 > c0 else float("nan")
+
+
+_compiled = threading.Event()
+
+
+def ensure_compiled(warm_up: Callable[[], object], *, notice_after: float = 0.5) -> None:
+    """Run ``warm_up`` (which calls every kernel once) the first time in this process.
+
+    When it takes longer than ``notice_after`` seconds (a compile, not a cache load), one line on
+    stderr says so and, when done, how long it took.
+    """
+    if _compiled.is_set():
+        return
+    start = time.perf_counter()
+    failure: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            warm_up()
+        except BaseException as exc:  # handed to the caller's thread below
+            failure.append(exc)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(notice_after)
+    if worker.is_alive():
+        print(
+            "emdm: compiling the control loop (once per installation; cached for later runs)...",
+            end="",
+            file=sys.stderr,
+            flush=True,
+        )
+        worker.join()
+        print(f" done in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+    if failure:
+        raise failure[0]
+    _compiled.set()
+
+
+def plain(compiled: F) -> F:
+    """The Python function behind a kernel: for builders of buffers called from Python, which
+    would otherwise pay numba's cost of boxing the NamedTuple they return."""
+    return cast(F, getattr(compiled, "py_func", compiled))

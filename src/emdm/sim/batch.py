@@ -1,0 +1,116 @@
+"""Many closed-loop runs at once: the compiled loop on every core, reduced to outcomes.
+
+Each thread of :func:`batch_kernel` owns one record and one set of step buffers and runs its share
+of the runs through :func:`emdm.sim.loop.run_kernel`, then reduces each record with
+:func:`emdm.sim.metrics.outcomes`. A run with a step the kernel hands back (see
+:mod:`emdm.sim.loop`) is finished by :func:`emdm.simulate` itself, so every outcome is exact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.controllers import Controller, get_controller
+from ..core.jit import ensure_compiled, parallel_kernel
+from ..core.kernels import ArmData, ProgramData
+from ..core.scenario import Policy, Scenario
+from .loop import Exit, Motion, _warm_up, motion_data, new_record, run_kernel, simulate, step_work
+from .metrics import OUTCOMES, outcomes
+
+F64 = NDArray[np.float64]
+
+
+@parallel_kernel
+def batch_kernel(
+    arm: ArmData,
+    motion: Motion,
+    prog: ProgramData,
+    goals: F64,
+    q0s: F64,
+    out: F64,
+    codes: NDArray[np.int64],
+) -> None:
+    """Run ``goals[r]`` from ``q0s[r]`` for every ``r``; ``out[r]`` = outcomes, ``codes[r]`` = exit."""
+    runs, n = q0s.shape
+    nx = prog.s_min.size + n if prog.slack else n
+    threads = min(numba.get_num_threads(), runs)
+    for t in numba.prange(threads):
+        rec = new_record(motion.n_steps, n)
+        work = step_work(n, nx)
+        for r in range(t, runs, threads):
+            task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps)
+            for j in range(n):
+                rec.q[0, j] = q0s[r, j]
+            code, k = run_kernel(arm, task, prog, True, True, rec, 0, work)
+            codes[r] = code
+            if code == Exit.REACHED or code == Exit.TIMEOUT:
+                outcomes(
+                    rec.m, rec.effort, rec.qd, rec.e, k, code == Exit.REACHED, motion.dt, out[r]
+                )
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """One array of ``R`` values per outcome (see :data:`emdm.sim.metrics.OUTCOMES`).
+
+    ``reached`` is boolean and ``time_to_goal`` NaN where a run did not reach its goal;
+    ``reference_runs`` lists the runs a step of which the solver chain settled.
+    """
+
+    steps: NDArray[np.int64]
+    reached: NDArray[np.bool_]
+    time_to_goal: F64
+    min_manipulability: F64
+    mean_manipulability: F64
+    total_effort: F64
+    final_error: F64
+    max_abs_qd: F64
+    reference_runs: NDArray[np.int64]
+
+    def outcomes(self) -> dict[str, np.ndarray]:
+        """The outcome arrays by name (everything but ``reference_runs``)."""
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "reference_runs"}
+
+    def __len__(self) -> int:
+        return int(self.steps.size)
+
+
+def simulate_batch(
+    scenario: Scenario,
+    controller: str | Controller,
+    *,
+    goals: ArrayLike | None = None,
+    q0s: ArrayLike | None = None,
+) -> BatchResult:
+    """Many closed-loop runs of ``controller``, in parallel on every core.
+
+    ``goals`` (R x 2, m) and ``q0s`` (R x n, rad) default to the scenario's; either may be given
+    alone (one row is broadcast). The outcomes equal those of :func:`emdm.simulate` run by run.
+    """
+    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    ensure_compiled(_warm_up)
+    n = scenario.n
+    g = np.atleast_2d(np.asarray(goals if goals is not None else scenario.motion.goal, dtype=float))
+    q = np.atleast_2d(np.asarray(q0s if q0s is not None else scenario.motion.q0, dtype=float))
+    runs = max(g.shape[0], q.shape[0])
+    g = np.ascontiguousarray(np.broadcast_to(g, (runs, 2)))
+    q = np.ascontiguousarray(np.broadcast_to(q, (runs, n)))
+    out = np.empty((runs, len(OUTCOMES)))
+    codes = np.full(runs, Exit.HANDOFF, dtype=np.int64)
+    if scenario.controller.on_infeasible is Policy.SCALE and runs:
+        prog = ctrl.program_data(scenario)
+        batch_kernel(scenario.arm_data, motion_data(scenario), prog, g, q, out, codes)
+    redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
+    for r in redo:  # finish these runs exactly, through the solver chain where needed
+        sc = scenario.with_overrides({"motion.goal": g[r].tolist(), "motion.q0": q[r].tolist()})
+        run = simulate(sc, ctrl)
+        outcomes(run.m, run.effort, run.qd, run.e, run.steps, run.reached, sc.motion.dt, out[r])
+    columns: dict[str, Any] = {name: out[:, i].copy() for i, name in enumerate(OUTCOMES)}
+    columns["steps"] = columns["steps"].astype(np.int64)
+    columns["reached"] = columns["reached"].astype(bool)
+    return BatchResult(**columns, reference_runs=redo)

@@ -1,0 +1,501 @@
+"""The compiled solver and certificate: the primal active-set method and the KKT residuals.
+
+Programs have the form ``min 1/2 x^T P x + c^T x  s.t.  A x = b (2 rows), lb <= x <= ub``.
+
+:func:`active_set` is Nocedal & Wright's Algorithm 16.3 specialised to two equality rows and simple
+bounds (see :mod:`emdm.solvers.active_set` for the method); it starts from the exact feasible point
+of :func:`emdm.core.kernels.feasible_point` and returns the multipliers of its final working set.
+
+:func:`kkt_residuals` measures how far ``(x, lam, mu)`` is from the KKT conditions
+
+    P x + c = A^T lam + mu,   A x = b,   lb <= x <= ub,
+    mu_j >= 0 only where x_j = lb_j,   mu_j <= 0 only where x_j = ub_j,
+
+with residuals relative to the size of the gradient ``P x + c`` (stationarity, complementarity)
+and of ``|A| |x|`` (equality). The multipliers do not enter the scale: huge multipliers, the mark
+of a rank-deficient task, must not make a wrong point look stationary.
+:func:`best_multipliers` finds, for any ``x``, the sign-feasible multipliers over the bounds active
+at ``x`` that fit stationarity best (non-negative least squares, Lawson-Hanson), so a solver's
+answer can be certified without trusting anything the solver says. For a strictly convex QP, small
+residuals prove ``x`` the unique optimum, whoever found it.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.jit import kernel
+from ..core.kernels import (
+    INFEASIBLE,
+    NEEDS_REFERENCE,
+    OK,
+    RANK_TOL,
+    FeasWork,
+    feas_work,
+    feasible_point,
+    free_rank,
+)
+
+F64 = NDArray[np.float64]
+
+KKT_TOL = 1e-9
+"""Largest relative KKT residual accepted as optimal."""
+BOUND_TOL = 1e-12
+"""Largest bound excess accepted (rad/s or m/s)."""
+ACTIVE_TOL = 1e-9
+"""A bound counts as active in the certificate when ``|x_j - bound| <= ACTIVE_TOL (1 + |bound|)``."""
+MAX_ITER_EXCEEDED = 3
+"""Code of :func:`active_set` when its iteration limit ran out."""
+
+__all__ = ["INFEASIBLE", "NEEDS_REFERENCE", "OK"]
+
+
+class QPWork(NamedTuple):
+    """Scratch buffers of the solver kernels for programs of ``nx`` variables."""
+
+    feas: FeasWork
+    work: NDArray[np.int8]
+    snap: F64
+    g: F64
+    p: F64
+    idx: NDArray[np.int64]
+    K: F64
+    rhs: F64
+    lam: F64
+    mu: F64
+    M: F64
+    z: F64
+    s: F64
+    w: F64
+    r: F64
+    passive: NDArray[np.bool_]
+    B: F64
+
+
+@kernel
+def qp_work(nx: int) -> QPWork:
+    """Buffers for programs with ``nx`` variables and two equality rows."""
+    cols = 4 + 2 * nx
+    return QPWork(
+        feas_work(nx),  # compiled here; a Python caller of qp_work.py_func gets it boxed once
+        np.empty(nx, dtype=np.int8),
+        np.empty(nx),
+        np.empty(nx),
+        np.empty(nx),
+        np.empty(nx, dtype=np.int64),
+        np.empty((nx + 2, nx + 2)),
+        np.empty(nx + 2),
+        np.empty(2),
+        np.empty(nx),
+        np.empty((nx, cols)),
+        np.empty(cols),
+        np.empty(cols),
+        np.empty(cols),
+        np.empty(nx),
+        np.empty(cols, dtype=np.bool_),
+        np.empty((nx, cols + 1)),
+    )
+
+
+@kernel
+def _solve_in_place(K: F64, rhs: F64, size: int) -> bool:
+    """Gaussian elimination with partial pivoting on ``K[:size, :size]``; ``rhs`` becomes the
+    solution. False for a singular matrix."""
+    for col in range(size):
+        piv = col
+        for r in range(col + 1, size):
+            if abs(K[r, col]) > abs(K[piv, col]):
+                piv = r
+        if K[piv, col] == 0.0:
+            return False
+        if piv != col:
+            for c in range(size):
+                K[col, c], K[piv, c] = K[piv, c], K[col, c]
+            rhs[col], rhs[piv] = rhs[piv], rhs[col]
+        for r in range(col + 1, size):
+            f = K[r, col] / K[col, col]
+            if f != 0.0:
+                for c in range(col, size):
+                    K[r, c] -= f * K[col, c]
+                rhs[r] -= f * rhs[col]
+    for r in range(size - 1, -1, -1):
+        s = rhs[r]
+        for c in range(r + 1, size):
+            s -= K[r, c] * rhs[c]
+        rhs[r] = s / K[r, r]
+    return True
+
+
+# ------------------------------------------------------------------------------ certificate
+@kernel
+def kkt_residuals(
+    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, lam: F64, mu: F64, out: F64
+) -> None:
+    """``out = (stationarity, equality, complementarity, bound excess)`` of ``(x, lam, mu)``.
+
+    ``mu`` is signed (``> 0``: multiplier of the lower bound, ``< 0``: of the upper bound). A
+    multiplier of a bound that does not exist counts in full as complementarity (dual infeasible).
+    """
+    n = x.size
+    scale_g = 1.0
+    stat = 0.0
+    comp = 0.0
+    for j in range(n):
+        px = 0.0
+        for i in range(n):
+            px += P[j, i] * x[i]
+        a0 = A[0, j] * lam[0]
+        a1 = A[1, j] * lam[1]
+        scale_g = max(scale_g, abs(px), abs(c[j]))
+        stat = max(stat, abs(px + c[j] - a0 - a1 - mu[j]))
+        if mu[j] > 0:
+            gap = x[j] - lb[j] if math.isfinite(lb[j]) else math.inf
+        elif mu[j] < 0:
+            gap = ub[j] - x[j] if math.isfinite(ub[j]) else math.inf
+        else:
+            gap = 0.0
+        if gap == math.inf:
+            comp = max(comp, abs(mu[j]))
+        else:
+            comp = max(comp, abs(mu[j] * gap))
+    scale_eq = 1.0
+    eq = 0.0
+    excess = 0.0
+    for i in range(2):
+        ax = 0.0
+        aax = 0.0
+        for j in range(n):
+            ax += A[i, j] * x[j]
+            aax += abs(A[i, j]) * abs(x[j])
+        scale_eq = max(scale_eq, abs(b[i]), aax)
+        eq = max(eq, abs(ax - b[i]))
+    for j in range(n):
+        excess = max(excess, lb[j] - x[j], x[j] - ub[j])
+    out[0] = stat / scale_g
+    out[1] = eq / scale_eq
+    out[2] = comp / scale_g
+    out[3] = excess
+
+
+@kernel
+def _least_squares(M: F64, passive: NDArray[np.bool_], d: F64, s: F64, B: F64) -> bool:
+    """``s`` = least-squares coefficients of the passive columns of ``M`` for ``d`` (0 elsewhere),
+    by Householder QR. False when the passive columns are numerically dependent."""
+    n, cols = M.shape
+    p = 0
+    for j in range(cols):
+        s[j] = 0.0
+        if passive[j]:
+            for i in range(n):
+                B[i, p] = M[i, j]
+            p += 1
+    for i in range(n):
+        B[i, p] = d[i]
+    big = 0.0
+    for k in range(p):
+        norm = 0.0
+        for i in range(k, n):
+            norm += B[i, k] * B[i, k]
+        norm = math.sqrt(norm)
+        big = max(big, norm)
+        if norm <= 1e-13 * max(big, 1e-300) or k >= n:
+            return False
+        alpha = -norm if B[k, k] >= 0 else norm
+        v0 = B[k, k] - alpha
+        vnorm2 = v0 * v0
+        for i in range(k + 1, n):
+            vnorm2 += B[i, k] * B[i, k]
+        B[k, k] = alpha
+        if vnorm2 == 0.0:
+            continue
+        for col in range(k + 1, p + 1):
+            dot = v0 * B[k, col]
+            for i in range(k + 1, n):
+                dot += B[i, k] * B[i, col]
+            f = 2.0 * dot / vnorm2
+            B[k, col] -= f * v0
+            for i in range(k + 1, n):
+                B[i, col] -= f * B[i, k]
+        for i in range(k + 1, n):
+            B[i, k] = 0.0
+    # back substitution R coef = (Q^T d)[:p]
+    for k in range(p - 1, -1, -1):
+        acc = B[k, p]
+        for col in range(k + 1, p):
+            acc -= B[k, col] * B[col, p]
+        B[k, p] = acc / B[k, k]
+    q = 0
+    for j in range(cols):
+        if passive[j]:
+            s[j] = B[q, p]
+            q += 1
+    return True
+
+
+@kernel
+def best_multipliers(
+    P: F64, c: F64, A: F64, lb: F64, ub: F64, x: F64, lam: F64, mu: F64, w: QPWork
+) -> None:
+    """Sign-feasible ``(lam, mu)`` over the bounds active at ``x`` that fit ``P x + c`` best.
+
+    Non-negative least squares (Lawson and Hanson) on the columns ``[A^T, -A^T, e_lo, -e_hi]``
+    (``lam = lam+ - lam-``), the same problem as the reference certificate of the tests.
+    """
+    n = x.size
+    M, z, s, wv, r, passive, B, g = w.M, w.z, w.s, w.w, w.r, w.passive, w.B, w.g
+    for j in range(n):
+        acc = c[j]
+        for i in range(n):
+            acc += P[j, i] * x[i]
+        g[j] = acc
+    cols = 4
+    for j in range(n):
+        for k in range(M.shape[1]):
+            M[j, k] = 0.0
+        M[j, 0], M[j, 1] = A[0, j], A[1, j]
+        M[j, 2], M[j, 3] = -A[0, j], -A[1, j]
+    for j in range(n):
+        if math.isfinite(lb[j]) and x[j] - lb[j] <= ACTIVE_TOL * (1.0 + abs(lb[j])):
+            M[j, cols] = 1.0
+            cols += 1
+    for j in range(n):
+        if math.isfinite(ub[j]) and ub[j] - x[j] <= ACTIVE_TOL * (1.0 + abs(ub[j])):
+            M[j, cols] = -1.0
+            cols += 1
+    Mv = M[:, :cols]
+    zv, sv, wvv, pv = z[:cols], s[:cols], wv[:cols], passive[:cols]
+    gnorm = 0.0
+    colmax = 0.0
+    for j in range(n):
+        gnorm = max(gnorm, abs(g[j]))
+        for k in range(cols):
+            colmax = max(colmax, abs(Mv[j, k]))
+    tol = 1e-14 * (1.0 + colmax * gnorm) * n
+    for k in range(cols):
+        zv[k] = 0.0
+        pv[k] = False
+    for j in range(n):
+        r[j] = g[j]
+    for _ in range(3 * cols):
+        best, t = tol, -1
+        for k in range(cols):
+            if not pv[k]:
+                acc = 0.0
+                for j in range(n):
+                    acc += Mv[j, k] * r[j]
+                wvv[k] = acc
+                if acc > best:
+                    best, t = acc, k
+        if t < 0:
+            break
+        pv[t] = True
+        for _inner in range(3 * cols):
+            if not _least_squares(Mv, pv, g, sv, B):
+                pv[t] = False
+                break
+            smallest = math.inf
+            for k in range(cols):
+                if pv[k]:
+                    smallest = min(smallest, sv[k])
+            if smallest > 0:
+                for k in range(cols):
+                    zv[k] = sv[k]
+                break
+            alpha = 1.0
+            for k in range(cols):
+                if pv[k] and sv[k] <= 0:
+                    alpha = min(alpha, zv[k] / (zv[k] - sv[k]))
+            for k in range(cols):
+                zv[k] += alpha * (sv[k] - zv[k])
+                if pv[k] and zv[k] <= 1e-300:
+                    pv[k] = False
+                    zv[k] = 0.0
+        else:
+            break
+        if not pv[t] and zv[t] == 0.0:
+            break  # the entering column was dependent: nothing more to gain
+        for j in range(n):
+            acc = g[j]
+            for k in range(cols):
+                acc -= Mv[j, k] * zv[k]
+            r[j] = acc
+    lam[0] = zv[0] - zv[2]
+    lam[1] = zv[1] - zv[3]
+    for j in range(n):
+        mu[j] = 0.0
+    for k in range(4, cols):
+        for j in range(n):
+            if Mv[j, k] != 0.0:
+                mu[j] += Mv[j, k] * zv[k]
+
+
+@kernel
+def certify(P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64) -> None:
+    """The KKT residuals of ``x`` with the best sign-feasible multipliers (solver-independent)."""
+    best_multipliers(P, c, A, lb, ub, x, w.lam, w.mu, w)
+    kkt_residuals(P, c, A, b, lb, ub, x, w.lam, w.mu, out)
+
+
+# ---------------------------------------------------------------------------- active set
+@kernel
+def active_set(
+    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+) -> tuple[int, int]:
+    """Exact optimum of the program by the primal active-set method: ``(code, iterations)``.
+
+    On ``OK``, ``x`` is the optimum, ``w.lam`` and ``w.mu`` its multipliers and ``out`` the KKT
+    residuals of :func:`kkt_residuals` for them. ``NEEDS_REFERENCE`` leaves a case this kernel
+    does not settle (dependent equality rows) to the numpy method; ``INFEASIBLE`` means no point
+    satisfies the constraints.
+    """
+    work, snap, g, p, idx, K, rhs, lam, mu = (
+        w.work,
+        w.snap,
+        w.g,
+        w.p,
+        w.idx,
+        w.K,
+        w.rhs,
+        w.lam,
+        w.mu,
+    )
+    free = w.feas.free
+    n = x.size
+    code, unique = feasible_point(A, b, lb, ub, x, w.feas)
+    if code != OK:
+        return code, 0
+    if unique:  # the (scaled) task leaves one feasible point: it is the optimum
+        certify(P, c, A, b, lb, ub, x, w, out)
+        if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
+            return OK, 0
+        return NEEDS_REFERENCE, 0  # a degenerate zonotope (parallel columns) fooled the test
+    for j in range(n):
+        a = abs(lb[j]) if math.isfinite(lb[j]) else 0.0
+        bb = abs(ub[j]) if math.isfinite(ub[j]) else 0.0
+        snap[j] = 1e-13 * (1.0 + max(a, bb))
+        work[j] = 0
+        free[j] = True
+    for j in range(n):
+        at_lo = x[j] - lb[j] <= snap[j]
+        at_hi = ub[j] - x[j] <= snap[j]
+        if at_lo:
+            x[j] = lb[j]
+        elif at_hi:
+            x[j] = ub[j]
+        if at_lo or at_hi:
+            free[j] = False
+            if free_rank(A, free) == 2:
+                work[j] = -1 if at_lo else 1
+            else:
+                free[j] = True
+    limit = 10 * (n + 2) + 20
+    zero_step = False
+    for iteration in range(1, limit + 1):
+        f = 0
+        for j in range(n):
+            acc = c[j]
+            for i in range(n):
+                acc += P[j, i] * x[i]
+            g[j] = acc
+            p[j] = 0.0
+            if work[j] == 0:
+                idx[f] = j
+                f += 1
+        lam0 = lam1 = 0.0
+        if f == 2:  # no null space: p = 0, A_F^T lam = g_F
+            i0, i1 = idx[0], idx[1]
+            det = A[0, i0] * A[1, i1] - A[1, i0] * A[0, i1]
+            size = math.hypot(A[0, i0], A[1, i0]) * math.hypot(A[0, i1], A[1, i1])
+            if abs(det) <= RANK_TOL * size:  # dependent task rows: the numpy method's case
+                return NEEDS_REFERENCE, iteration
+            lam0 = (g[i0] * A[1, i1] - g[i1] * A[1, i0]) / det
+            lam1 = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
+        else:
+            size = f + 2
+            for r in range(size):
+                rhs[r] = 0.0
+                for cc in range(size):
+                    K[r, cc] = 0.0
+            for a in range(f):
+                j = idx[a]
+                for a2 in range(f):
+                    K[a, a2] = P[j, idx[a2]]
+                K[a, f] = -A[0, j]
+                K[a, f + 1] = -A[1, j]
+                K[f, a] = A[0, j]
+                K[f + 1, a] = A[1, j]
+                rhs[a] = -g[j]
+            if not _solve_in_place(K, rhs, size):
+                return NEEDS_REFERENCE, iteration
+            for a in range(f):
+                p[idx[a]] = rhs[a]
+            lam0, lam1 = rhs[f], rhs[f + 1]
+        pmax = xmax = 0.0
+        for j in range(n):
+            pmax = max(pmax, abs(p[j]))
+            xmax = max(xmax, abs(x[j]))
+        if not (math.isfinite(pmax) and math.isfinite(lam0) and math.isfinite(lam1)):
+            return NEEDS_REFERENCE, iteration
+        if pmax <= 1e-12 * (1.0 + xmax):
+            gmax = 0.0
+            for j in range(n):
+                gmax = max(gmax, abs(g[j]))
+            tol = 1e-12 * (1.0 + gmax)
+            worst, drop, first = tol, -1, -1
+            for j in range(n):
+                mu[j] = 0.0
+                if work[j] != 0:
+                    mu[j] = g[j] - A[0, j] * lam0 - A[1, j] * lam1
+                    wrong = -mu[j] if work[j] == -1 else mu[j]
+                    if wrong > tol and first < 0:
+                        first = j
+                    if wrong > worst:
+                        worst, drop = wrong, j
+            lam[0], lam[1] = lam0, lam1
+            if drop < 0:
+                kkt_residuals(P, c, A, b, lb, ub, x, lam, mu, out)
+                return OK, iteration
+            # a bound active at x outside the working set makes the vertex degenerate: the
+            # multipliers are not unique, and the certificate settles optimality over all of them
+            degenerate = False
+            for j in range(n):
+                if work[j] == 0 and (
+                    (math.isfinite(lb[j]) and x[j] - lb[j] <= ACTIVE_TOL * (1.0 + abs(lb[j])))
+                    or (math.isfinite(ub[j]) and ub[j] - x[j] <= ACTIVE_TOL * (1.0 + abs(ub[j])))
+                ):
+                    degenerate = True
+            if degenerate:
+                certify(P, c, A, b, lb, ub, x, w, out)
+                if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
+                    return OK, iteration
+            work[first if zero_step else drop] = 0
+            continue
+        step = 1.0
+        block = -1
+        for j in range(n):
+            if work[j] != 0 or abs(p[j]) <= 1e-13 * pmax:
+                continue
+            r = (lb[j] - x[j]) / p[j] if p[j] < 0 else (ub[j] - x[j]) / p[j]
+            if r < step:
+                step, block = r, j
+        step = max(0.0, step)
+        for j in range(n):
+            x[j] += step * p[j]
+            if work[j] == 0 and abs(p[j]) > 1e-13 * pmax:
+                if x[j] < lb[j] and lb[j] - x[j] <= snap[j]:
+                    x[j] = lb[j]
+                elif x[j] > ub[j] and x[j] - ub[j] <= snap[j]:
+                    x[j] = ub[j]
+        zero_step = step == 0.0
+        if block >= 0:
+            side = -1 if p[block] < 0 else 1
+            x[block] = lb[block] if side < 0 else ub[block]
+            for j in range(n):
+                free[j] = work[j] == 0 and j != block
+            if free_rank(A, free) == 2:
+                work[block] = side
+    return MAX_ITER_EXCEEDED, limit
