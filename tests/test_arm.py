@@ -112,3 +112,22 @@ def test_reachable_annulus():
     assert PlanarArm([0.2, 0.6, 0.3]).inner_reach == pytest.approx(0.1)
     assert PlanarArm([0.3, 0.3]).inner_reach == 0.0
     assert PlanarArm([0.5, 0.4]).reach == pytest.approx(0.9)
+
+
+@pytest.mark.parametrize("n", [2, 3, 5, 8])
+def test_compiled_kinematics_match_the_numpy_references(n, rng):
+    import reference
+
+    arm = PlanarArm(rng.uniform(0.1, 1.0, n))
+    configurations = [*rng.uniform(-3, 3, (20, n)), np.zeros(n), np.r_[0.3, np.zeros(n - 1)]]
+    for q in configurations:
+        kin = arm.kinematics(q)
+        p, J, m, Jm = reference.kinematics(arm.lengths, q)
+        np.testing.assert_allclose(kin.p, p, atol=1e-15)
+        np.testing.assert_allclose(kin.J, J, atol=1e-15)
+        assert kin.m == pytest.approx(m, abs=1e-15)
+        np.testing.assert_allclose(kin.Jm, Jm, atol=1e-13)
+        if m > 1e-3:
+            _, _, m2, Jm2 = reference.textbook_kinematics(arm.lengths, q)
+            assert kin.m == pytest.approx(m2, rel=1e-9)
+            np.testing.assert_allclose(kin.Jm, Jm2, atol=1e-8)

@@ -133,3 +133,33 @@ def test_faulty_solver_in_a_run_is_recorded():
         assert all(a.startswith("faulty-run: not optimal") for a in run.attempts)
     finally:
         del _REGISTRY[name]
+
+
+def test_compiled_certificate_matches_scipy_nnls(rng):
+    import reference
+
+    for trial in range(300):
+        qp = random_qp(rng, trial)
+        if qp is None:
+            continue
+        exact = solve_active_set(qp).x
+        for x in (exact, exact + rng.normal(size=exact.size) * 10.0 ** rng.uniform(-12, -1)):
+            mine = kkt_report(qp, x).residual
+            ref = reference.kkt_residual(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, x)
+            assert (mine <= 1e-9) == (ref <= 1e-9) or abs(np.log10(mine / ref)) < 1, trial
+            assert mine == pytest.approx(ref, rel=1e-3, abs=1e-12), trial
+
+
+def test_huge_multipliers_do_not_certify_a_wrong_point():
+    """Dependent task rows with b = 0: multipliers of 1e17 once made any point look stationary."""
+    A = np.array([[-0.22729749, -0.3 * 0.22729749], [-0.26173735, -0.3 * 0.26173735]])
+    qp = QP(np.diag([7.27, 1.72]), np.array([0.6, -3.5]), A, np.zeros(2),
+            np.array([-1.39, -1.71]), np.array([1.93, 0.61]), n_joints=2)  # fmt: skip
+    wrong = np.array([0.18382841757620333, -0.612761391920678])
+    assert np.abs(A @ wrong).max() < 1e-12
+    assert not kkt_report(qp, wrong).is_optimal()
+    result = solve_active_set(qp)
+    assert kkt_report(qp, result.x).is_optimal()
+    np.testing.assert_allclose(
+        result.x, reference_solve(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub), atol=1e-8
+    )

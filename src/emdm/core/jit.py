@@ -49,7 +49,7 @@ def _cache_folder() -> None:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:  # no writable home: numba's own choice (beside the sources) stands
         return
-    numba.config.CACHE_DIR = str(folder)
+    setattr(numba.config, "CACHE_DIR", str(folder))  # noqa: B010 - untyped module attribute
 
 
 _cache_folder()  # before any kernel below (or in other modules) is decorated
@@ -93,17 +93,27 @@ def seconds_per_tick() -> float:
     return (t1 - t0) / (c1 - c0) if c1 > c0 else float("nan")
 
 
-_compiled = threading.Event()
+_compiled: set[Callable[[], object]] = set()
+_lock = threading.Lock()
 
 
-def ensure_compiled(warm_up: Callable[[], object], *, notice_after: float = 0.5) -> None:
-    """Run ``warm_up`` (which calls every kernel once) the first time in this process.
+def ensure_compiled(
+    warm_up: Callable[[], object], *, what: str = "the control loop", notice_after: float = 0.5
+) -> None:
+    """Run ``warm_up`` (which calls a group of kernels once) the first time in this process.
 
     When it takes longer than ``notice_after`` seconds (a compile, not a cache load), one line on
     stderr says so and, when done, how long it took.
     """
-    if _compiled.is_set():
+    if warm_up in _compiled:
         return
+    with _lock:
+        if warm_up not in _compiled:
+            _first_use(warm_up, what, notice_after)
+            _compiled.add(warm_up)
+
+
+def _first_use(warm_up: Callable[[], object], what: str, notice_after: float) -> None:
     start = time.perf_counter()
     failure: list[BaseException] = []
 
@@ -118,7 +128,7 @@ def ensure_compiled(warm_up: Callable[[], object], *, notice_after: float = 0.5)
     worker.join(notice_after)
     if worker.is_alive():
         print(
-            "emdm: compiling the control loop (once per installation; cached for later runs)...",
+            f"emdm: compiling {what} (once per installation; cached for later runs)...",
             end="",
             file=sys.stderr,
             flush=True,
@@ -127,7 +137,6 @@ def ensure_compiled(warm_up: Callable[[], object], *, notice_after: float = 0.5)
         print(f" done in {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
     if failure:
         raise failure[0]
-    _compiled.set()
 
 
 def plain(compiled: F) -> F:

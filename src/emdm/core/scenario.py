@@ -237,7 +237,29 @@ class Scenario:
                     f"unknown key (known: name, {known})",
                 )
             data[section][key] = value
+        lengths = overrides.get("arm.lengths")
+        if isinstance(lengths, list) and len(lengths) != self.n:
+            self._resize(data, overrides, len(lengths))
         return scenario_from_dict(data, source=self.source)
+
+    def _resize(self, data: dict[str, Any], overrides: Mapping[str, Any], n: int) -> None:
+        """``arm.lengths`` overridden with another number of joints: the per-joint values not
+        overridden follow when they are one value for every joint, else the lengths are blamed."""
+        for section, keys in SCHEMA.items():
+            for key, spec in keys.items():
+                dotted = f"{section}.{key}"
+                if spec.kind != "joints" or dotted in overrides or dotted == "arm.lengths":
+                    continue
+                values = data[section][key]
+                if spec.scalar_ok and len(set(values)) == 1:
+                    data[section][key] = values[0]
+                else:
+                    raise ScenarioError(
+                        self.source,
+                        "arm.lengths",
+                        f"gives {n} joints where the scenario has {self.n}, and {dotted} "
+                        f"differs per joint: set {dotted} ({n} values) as well",
+                    )
 
 
 _SECTION_TYPES: dict[str, Callable[..., Any]] = {
@@ -277,9 +299,14 @@ class _Checker:
     def number(self, key: str, value: Any) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"must be a number, got {_show(value)}")
-        if not math.isfinite(value):
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond the float range
+            digits = len(str(abs(value)))
+            raise self.fail(key, f"must be finite, got an integer of {digits} digits") from None
+        if not math.isfinite(number):
             raise self.fail(key, f"must be finite, got {value}")
-        return float(value)
+        return number
 
     def vector(self, key: str, value: Any, size: int, scalar_ok: bool) -> Vector:
         if isinstance(value, list):
@@ -361,6 +388,63 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     return Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
 
 
+RANGES: dict[str, tuple[float, float, str]] = {
+    "arm.lengths": (1e-6, 1e6, " m"),
+    "arm.q_min": (-1e6, 1e6, " rad"),
+    "arm.q_max": (-1e6, 1e6, " rad"),
+    "arm.qd_min": (-1e6, 1e6, " rad/s"),
+    "arm.qd_max": (-1e6, 1e6, " rad/s"),
+    "motion.goal": (-1e9, 1e9, " m"),
+    "motion.dt": (1e-6, 3600.0, " s"),
+    "motion.tolerance": (1e-12, 1e9, " m"),
+    "weights.effort": (1e-8, 1e8, ""),
+    "weights.manipulability": (0.0, 1e8, ""),
+    "weights.slack": (1e-8, 1e8, ""),
+    "slack.min": (-1e6, 1e6, " m/s"),
+    "slack.max": (-1e6, 1e6, " m/s"),
+    "damper.influence": (0.0, 1e6, " rad"),
+    "damper.gain": (0.0, 1e6, ""),
+}
+"""Where each value means something (beyond them: overflowing numbers, or a meaningless run)."""
+MAX_STEPS = 1e12
+"""At most this many control steps (``max_time / dt``)."""
+MAX_RATIO = 1e10
+"""At most this ``w_M / w_E``: beyond it the unconstrained EMDM command exceeds 1e10 rad/s."""
+
+
+def _check_ranges(check: _Checker, p: dict[str, dict[str, Any]]) -> None:
+    """Values that are valid in sign but make the program meaningless, with their valid range."""
+    for dotted, (low, high, unit) in RANGES.items():
+        section, key = dotted.split(".")
+        values = np.atleast_1d(p[section][key])
+        bad = (values < low) | (values > high)
+        if np.any(bad):
+            value = values[int(np.argmax(bad))]
+            raise check.fail(dotted, f"must be between {low:g} and {high:g}{unit}, got {value:g}")
+    motion, weights = p["motion"], p["weights"]
+    steps = motion["max_time"] / motion["dt"]
+    if steps > MAX_STEPS:
+        raise check.fail(
+            "motion.max_time",
+            f"must be at most {MAX_STEPS:g} steps of motion.dt ({MAX_STEPS * motion['dt']:g} s), "
+            f"got {motion['max_time']:g} s",
+        )
+    kp_dt = np.atleast_1d(motion["kp"]) * motion["dt"]
+    if np.any(kp_dt >= 2.0):
+        raise check.fail(
+            "motion.kp",
+            f"must be < 2 / motion.dt = {2.0 / motion['dt']:g} 1/s, or the loop diverges, "
+            f"got {_fmt(np.atleast_1d(motion['kp']))}",
+        )
+    ratio = weights["manipulability"] / weights["effort"]
+    if ratio > MAX_RATIO:
+        raise check.fail(
+            "weights.manipulability",
+            f"must be at most {MAX_RATIO:g} x weights.effort (the command would exceed "
+            f"{MAX_RATIO:g} rad/s), got {ratio:g} x",
+        )
+
+
 def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
     """Cross-field rules; returns the warnings (valid but suspicious settings)."""
     arm, motion, weights, slack, damper = (
@@ -413,6 +497,7 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
             f"and influence {_fmt(damper['influence'])}",
         )
     positive("damper.gain", damper["gain"])
+    _check_ranges(check, p)
     if p["controller"]["on_infeasible"] not in POLICIES:
         raise check.fail(
             "controller.on_infeasible",
@@ -471,7 +556,7 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise ScenarioError("--set", text, "expected section.key=value")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
+    except ValueError:  # not TOML (or an integer of more than 4300 digits): kept as text
         value = raw
     return dotted, value
 
@@ -499,7 +584,7 @@ def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None 
             raise ScenarioError(source, "", f"cannot be read: {exc}") from None
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except ValueError as exc:  # TOMLDecodeError, or an integer of more than 4300 digits
         raise ScenarioError(source, "", f"not a valid TOML file: {exc}") from None
     data.setdefault("name", Path(source).stem)
     scenario = scenario_from_dict(data, source=source)

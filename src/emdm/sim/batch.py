@@ -16,13 +16,52 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core.controllers import Controller, get_controller
-from ..core.jit import ensure_compiled, parallel_kernel
+from ..core.jit import ensure_compiled, kernel, parallel_kernel
 from ..core.kernels import ArmData, ProgramData
 from ..core.scenario import Policy, Scenario
-from .loop import Exit, Motion, _warm_up, motion_data, new_record, run_kernel, simulate, step_work
+from .loop import (
+    REACHED,
+    TIMEOUT,
+    Exit,
+    Motion,
+    _warm_up,
+    motion_data,
+    new_record,
+    run_kernel,
+    simulate,
+    step_work,
+)
 from .metrics import OUTCOMES, outcomes
 
 F64 = NDArray[np.float64]
+
+
+@kernel
+def run_share(
+    arm: ArmData,
+    motion: Motion,
+    prog: ProgramData,
+    goals: F64,
+    q0s: F64,
+    first: int,
+    stride: int,
+    out: F64,
+    codes: NDArray[np.int64],
+) -> None:
+    """Runs ``first, first + stride, ...`` with one record and one set of buffers."""
+    runs, n = q0s.shape
+    nx = prog.s_min.size + n if prog.slack else n
+    rec = new_record(motion.n_steps, n)
+    work = step_work(n, nx)
+    for r in range(first, runs, stride):
+        task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps)
+        for j in range(n):
+            rec.q[0, j] = q0s[r, j]
+        code, k = run_kernel(arm, task, prog, True, True, rec, 0, work)
+        codes[r] = code
+        if code == REACHED or code == TIMEOUT:
+            reached = code == REACHED
+            outcomes(rec.m, rec.effort, rec.qd, rec.e, k, reached, motion.dt, out[r])
 
 
 @parallel_kernel
@@ -32,26 +71,29 @@ def batch_kernel(
     prog: ProgramData,
     goals: F64,
     q0s: F64,
+    threads: int,
     out: F64,
     codes: NDArray[np.int64],
 ) -> None:
-    """Run ``goals[r]`` from ``q0s[r]`` for every ``r``; ``out[r]`` = outcomes, ``codes[r]`` = exit."""
-    runs, n = q0s.shape
-    nx = prog.s_min.size + n if prog.slack else n
-    threads = min(numba.get_num_threads(), runs)
+    """Run ``goals[r]`` from ``q0s[r]`` for every ``r`` on ``threads`` threads; ``out[r]`` =
+    outcomes, ``codes[r]`` = how the run ended. (The buffers are made inside :func:`run_share`:
+    NamedTuples of arrays built inside a ``prange`` body do not survive numba's parfor lowering.)"""
     for t in numba.prange(threads):
-        rec = new_record(motion.n_steps, n)
-        work = step_work(n, nx)
-        for r in range(t, runs, threads):
-            task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps)
-            for j in range(n):
-                rec.q[0, j] = q0s[r, j]
-            code, k = run_kernel(arm, task, prog, True, True, rec, 0, work)
-            codes[r] = code
-            if code == Exit.REACHED or code == Exit.TIMEOUT:
-                outcomes(
-                    rec.m, rec.effort, rec.qd, rec.e, k, code == Exit.REACHED, motion.dt, out[r]
-                )
+        run_share(arm, motion, prog, goals, q0s, t, threads, out, codes)
+
+
+def _warm_up_batch() -> None:
+    """Compile (or load) the batch kernel on a two-step run of each kind of program."""
+    from ..core.scenario import load_scenario
+
+    for task in ("task1", "task2"):
+        sc = load_scenario(task, {"motion.max_time": 0.1})
+        for name in ("UC-IVKC", "C-EMDM"):
+            q0s = np.array([sc.motion.q0], dtype=float)
+            goals = np.array([sc.motion.goal], dtype=float)
+            out, codes = np.empty((1, len(OUTCOMES))), np.empty(1, dtype=np.int64)
+            prog = get_controller(name).program_data(sc)
+            batch_kernel(sc.arm_data, motion_data(sc), prog, goals, q0s, 1, out, codes)
 
 
 @dataclass(frozen=True)
@@ -94,6 +136,7 @@ def simulate_batch(
     """
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     ensure_compiled(_warm_up)
+    ensure_compiled(_warm_up_batch, what="the batch loop")
     n = scenario.n
     g = np.atleast_2d(np.asarray(goals if goals is not None else scenario.motion.goal, dtype=float))
     q = np.atleast_2d(np.asarray(q0s if q0s is not None else scenario.motion.q0, dtype=float))
@@ -104,7 +147,8 @@ def simulate_batch(
     codes = np.full(runs, Exit.HANDOFF, dtype=np.int64)
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
         prog = ctrl.program_data(scenario)
-        batch_kernel(scenario.arm_data, motion_data(scenario), prog, g, q, out, codes)
+        threads = min(numba.get_num_threads(), runs)
+        batch_kernel(scenario.arm_data, motion_data(scenario), prog, g, q, threads, out, codes)
     redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
     for r in redo:  # finish these runs exactly, through the solver chain where needed
         sc = scenario.with_overrides({"motion.goal": g[r].tolist(), "motion.q0": q[r].tolist()})

@@ -54,12 +54,15 @@ FIRST_CHUNK = 256
 
 
 class Exit(IntEnum):
-    """Why :func:`run_kernel` returned."""
+    """Why :func:`run_kernel` returned (kernels return the plain integers below)."""
 
     REACHED = 0  # ||e_k|| < tolerance at state k
     TIMEOUT = 1  # t_k reached max_time
     HANDOFF = 2  # step k is for the solver chain (its nominal program is in the StepWork)
     FULL = 3  # the record has no room for step k
+
+
+REACHED, TIMEOUT, HANDOFF, FULL = (int(e) for e in Exit)  # IntEnum does not cross numba's parfors
 
 
 class Motion(NamedTuple):
@@ -154,6 +157,22 @@ def step_work(n: int, nx: int) -> StepWork:
     )
 
 
+ACTIVE_TOL = 1e-12
+"""A joint is recorded at a bound when within ``ACTIVE_TOL (1 + |bound|)`` of it (rad/s)."""
+
+
+@kernel
+def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
+    """``active_j`` = -1 when ``qd_j`` is at its lower bound, +1 at its upper bound, else 0."""
+    for j in range(qd.size):
+        if qd[j] <= lo[j] + ACTIVE_TOL * (1.0 + abs(lo[j])):
+            active[j] = -1
+        elif qd[j] >= hi[j] - ACTIVE_TOL * (1.0 + abs(hi[j])):
+            active[j] = 1
+        else:
+            active[j] = 0
+
+
 @kernel
 def run_kernel(
     arm: ArmData,
@@ -177,19 +196,19 @@ def run_kernel(
         rec.v[k, 0], rec.v[k, 1] = motion.kp[0] * ex, motion.kp[1] * ey
         err = math.hypot(ex, ey)
         if err < motion.tolerance:
-            return Exit.REACHED, k
+            return REACHED, k
         if k >= motion.n_steps:
-            return Exit.TIMEOUT, k
+            return TIMEOUT, k
         if k == cap:
-            return Exit.FULL, k
+            return FULL, k
         build_program(arm, prog, rec.q[k], w.J, w.Jm, rec.v[k], err, w.P, w.c, w.A, w.b, w.lb, w.ub)
         for j in range(n):
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
-            return Exit.HANDOFF, k
+            return HANDOFF, k
         alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
         if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
-            return Exit.HANDOFF, k
+            return HANDOFF, k
         w.b[0] *= alpha
         w.b[1] *= alpha
         start = ticks()
@@ -197,18 +216,18 @@ def run_kernel(
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
             w.b[0], w.b[1] = rec.v[k, 0], rec.v[k, 1]  # the nominal program, for the chain
-            return Exit.HANDOFF, k
+            return HANDOFF, k
         effort = 0.0
         manip = 0.0
         for j in range(n):
             qd = w.x[j]
             rec.qd[k, j] = qd
-            rec.active[k, j] = -1 if qd <= w.lb[j] else (1 if qd >= w.ub[j] else 0)
             rec.q[k + 1, j] = rec.q[k, j] + qd * motion.dt
             effort += qd * qd
             manip += w.Jm[j] * qd
         rec.effort[k] = 0.5 * effort
         rec.manip[k] = manip
+        mark_active(rec.qd[k], w.lb, w.ub, rec.active[k])
         if prog.slack:
             rec.delta[k, 0], rec.delta[k, 1] = w.x[n], w.x[n + 1]
         rec.alpha[k] = alpha
@@ -216,7 +235,7 @@ def run_kernel(
         rec.ticks[k] = stop - start
         rec.kkt[k] = max(w.res[0], w.res[1], w.res[2])
         rec.excess[k] = w.res[3]
-    return Exit.FULL, cap
+    return FULL, cap
 
 
 @dataclass(eq=False)
@@ -402,7 +421,7 @@ def _chain_step(
     x = result.x
     rec.qd[k] = x[:n]
     rec.delta[k] = x[n : n + 2] if program.qp.n_slack else 0.0
-    rec.active[k] = np.where(x[:n] <= rec.lo[k], -1, np.where(x[:n] >= rec.hi[k], 1, 0))
+    mark_active(rec.qd[k], rec.lo[k], rec.hi[k], rec.active[k])
     rec.effort[k] = 0.5 * float(rec.qd[k] @ rec.qd[k])
     rec.manip[k] = float(w.Jm @ rec.qd[k])
     rec.alpha[k] = program.alpha

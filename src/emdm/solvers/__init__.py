@@ -9,8 +9,6 @@ from __future__ import annotations
 from .active_set import solve_active_set, solve_kkt
 from .admm import solve_admm
 from .base import (
-    BOUND_TOL,
-    KKT_TOL,
     ChainResult,
     Family,
     KKTReport,
@@ -25,6 +23,7 @@ from .base import (
     solve_chain,
 )
 from .interior_point import solve_interior_point
+from .kernels import BOUND_TOL, KKT_TOL
 from .nlp import gradient_free, solve_slsqp, solve_trust_constr
 from .qpsolvers_backend import register_backends
 
