@@ -1,17 +1,22 @@
 """Writing results: CSV with round-trip precision, JSON, and atomic output folders.
 
-Everything a command writes goes first to a hidden staging folder beside ``--out``; only when the
-whole command has succeeded are the files moved into place (``os.replace``, atomic per file). A
-failed or interrupted command leaves the previous results in ``--out`` untouched.
+Everything a command writes goes first to a hidden staging folder beside ``--out`` (same
+filesystem); only when the whole command has succeeded does it replace ``--out``, in one rename
+where the filesystem allows it (:func:`atomic_output`). A failed or interrupted command leaves the
+earlier results in ``--out`` byte for byte, and no staging folder behind.
 """
 
 from __future__ import annotations
 
 import csv
+import ctypes
+import errno
 import json
 import math
 import os
 import shutil
+import signal
+import sys
 import tempfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -20,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import EmdmError, one_line
 from ..sim.loop import Run
 
 
@@ -145,54 +151,441 @@ def write_json(path: Path, data: Any) -> None:
     path.write_text(json.dumps(_json_safe(data), indent=2) + "\n", encoding="utf-8")
 
 
-@contextmanager
-def atomic_output(out: Path) -> Iterator[Path]:
-    """Yield a staging folder; on success move its files into ``out``, on any failure discard it."""
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise NotADirectoryError(f"--out {out} exists and is not a folder")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+# ------------------------------------------------------------------------- atomic output folders
+MARKER = ".emdm-results"
+"""The file emdm leaves in every folder it writes: only such folders (or empty ones) are replaced."""
+IGNORED = frozenset({"lost+found"})
+"""Entries of an output folder that emdm neither counts nor moves (a mount point's lost+found)."""
+_OURS = (".emdm-partial-", ".emdm-old-", ".emdm-copy-", ".emdm-probe-")
+_NO_EXCHANGE = {errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EXDEV}
+COMMITTED: list[Path] = []
+"""Every folder :func:`atomic_output` has put in place in this process, in order."""
+MIN_FREE = 1 << 20
+"""Free space ``--out`` must offer before any work starts (bytes)."""
+
+
+class OutputError(EmdmError):
+    """An output folder that cannot receive the results; says which folder and why."""
+
+    def __init__(self, out: Path | str, problem: str) -> None:
+        self.out, self.problem = Path(out), problem
+        super().__init__(one_line(f"{out}: {problem}"))
+
+
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror[0].lower() + exc.strerror[1:]
+    return str(exc) or type(exc).__name__
+
+
+def _is_mount(path: Path) -> bool:
+    """``path`` is a folder on another filesystem than its parent (a mount point, a volume)."""
     try:
-        yield staging
-        for file in sorted(p for p in staging.rglob("*") if p.is_file()):
-            target = out / file.relative_to(staging)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(file, target)
+        return path.is_dir() and path.stat().st_dev != path.parent.resolve().stat().st_dev
+    except OSError:
+        return False
+
+
+def _entries(folder: Path) -> list[str]:
+    """The entries of an output folder that are results (not ours in flight, not lost+found)."""
+    return sorted(
+        name for name in os.listdir(folder) if name not in IGNORED and not name.startswith(_OURS)
+    )
+
+
+def _size(number: float) -> str:
+    for unit in ("bytes", "kB", "MB", "GB"):
+        if number < 1000 or unit == "GB":
+            return f"{number:.0f} {unit}" if unit == "bytes" else f"{number:.1f} {unit}"
+        number /= 1000
+    raise AssertionError  # pragma: no cover
+
+
+def check_out(out: Path, *, need: int | None = None) -> None:
+    """Check, before any work, that ``out`` can receive results; raise :class:`OutputError` if not.
+
+    ``out`` must be a folder or not exist yet; an existing folder must be empty or written by emdm
+    (it holds :data:`MARKER`), since it is replaced as a whole; every folder in it must be
+    writable (the earlier results are removed once the new ones are in); the nearest existing
+    ancestor must be a folder in which a folder can be created; its filesystem must have ``need``
+    bytes free (default :data:`MIN_FREE`). Nothing is left behind by the check.
+    """
+    out = Path(out)
+    if os.path.lexists(out):
+        if not out.is_dir():
+            raise OutputError(out, "exists and is not a folder")
+        try:
+            entries = _entries(out)
+        except OSError as exc:
+            raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
+        if entries and not (out / MARKER).is_file():
+            raise OutputError(
+                out,
+                f"holds {len(entries)} file(s) or folder(s) emdm did not write (no {MARKER}); "
+                "emdm replaces its output folder as a whole, so give a new or empty folder",
+            )
+        for folder, subfolders, _ in os.walk(out):
+            for sub in (folder, *(os.path.join(folder, s) for s in subfolders)):
+                if not os.access(sub, os.W_OK | os.X_OK):
+                    raise OutputError(
+                        out, f"{sub} is read-only: the earlier results in it could not be replaced"
+                    )
+    ancestor = Path(os.path.abspath(out)).parent
+    while not os.path.lexists(ancestor):
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise OutputError(out, f"{ancestor} is not a folder")
+    places = [ancestor, out] if _is_mount(out) else [ancestor]
+    for place in places:
+        try:
+            os.rmdir(tempfile.mkdtemp(prefix=".emdm-probe-", dir=place))
+        except OSError as exc:
+            raise OutputError(out, f"cannot create folders in {place} ({_reason(exc)})") from None
+    free = shutil.disk_usage(places[-1]).free
+    need = MIN_FREE if need is None else need
+    if free < need:
+        raise OutputError(
+            out, f"only {_size(free)} free on its filesystem, at least {_size(need)} needed"
+        )
+
+
+class _Critical:
+    """Signals that arrive while results are being swapped in wait until the swap is done."""
+
+    depth = 0
+    pending: list[int] = []  # noqa: RUF012
+
+
+def deferring() -> bool:
+    """True while a swap is in progress: a signal handler should call :func:`defer` and return."""
+    return _Critical.depth > 0
+
+
+def defer(signum: int) -> None:
+    """Remember ``signum``; it is raised again as soon as the swap is done."""
+    _Critical.pending.append(signum)
+
+
+@contextmanager
+def critical_section() -> Iterator[None]:
+    """A section that a signal handler honouring :func:`deferring` does not interrupt."""
+    _Critical.depth += 1
+    try:
+        yield
     finally:
-        shutil.rmtree(staging, ignore_errors=True)
+        _Critical.depth -= 1
+        if not _Critical.depth and _Critical.pending:
+            signum = _Critical.pending[0]
+            _Critical.pending.clear()
+            signal.raise_signal(signum)
+
+
+def _exchange(a: Path, b: Path) -> None:
+    """Swap two paths in one step (Linux ``renameat2(RENAME_EXCHANGE)``); OSError where unsupported."""
+    if not sys.platform.startswith("linux"):
+        raise OSError(errno.ENOSYS, "renameat2 is Linux only")
+    libc = ctypes.CDLL(None, use_errno=True)
+    renameat2 = getattr(libc, "renameat2", None)
+    if renameat2 is None:
+        raise OSError(errno.ENOSYS, "no renameat2 in this C library")
+    at_fdcwd, rename_exchange = -100, 2
+    if renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) != 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code), str(a), None, str(b))
+
+
+def _remove(path: Path) -> None:
+    if os.path.lexists(path):
+        shutil.rmtree(path, ignore_errors=True)
+
+
+def _make_parents(folder: Path) -> list[Path]:
+    """Create ``folder`` and its missing ancestors; the ones created, outermost first."""
+    missing = []
+    while not os.path.lexists(folder):
+        missing.append(folder)
+        folder = folder.parent
+    created = []
+    for path in reversed(missing):
+        path.mkdir()
+        created.append(path)
+    return created
+
+
+def _swap_entries(new: Path, out: Path) -> None:
+    """Replace the entries of ``out`` by those of ``new`` (same filesystem), undoing it all on any
+    failure: for an ``out`` that cannot itself be renamed (a mount point)."""
+    old = Path(tempfile.mkdtemp(prefix=".emdm-old-", dir=out))
+    moved_old: list[str] = []
+    moved_new: list[str] = []
+    try:
+        for name in _entries(out):
+            os.rename(out / name, old / name)
+            moved_old.append(name)
+        for name in sorted(os.listdir(new)):
+            os.rename(new / name, out / name)
+            moved_new.append(name)
+    except BaseException:
+        stuck = []
+        for name in reversed(moved_new):
+            try:
+                os.rename(out / name, new / name)
+            except OSError:
+                stuck.append(out / name)
+        for name in reversed(moved_old):
+            try:
+                os.rename(old / name, out / name)
+            except OSError:
+                stuck.append(old / name)
+        if stuck:
+            raise OutputError(
+                out, f"could not undo a failed swap; the earlier results are in {old}"
+            ) from None
+        _remove(old)
+        raise
+    _remove(old)
+
+
+def _copy_and_swap(staging: Path, out: Path) -> None:
+    """Copy ``staging`` onto the filesystem of ``out``, then swap the entries in."""
+    copy = Path(tempfile.mkdtemp(prefix=".emdm-copy-", dir=out))
+    try:
+        shutil.copytree(staging, copy, dirs_exist_ok=True)
+        _swap_entries(copy, out)
+    finally:
+        _remove(copy)
+
+
+def _commit(staging: Path, out: Path, inside: bool) -> None:
+    """Put the staged results in place of ``out`` in one step where the filesystem allows it."""
+    if inside:  # staged inside a mount point: swap its entries
+        _swap_entries(staging, out)
+        return
+    if not os.path.lexists(out):
+        try:
+            os.rename(staging, out)
+        except OSError as exc:
+            if exc.errno != errno.EXDEV:
+                raise
+            out.mkdir()
+            try:
+                _copy_and_swap(staging, out)
+            except BaseException:
+                _remove(out)
+                raise
+        return
+    try:
+        _exchange(staging, out)  # staging now holds the earlier results, removed by the caller
+        return
+    except OSError as exc:
+        if exc.errno not in _NO_EXCHANGE:
+            raise
+    backup = Path(tempfile.mkdtemp(prefix=f".{out.name[:80]}.old-", dir=out.parent))
+    os.rmdir(backup)
+    try:
+        os.rename(out, backup)
+    except OSError as exc:
+        if exc.errno not in (errno.EXDEV, errno.EBUSY):
+            raise
+        _copy_and_swap(staging, out)
+        return
+    try:
+        os.rename(staging, out)
+    except BaseException as exc:
+        try:
+            os.rename(backup, out)
+        except OSError:
+            raise OutputError(
+                out, f"could not put the earlier results back; they are in {backup}"
+            ) from None
+        if isinstance(exc, OSError) and exc.errno == errno.EXDEV:
+            _copy_and_swap(staging, out)
+            return
+        raise
+    _remove(backup)
+
+
+@contextmanager
+def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
+    """Yield a staging folder; when the block succeeds, its content replaces ``out`` as a whole.
+
+    The staging folder is hidden beside ``out`` (inside it when ``out`` is a mount point), on the
+    same filesystem, and swapped in with one rename (``renameat2(RENAME_EXCHANGE)`` on Linux, else
+    two renames, undone on failure); where the filesystem refuses (``EXDEV``), the results are
+    copied next to the earlier ones first, then swapped in entry by entry, undone on failure. So
+    whatever fails, at whatever point, ``out`` holds either the earlier results byte for byte or
+    the new ones complete, and no staging folder is left behind. Signals that arrive during the
+    swap are deferred (:func:`critical_section`). Raises :class:`OutputError` when ``out`` cannot
+    receive results, before the block runs.
+    """
+    out = Path(out)
+    if os.path.islink(out):  # write where the link points, and keep the link
+        out = Path(os.path.realpath(out))
+    check_out(out, need=0)
+    existed = os.path.lexists(out)
+    created = _make_parents(out.parent)
+    inside = _is_mount(out)
+    staging = Path(
+        tempfile.mkdtemp(
+            prefix=".emdm-partial-" if inside else f".{out.name[:80]}.partial-",
+            dir=out if inside else out.parent,
+        )
+    )
+    os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes it private; results are not
+    done = False
+    try:
+        try:
+            yield staging
+        except OSError as exc:
+            if exc.filename is None or _within(exc.filename, (staging, out)):
+                raise _write_error(out, existed, exc) from exc
+            raise  # not about the results (an input file, say): reported as it is
+        try:
+            (staging / MARKER).write_text(
+                f"Written by emdm {_version()}{f' ({command})' if command else ''}. emdm replaces "
+                "folders holding this file as a whole when it writes there again.\n",
+                encoding="utf-8",
+            )
+            with critical_section():
+                _commit(staging, out, inside)
+                done = True
+                COMMITTED.append(out)
+                _remove(staging)  # after an exchange: the earlier results
+        except OSError as exc:
+            raise _write_error(out, existed, exc) from exc
+    finally:
+        _remove(staging)
+        if not done:
+            for folder in reversed(created):
+                try:
+                    folder.rmdir()
+                except OSError:
+                    break
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _write_error(out: Path, existed: bool, exc: OSError) -> OutputError:
+    kept = "the earlier results are unchanged" if existed else "nothing was written"
+    return OutputError(out, f"could not write the results ({_reason(exc)}); {kept}")
+
+
+def _within(path: str | bytes | os.PathLike[str], folders: tuple[Path, ...]) -> bool:
+    text = os.path.abspath(os.fsdecode(path))
+    return any(text.startswith(os.path.abspath(folder)) for folder in folders)
+
+
+def _version() -> str:
+    from .. import __version__
+
+    return __version__
 
 
 def _float(text: str) -> float:
     return float(text) if text != "" else float("nan")
 
 
+class RunFolderError(EmdmError):
+    """A folder that is not (or no longer) a complete record written by ``emdm run``."""
+
+
+def read_scenario(folder: Path) -> Any:
+    """The scenario of a folder written by ``emdm run`` (from its ``metrics.json``)."""
+    from ..core.scenario import scenario_from_dict
+
+    path = Path(folder) / "metrics.json"
+    if not path.is_file():
+        raise RunFolderError(
+            f"{folder}: not a run folder (no metrics.json; write one with emdm run)"
+        )
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+        return scenario_from_dict(meta["scenario"], source=str(path))
+    except EmdmError:
+        raise
+    except (OSError, ValueError, TypeError, KeyError) as exc:
+        raise RunFolderError(
+            f"{path}: not a metrics.json written by emdm run ({_problem(exc)})"
+        ) from None
+
+
+def _problem(exc: BaseException) -> str:
+    if isinstance(exc, KeyError):
+        return f"missing {exc}"
+    if isinstance(exc, OSError):
+        return exc.strerror or str(exc)
+    return str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+
+
 def read_run(folder: Path, controller: str) -> Run:
     """Read back the run of ``controller`` written by ``emdm run`` into ``folder``.
 
     The CSVs hold every value at full precision, so the arrays equal the simulated ones exactly.
+    A file that is truncated, edited out of shape or inconsistent with ``metrics.json`` raises
+    :class:`RunFolderError` naming it.
     """
     from ..core.controllers import get_controller
-    from ..core.scenario import scenario_from_dict
 
     folder = Path(folder)
-    meta = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
-    scenario = scenario_from_dict(meta["scenario"], source=str(folder / "metrics.json"))
+    scenario = read_scenario(folder)
+    where = folder / "metrics.json"
+    try:
+        meta = json.loads(where.read_text(encoding="utf-8"))
+        steps = int(meta["controllers"][controller]["steps"])
+        reached = bool(meta["controllers"][controller]["reached"])
+        where = folder / "trajectories" / f"{controller}.csv"
+        rows = _rows(where, trajectory_header(scenario.n), steps + 1)
+        where = folder / "diagnostics" / f"{controller}.csv"
+        diag = _rows(where, diagnostics_header(scenario.n), steps)
+        where = folder / "trajectories" / f"{controller}.csv"
+        return _run_from_rows(scenario, get_controller(controller), rows, diag, reached)
+    except EmdmError:
+        raise
+    except (OSError, ValueError, TypeError, KeyError, IndexError, csv.Error) as exc:
+        raise RunFolderError(
+            f"{where}: not a complete run record ({_problem(exc)}); write it again with emdm run"
+        ) from None
+
+
+def _rows(path: Path, header: list[str], count: int) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as handle:
+        reader = csv.reader(handle)
+        found = next(reader, None)
+        if found != header:
+            raise ValueError("its header is not the one emdm writes")
+        rows = list(reader)
+    if len(rows) != count:
+        raise ValueError(f"{len(rows)} rows where metrics.json says {count}")
+    for number, row in enumerate(rows, start=2):
+        if len(row) != len(header):
+            raise ValueError(f"line {number} has {len(row)} fields, not {len(header)}")
+    return [dict(zip(header, row, strict=True)) for row in rows]
+
+
+def _run_from_rows(
+    scenario: Any,
+    controller: Any,
+    rows: list[dict[str, str]],
+    diag: list[dict[str, str]],
+    reached: bool,
+) -> Run:
     n = scenario.n
-    with (folder / "trajectories" / f"{controller}.csv").open(encoding="utf-8") as handle:
-        rows = list(csv.DictReader(handle))
-    with (folder / "diagnostics" / f"{controller}.csv").open(encoding="utf-8") as handle:
-        diag = list(csv.DictReader(handle))
     K = len(rows) - 1
 
     def column(*names: str, last: bool = True) -> np.ndarray:
         used = rows if last else rows[:-1]
-        return np.array([[_float(r[name]) for name in names] for r in used])
+        return np.array([[_float(r[name]) for name in names] for r in used]).reshape(
+            len(used), len(names)
+        )
 
     joints = [str(i) for i in range(1, n + 1)]
     return Run(
         scenario=scenario,
-        controller=get_controller(controller),
+        controller=controller,
         t=column("t")[:, 0],
         q=column(*[f"q{j}" for j in joints]),
         p=column("x", "y"),
@@ -211,23 +604,30 @@ def read_run(folder: Path, controller: str) -> Run:
         ).reshape(K, n),
         iterations=np.array([int(r["iterations"]) for r in rows[:-1]], dtype=np.int64),
         solve_time=column("solve_time", last=False).reshape(K),
-        kkt=np.array([_float(d["kkt_residual"]) for d in diag]),
-        bound_excess=np.array([_float(d["bound_excess"]) for d in diag]),
-        fallback=np.array([d["fallback"] == "True" for d in diag], dtype=bool),
+        kkt=np.array([_float(d["kkt_residual"]) for d in diag]).reshape(K),
+        bound_excess=np.array([_float(d["bound_excess"]) for d in diag]).reshape(K),
+        fallback=np.array([d["fallback"] == "True" for d in diag], dtype=bool).reshape(K),
         solver=[r["solver"] for r in rows[:-1]],
         status=[r["status"] for r in rows[:-1]],
         attempts=[d["attempts"] for d in diag],
         policy=[d["policy"] for d in diag],
-        reached=bool(meta["controllers"][controller]["reached"]),
+        reached=reached,
     )
 
 
 def write_run_folder(
-    folder: Path, scenario: Any, runs: dict[str, Run], **meta: Any
+    folder: Path,
+    scenario: Any,
+    runs: dict[str, Run],
+    *,
+    stopped: dict[str, dict[str, Any]] | None = None,
+    **meta: Any,
 ) -> dict[str, dict[str, Any]]:
     """What ``emdm run`` writes: trajectories and diagnostics CSVs, and metrics.json.
 
-    Returns the metrics of every run (as written)."""
+    ``stopped`` names the runs that stopped part-way (``{controller: {"step", "reason"}}``): their
+    records end at the failing step and their metrics say so (``"stopped"``). Returns the metrics
+    of every run (as written)."""
     from .. import __version__
     from ..sim.metrics import metrics
 
@@ -243,6 +643,9 @@ def write_run_folder(
             diagnostics_rows(run),
         )
     results = {name: metrics(run) for name, run in runs.items()}
+    for name, why in (stopped or {}).items():
+        if name in results:
+            results[name]["stopped"] = dict(why)
     write_json(
         folder / "metrics.json",
         {

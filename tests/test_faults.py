@@ -1,0 +1,291 @@
+"""Faults injected into writing results: whatever fails, wherever, earlier results stay byte for
+byte, and nothing half-written or staged is left behind."""
+
+from __future__ import annotations
+
+import errno
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from emdm.cli import main
+from emdm.outputs import records
+from emdm.outputs.records import MARKER, OutputError, atomic_output, check_out
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
+    }
+
+
+def write(out: Path, version: str) -> None:
+    """Results in a few files and folders, as a command writes them."""
+    with atomic_output(out) as stage:
+        (stage / "metrics.json").write_text(f'{{"version": "{version}"}}')
+        (stage / "trajectories").mkdir()
+        for name in ("a", "b", "c"):
+            (stage / "trajectories" / f"{name}.csv").write_text(f"{version},{name}\n" * 50)
+        (stage / "figures" / "UC").mkdir(parents=True)
+        (stage / "figures" / "UC" / "path.png").write_bytes(version.encode() * 100)
+
+
+def leftovers(parent: Path) -> list[str]:
+    """Hidden staging, backup or copy folders anywhere under ``parent``."""
+    return sorted(
+        str(p.relative_to(parent))
+        for p in parent.rglob(".*")
+        if p.name != MARKER and not p.name.startswith(".emdm-results")
+    )
+
+
+class Faults:
+    """``os.rename`` that fails once, on call number ``fail_at`` (counting from 0)."""
+
+    def __init__(self, fail_at: int, code: int = errno.EIO) -> None:
+        self.fail_at, self.code, self.calls = fail_at, code, 0
+        self.real = os.rename
+
+    def __call__(self, src: object, dst: object, *args: object, **kwargs: object) -> None:
+        call, self.calls = self.calls, self.calls + 1
+        if call == self.fail_at:
+            raise OSError(self.code, os.strerror(self.code), str(src))
+        self.real(src, dst, *args, **kwargs)  # type: ignore[arg-type]
+
+
+def no_exchange(a: Path, b: Path) -> None:
+    raise OSError(errno.ENOSYS, "not here")
+
+
+def exdev_exchange(a: Path, b: Path) -> None:
+    raise OSError(errno.EXDEV, os.strerror(errno.EXDEV))
+
+
+# ------------------------------------------------------------------------------ the swap itself
+def test_results_replace_the_folder_as_a_whole(tmp_path):
+    out = tmp_path / "out"
+    write(out, "v1")
+    (out / "trajectories" / "stale.csv").write_text("from an older run")
+    write(out, "v2")
+    assert snapshot(out)["metrics.json"] == b'{"version": "v2"}'
+    assert "trajectories/stale.csv" not in snapshot(out)
+    assert (out / MARKER).is_file() and leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("exchange", [None, no_exchange], ids=["renameat2", "two-renames"])
+def test_every_rename_failing_keeps_the_earlier_results(tmp_path, monkeypatch, exchange):
+    out = tmp_path / "out"
+    write(out, "v1")
+    before = snapshot(out)
+    if exchange is not None:
+        monkeypatch.setattr(records, "_exchange", exchange)
+    failures = 0
+    for fail_at in range(6):
+        faults = Faults(fail_at)
+        monkeypatch.setattr(os, "rename", faults)
+        try:
+            write(out, "v2")
+        except OutputError as exc:
+            failures += 1
+            assert "the earlier results are unchanged" in str(exc)
+            assert snapshot(out) == before, fail_at
+        else:
+            assert snapshot(out)["metrics.json"] == b'{"version": "v2"}'
+        finally:
+            monkeypatch.setattr(os, "rename", faults.real)
+        assert leftovers(tmp_path) == [], fail_at
+        write(out, "v1")  # back to the start for the next fault
+    # two renames (out -> backup, staged -> out): either may fail; renameat2 needs none
+    assert failures == (0 if exchange is None else 2)
+
+
+def test_a_failing_exchange_changes_nothing(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    write(out, "v1")
+    before = snapshot(out)
+
+    def broken(a: Path, b: Path) -> None:
+        raise OSError(errno.EIO, os.strerror(errno.EIO))
+
+    monkeypatch.setattr(records, "_exchange", broken)
+    with pytest.raises(OutputError, match="input/output error"):
+        write(out, "v2")
+    assert snapshot(out) == before and leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("fail_at", range(12))
+def test_cross_device_copy_then_swap_survives_any_failing_rename(tmp_path, monkeypatch, fail_at):
+    """EXDEV (another filesystem, an overlay): copy beside the results, then swap entry by entry."""
+    out = tmp_path / "out"
+    write(out, "v1")
+    before = snapshot(out)
+    monkeypatch.setattr(records, "_exchange", exdev_exchange)
+    real = os.rename
+    calls = [0]
+
+    def rename(src: object, dst: object) -> None:
+        call, calls[0] = calls[0], calls[0] + 1
+        if call == 0:  # out -> backup: refused, another filesystem
+            raise OSError(errno.EXDEV, os.strerror(errno.EXDEV))
+        if call == fail_at + 1:
+            raise OSError(errno.EIO, os.strerror(errno.EIO))
+        real(src, dst)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(os, "rename", rename)
+    try:
+        write(out, "v2")
+    except OutputError:
+        assert snapshot(out) == before
+    else:
+        assert snapshot(out)["metrics.json"] == b'{"version": "v2"}'
+        assert set(snapshot(out)) == set(before)
+    assert leftovers(tmp_path) == []
+
+
+def test_cross_device_into_a_new_folder(tmp_path, monkeypatch):
+    real = os.rename
+
+    def rename(src: object, dst: object) -> None:
+        if Path(str(src)).name.startswith(".out.partial-"):
+            raise OSError(errno.EXDEV, os.strerror(errno.EXDEV))
+        real(src, dst)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(os, "rename", rename)
+    write(tmp_path / "out", "v1")
+    assert snapshot(tmp_path / "out")["metrics.json"] == b'{"version": "v1"}'
+    assert leftovers(tmp_path) == []
+
+
+def test_a_failure_while_writing_removes_the_staging_and_new_parents(tmp_path):
+    out = tmp_path / "new" / "deeper" / "out"
+    with pytest.raises(RuntimeError), atomic_output(out) as stage:
+        (stage / "x").write_text("half")
+        raise RuntimeError("the command failed")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_interrupt_during_the_swap_is_deferred(tmp_path, monkeypatch):
+    """A signal arriving during the swap waits for it: the results are either old or new."""
+    import signal
+
+    out = tmp_path / "out"
+    write(out, "v1")
+    seen = []
+
+    def handler(signum, frame):
+        if records.deferring():
+            records.defer(signum)
+            seen.append("deferred")
+            return
+        seen.append("raised")
+        raise KeyboardInterrupt
+
+    real = records._exchange
+
+    def exchange(a: Path, b: Path) -> None:
+        signal.raise_signal(signal.SIGUSR1)  # arrives in the middle of the swap
+        real(a, b)
+
+    previous = signal.signal(signal.SIGUSR1, handler)
+    try:
+        monkeypatch.setattr(records, "_exchange", exchange)
+        with pytest.raises(KeyboardInterrupt):
+            write(out, "v2")
+    finally:
+        signal.signal(signal.SIGUSR1, previous)
+    assert seen == ["deferred", "raised"]
+    assert snapshot(out)["metrics.json"] == b'{"version": "v2"}' and leftovers(tmp_path) == []
+
+
+# ------------------------------------------------------------------------- checked before work
+def test_out_checked_before_any_work(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("my own notes")
+    cases = {
+        "file": "exists and is not a folder",
+        "file/sub": "is not a folder",
+        "mine": "emdm did not write",
+    }
+    for where, message in cases.items():
+        with pytest.raises(OutputError, match=message):
+            check_out(tmp_path / where)
+        assert main(["run", "task2", "--out", str(tmp_path / where)]) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "my own notes"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "mine"]
+
+
+def test_out_without_room_is_refused_before_work(tmp_path, monkeypatch):
+    monkeypatch.setattr(records, "MIN_FREE", 1 << 60)
+    with pytest.raises(OutputError, match="free on its filesystem"):
+        check_out(tmp_path / "out")
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------- real filesystems (tmpfs)
+def _mount(path: Path, *options: str) -> None:
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    path.mkdir(parents=True, exist_ok=True)
+    done = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", ",".join(options), "tmpfs", str(path)],
+        capture_output=True,
+        check=False,
+    )
+    if done.returncode:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.decode().strip()}")
+
+
+@pytest.fixture
+def mounts():
+    made: list[Path] = []
+
+    def mount(path: Path, *options: str) -> Path:
+        _mount(path, *options)
+        made.append(path)
+        return path
+
+    yield mount
+    for path in reversed(made):
+        subprocess.run(["umount", "-l", str(path)], check=False)
+
+
+def test_out_on_its_own_filesystem(tmp_path, mounts):
+    """``--out`` is a mount point (a tmpfs, a Docker volume): staged inside it, swapped in."""
+    out = mounts(tmp_path / "out", "size=1m")
+    write(out, "v1")
+    write(out, "v2")
+    assert snapshot(out)["metrics.json"] == b'{"version": "v2"}'
+    assert leftovers(tmp_path) == []
+
+
+def test_read_only_subfolder_is_refused_before_work(tmp_path, mounts, capsys):
+    out = tmp_path / "out"
+    write(out, "v1")
+    mounts(out / "trajectories", "size=64k")
+    (out / "trajectories" / "a.csv").write_text("v1,a\n")
+    subprocess.run(["mount", "-o", "remount,ro", str(out / "trajectories")], check=True)
+    before = snapshot(out)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "trajectories is read-only" in err and err.count("\n") == 1
+    assert snapshot(out) == before and leftovers(tmp_path) == []
+
+
+def test_full_disk(tmp_path, mounts, monkeypatch, capsys):
+    disk = mounts(tmp_path / "disk", "size=256k")
+    assert main(["run", "task2", "--out", str(disk / "r")]) == 2  # refused before any work
+    err = capsys.readouterr().err
+    assert "free on its filesystem" in err and err.count("\n") == 1
+    monkeypatch.setattr(records, "MIN_FREE", 0)  # let it start: the disk fills while writing
+    assert main(["run", "task2", "--controller", "UC-IVKC", "--out", str(disk / "r")]) == 0
+    before = snapshot(disk / "r")
+    assert main(["run", "task2", "--out", str(disk / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "no space left on device" in err and "earlier results are unchanged" in err
+    assert err.count("\n") == 1
+    assert snapshot(disk / "r") == before and leftovers(disk) == []
