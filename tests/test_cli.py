@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import math
@@ -166,7 +167,7 @@ BAD_ARGS = [
     (["run", "task1", "--controller", "X"], "unknown controller"),
     (["run", "task1", "--solver", "nope"], "unknown solver"),
     (["run", "task1", "--set", "weights.effort=-1"], "weights.effort: must be > 0"),
-    (["run", "task1", "--set", "arm.lengths=[0.2, 0.6]"], "arm.q_min"),
+    (["run", "task1", "--set", "arm.lengths=[0.2, 0.6]"], "arm.lengths: gives 2 joints"),
     (["run", "task1", "--set", "bogus"], "expected section.key=value"),
     (["run", "task1", "--set", "motion.q0=[0, 3, 0]"], "motion.q0"),
     (["run", "task1", "--set", "damper.stop=1.0"], "damper.stop: must be < damper.influence"),
@@ -204,16 +205,36 @@ def test_bad_file_names_the_file(tmp_path, capsys):
     assert f"{bad}: arm.lengths: must be > 0" in err
 
 
-def test_failed_run_keeps_previous_results(tmp_path, capsys):
+def test_bad_input_keeps_previous_results(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["run", "task2", "--out", str(out)]) == 0
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 0
     before = snapshot(out)
-    # a run that stops on its first step (on_infeasible = error on task 1's infeasible start)
-    code = main(["run", "task1", "--set", "controller.on_infeasible=error", "--out", str(out)])
-    assert code == 1
-    assert "run stopped: step 0" in capsys.readouterr().err
+    for args in BAD_ARGS:
+        assert main([*args[0], "--out", str(out)]) == 2
     assert snapshot(out) == before
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no staging folder left behind
+
+
+def test_run_stopped_part_way_keeps_what_finished(tmp_path, capsys):
+    """C- controllers stop at step 0 (task 1's start is infeasible, on_infeasible = error): the
+    UC ones finish; all is written, the stop named in one line, exit status 2."""
+    out = tmp_path / "out"
+    code = main(["run", "task1", "--set", "controller.on_infeasible=error", "--out", str(out)])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("emdm: error: run stopped: C-IVKC at step 0:")
+    assert "infeasible" in err and "C-EMDM at step 0" in err
+    assert "UC-IVKC, UC-EMDM finished" in err and str(out) in err
+    data = json.loads((out / "metrics.json").read_text())
+    assert (
+        data["controllers"]["UC-EMDM"]["reached"]
+        and "stopped" not in data["controllers"]["UC-EMDM"]
+    )
+    stopped = data["controllers"]["C-EMDM"]["stopped"]
+    assert stopped["step"] == 0 and "infeasible" in stopped["reason"]
+    _, rows = read_csv(out / "trajectories" / "C-EMDM.csv")
+    assert len(rows) == 1  # the partial run: the state it stopped at
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
 
 
 def test_interrupted_run_keeps_previous_results(tmp_path, monkeypatch, capsys):
@@ -332,8 +353,185 @@ def test_random_scenarios_through_the_command_line(tmp_path):
     ],
 )
 def test_argument_errors_are_one_line(args, capsys):
-    with pytest.raises(SystemExit) as info:
-        main(args)
-    assert info.value.code == 2
+    assert main(args) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "error:" in err and "usage" not in err
+
+
+# ------------------------------------------------------------- meaningless values, their range
+MEANINGLESS = [
+    (["run", "task1", "--set", "motion.dt=" + "1" * 400], "motion.dt: must be finite"),
+    (["run", "task1", "--set", "motion.dt=" + "1" * 5000], "motion.dt: must be a number"),
+    (["run", "task1", "--set", "weights.effort=1e-300"], "weights.effort: must be between 1e-08"),
+    (["run", "task1", "--set", "motion.kp=1e6"], "motion.kp: must be < 2 / motion.dt = 40"),
+    (["run", "task1", "--set", "arm.lengths=[1e200, 1e200, 1e200]"], "arm.lengths: must be"),
+    (["run", "task1", "--set", "motion.max_time=1e300"], "motion.max_time: must be at most"),
+    (
+        ["run", "task1", "--set", "weights.effort=1e-8", "--set", "weights.manipulability=1e3"],
+        "weights.manipulability: must be at most 1e+10 x weights.effort",
+    ),
+    (["run", "task1", "--set", "damper.gain=1e300"], "damper.gain: must be between"),
+    (["run", "task1", "--controller", ","], "--controller must name at least one"),
+    (["run", "task1", "--solver", "nope"], "unknown solver 'nope'"),
+    (["study", "task1", "--runs", "10", "--seed", "-1"], "--seed must be between 0 and"),
+    (["study", "task1", "--runs", "0"], "--runs must be between 1"),
+    (["study", "task1", "--chunk", "0"], "--chunk must be between 1"),
+    (["study", "task1", "--workers", "0"], "--workers must be between 1"),
+    (["pareto", "task1", "--grid", "0"], "--grid must be between 2"),
+    (["pareto", "task1", "--controller", "C-IVKC"], "--controller must be UC-EMDM or C-EMDM"),
+    (["animate", "task2", "--speedup", "nan"], "--speedup must be > 0"),
+    (["animate", "task2", "--speedup", "inf"], "--speedup must be > 0"),
+    (["animate", "task2", "--speedup", "0.123457", "--no-mp4"], "no frame duration"),
+    (["animate", "task2", "--controller", "C-EMDM", "--pair", "UC"], "not both"),
+    (["solvers", "task2", "--solvers", ","], "--solvers must name at least one solver"),
+    (["solvers", "task2", "--solver", "daqp,,quadprog"], "empty solver name"),
+    (["solvers", "task2", "--repeats", "0"], "--repeats must be between 1"),
+    (["solvers", "task2", "--sample", "-3"], "--sample must be >= 0"),
+    (["solvers", "task2", "--workers", "0"], "--workers must be between 1"),
+    (["report", "--workers", "0"], "--workers must be between 1"),
+    (["scenario", "task1", "--out", "x"], "unrecognized arguments: --out"),
+    (["list", "--out", "x"], "unrecognized arguments: --out"),
+]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"), MEANINGLESS, ids=[" ".join(a)[:60] for a, _ in MEANINGLESS]
+)
+def test_meaningless_values_are_refused_with_their_range(
+    tmp_path, monkeypatch, capsys, args, message
+):
+    monkeypatch.chdir(tmp_path)  # the default --out would be under results/ here
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("work started before the arguments were checked")
+
+    monkeypatch.setattr(sys.modules["emdm.cli.main"], "simulate", no_work)
+    monkeypatch.setattr("emdm.studies.montecarlo.run_sweep", no_work)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert message in err, err
+    assert err.count("\n") == 1 and "internal error" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_long_runs_allocate_what_they_use(tmp_path):
+    """max_time = 1e8 s (2e9 steps): the goal is reached at 8 s, memory follows the run."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    out = tmp_path / "o"
+    args = ["run", "task1", "--controller", "C-EMDM", "--set", "motion.max_time=1e8"]
+    assert main([*args, "--out", str(out)]) == 0
+    grown_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+    assert grown_kib < 200_000  # not the 15-45 GiB of max_time / dt up front
+    assert json.loads((out / "metrics.json").read_text())["controllers"]["C-EMDM"]["reached"]
+
+
+def test_a_truncated_run_folder_is_named(tmp_path, capsys):
+    run_dir = tmp_path / "r"
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(run_dir)]) == 0
+    csv_file = run_dir / "trajectories" / "C-EMDM.csv"
+    text = csv_file.read_bytes()
+    for cut in (len(text) // 2, text.rindex(b"\n", 0, len(text) // 2) + 1):  # mid-row, at a row
+        csv_file.write_bytes(text[:cut])
+        capsys.readouterr()
+        assert main(["plot", str(run_dir), "--out", str(tmp_path / "f")]) == 2
+        err = capsys.readouterr().err
+        assert f"{csv_file}: not a complete run record" in err and err.count("\n") == 1
+    (run_dir / "metrics.json").write_text("{")
+    assert main(["plot", str(run_dir), "--out", str(tmp_path / "f")]) == 2
+    assert "not a metrics.json written by emdm run" in capsys.readouterr().err
+    assert not (tmp_path / "f").exists()
+
+
+def test_missing_ffmpeg_is_one_line_before_any_work(tmp_path, monkeypatch, capsys):
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+
+    def missing():
+        raise RuntimeError("No ffmpeg exe could be found")
+
+    monkeypatch.setattr(imageio_ffmpeg, "get_ffmpeg_exe", missing)
+    assert main(["animate", "task2", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err
+    assert "ffmpeg cannot be found" in err and "--no-mp4" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_scenario_names_never_leave_the_results_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    args = ["run", "task2", "--controller", "UC-IVKC", "--set", "name=../../escape"]
+    assert main(args) == 0
+    assert [p.relative_to(tmp_path).as_posix() for p in tmp_path.iterdir()] == ["results"]
+    assert (tmp_path / "results" / "escape" / "metrics.json").is_file()
+
+
+def test_preset_names_are_case_insensitive(capsys):
+    assert main(["scenario", "TASK1"]) == 0
+    assert 'name = "task1"' in capsys.readouterr().out
+
+
+def test_controllers_repeat_and_deduplicate(tmp_path, capsys):
+    out = tmp_path / "o"
+    args = ["run", "task2", "--controller", "c-emdm", "--controller", "C-EMDM,uc-ivkc"]
+    assert main([*args, "--out", str(out)]) == 0
+    data = json.loads((out / "metrics.json").read_text())
+    assert list(data["controllers"]) == ["C-EMDM", "UC-IVKC"]
+
+
+def test_solver_chain_from_repeated_solvers(tmp_path):
+    out = tmp_path / "o"
+    args = ["run", "task2", "--controller", "C-EMDM", "--solver", "daqp", "--solver", "quadprog"]
+    assert main([*args, "--fallback", "none", "--out", str(out)]) == 0
+    data = json.loads((out / "metrics.json").read_text())
+    assert data["solver"] == "daqp" and data["fallback"] == ["quadprog"]
+
+
+def test_every_command_is_described_and_options_mean_one_thing():
+    from emdm.cli.main import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    helps = {}
+    for name, sub in commands.choices.items():
+        assert sub.description and len(sub.description) > 20, name
+        for action in sub._actions:
+            for option in action.option_strings:
+                if action.help is argparse.SUPPRESS or option in ("-h", "--help"):
+                    continue
+                helps.setdefault(option, {})[name] = action
+    for option in ("--controller", "--solver"):
+        assert all(
+            a.type.__name__ == "parse" and isinstance(a, argparse._ExtendAction)
+            for a in helps[option].values()
+        ), option
+    assert all(a.help.startswith("worker processes") for a in helps["--workers"].values())
+    assert all(
+        a.help.startswith("output folder") for c, a in helps["--out"].items() if c != "bench"
+    )
+    assert "scenario" not in helps["--out"] and "list" not in helps["--out"]
+    assert set(helps["--quick"]) == {"report", "bench"}
+
+
+def test_progress_is_drawn_on_a_terminal_only(tmp_path, monkeypatch, capsys):
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(tmp_path / "a")]) == 0
+    assert capsys.readouterr().err == ""  # stderr is not a terminal here: silent
+    monkeypatch.setattr("emdm.cli.progress.shown", lambda: True)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(tmp_path / "b")]) == 0
+    err = capsys.readouterr().err
+    assert "run task2" in err and "controller" in err
+
+
+def test_piping_into_head_is_quiet(tmp_path):
+    """The reader goes away first (head -1 after a line, true at once): no "Broken pipe"."""
+    exe = Path(sys.executable).with_name("emdm")
+    command = str(exe) if exe.exists() else f"{sys.executable} -m emdm.cli"
+    for reader in ("head -1", "true"):
+        done = subprocess.run(
+            f"set -o pipefail; {command} list | {reader}",
+            shell=True,
+            executable="/bin/bash",
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert done.stderr == "" and done.returncode == 0, (reader, done.stderr)

@@ -208,4 +208,5 @@ def test_command_line_never_shows_a_traceback_for_a_stopped_run(tmp_path, capsys
         ["run", "task1", "--set", "controller.on_infeasible=error", "--out", str(tmp_path / "o")]
     )
     err = capsys.readouterr().err
-    assert code == 1 and "Traceback" not in err and err.count("\n") == 1
+    assert code == 2 and "Traceback" not in err and err.count("\n") == 1
+    assert "C-IVKC at step 0" in err and "infeasible" in err

@@ -1,15 +1,21 @@
-"""The ``emdm`` command line. Bad input: one line on stderr and exit status 2, nothing written."""
+"""The ``emdm`` command line.
+
+Bad input: one line on stderr and exit status 2, nothing written. ``--out`` is checked before any
+work; results are staged and replace ``--out`` as a whole only when the command succeeds
+(:func:`emdm.outputs.records.atomic_output`). Failures and signals go through one boundary
+(:mod:`emdm.cli.boundary`).
+"""
 
 from __future__ import annotations
 
 import argparse
-import os
+import re
 import sys
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
@@ -17,361 +23,394 @@ from .. import __version__
 from ..core.controllers import CONTROLLERS, get_controller
 from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
 from ..errors import EmdmError, NoSolution
-from ..outputs.records import atomic_output, cell, write_csv, write_json, write_run_folder
+from ..outputs.records import (
+    atomic_output,
+    cell,
+    check_out,
+    write_csv,
+    write_json,
+    write_run_folder,
+)
 from ..sim.loop import Run, simulate
-from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, get_solver, registered_solvers
+from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, registered_solvers
+from .args import (
+    Parser,
+    add_controllers,
+    add_out,
+    add_quick,
+    add_scenario,
+    add_workers,
+    integer,
+    names,
+    positive,
+)
+from .boundary import RunStopped, run_command
+from .progress import Progress, say
+from .tables import lab_table, summary_table
 
 
 class UsageError(EmdmError):
-    """A command-line argument that is wrong."""
+    """A combination of command-line arguments that is wrong."""
 
 
-class Parser(argparse.ArgumentParser):
-    """argparse with one-line errors: ``emdm: error: ...`` and exit status 2, no usage dump."""
+# ----------------------------------------------------------------------------------- helpers
+def safe(text: str) -> str:
+    """``text`` as one harmless path component (a scenario name in a default ``--out``)."""
+    cleaned = re.sub(r"[^A-Za-z0-9._+=-]+", "_", text).strip("._")
+    return cleaned[:100] or "scenario"
 
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+def _unique(items: Iterable[str] | None) -> list[str]:
+    return list(dict.fromkeys(items or []))
 
 
-def _scenario(args: argparse.Namespace) -> Scenario:
-    overrides = dict(parse_override(text) for text in args.set or [])
+def _overrides(args: argparse.Namespace) -> dict[str, Any]:
+    return dict(parse_override(text) for text in args.set or [])
+
+
+def _load(name: str, overrides: dict[str, Any]) -> Scenario:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        scenario = load_scenario(args.scenario, overrides)
+        scenario = load_scenario(name, overrides)
     for message in scenario.warnings:
         print(f"emdm: warning: {scenario.source}: {message}", file=sys.stderr)
     return scenario
 
 
-def _add_scenario_args(
-    parser: argparse.ArgumentParser,
-    *,
-    run_dir: bool = False,
-    default: str | None = None,
-    many: bool = False,
-) -> None:
-    """The scenario argument (a preset or TOML file, optionally a run folder) and ``--set``."""
-    what = "a preset (" + ", ".join(PRESETS) + ") or a scenario TOML file"
-    if run_dir:
-        what += ", or a folder written by emdm run"
-    if many:
-        parser.add_argument("scenario", nargs="+", help=f"{what}; several make a sweep")
-    elif default is None:
-        parser.add_argument("scenario", help=what)
-    else:
-        parser.add_argument(
-            "scenario", nargs="?", default=default, help=f"{what} (default {default})"
-        )
-    parser.add_argument(
-        "--set",
-        action="append",
-        metavar="SECTION.KEY=VALUE",
-        help="override one scenario value (repeatable), e.g. --set weights.effort=0.2",
-    )
+def _scenario(args: argparse.Namespace) -> Scenario:
+    return _load(args.scenario, _overrides(args))
 
 
-def _add_out(parser: argparse.ArgumentParser, default: str) -> None:
-    parser.add_argument("--out", metavar="DIR", help=f"output folder (default {default})")
+def _out(args: argparse.Namespace, default: str) -> Path:
+    """``--out`` (or ``results/<default>``), checked before any work."""
+    out = Path(args.out) if args.out else Path("results") / default
+    check_out(out)
+    return out
 
 
-def _fallback(text: str | None) -> list[str]:
-    if text is None:
-        return list(DEFAULT_FALLBACK)
-    return [name.strip() for name in text.split(",") if name.strip()]
+def _simulate(scenario: Scenario, name: str, **options: Any) -> Run:
+    try:
+        return simulate(scenario, name, **options)
+    except NoSolution as exc:
+        raise RunStopped(f"run stopped: {_stopped(name, exc)}") from None
 
 
-def _table(rows: list[list[str]], header: list[str]) -> str:
-    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
-    line = "  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))
-    body = [
-        "  ".join(
-            str(c).rjust(w) if i else str(c).ljust(w)
-            for i, (c, w) in enumerate(zip(r, widths, strict=True))
-        )
-        for r in rows
-    ]
-    return "\n".join([line, "-" * len(line), *body])
+def _stopped(name: str, exc: NoSolution) -> str:
+    """``"C-EMDM at step 3: <why>"``."""
+    text = str(exc)
+    step = getattr(exc, "step", None)
+    found = re.match(r"step (\d+): ", text)
+    if found:
+        step = int(found.group(1)) if step is None else step
+        text = text[found.end() :]
+    return f"{name} at step {step}: {text}" if step is not None else f"{name}: {text}"
 
 
-def summary_table(results: dict[str, dict[str, Any]]) -> str:
-    """A readable table of the main metrics, one row per controller."""
-    rows = []
-    for name, mt in results.items():
-        ttg = mt["time_to_goal"]
-        rows.append(
-            [
-                name,
-                "yes" if mt["reached"] else "no",
-                str(mt["steps"]),
-                f"{ttg:.2f}" if ttg is not None else "-",
-                f"{mt['final_error']:.2e}",
-                f"{mt['min_manipulability']:.4f}",
-                f"{mt['mean_manipulability']:.4f}",
-                f"{mt['total_effort']:.4f}",
-                f"{mt['max_abs_qd']:.3f}",
-                f"{mt['min_joint_margin']:.3f}",
-                str(mt["scaled_steps"]),
-                str(mt["fallback_steps"]),
-                f"{mt['max_kkt_residual']:.1e}",
-            ]
-        )
-    header = [
-        "controller",
-        "reached",
-        "steps",
-        "t_goal[s]",
-        "final|e|[m]",
-        "min m",
-        "mean m",
-        "effort",
-        "max|qd|",
-        "margin[rad]",
-        "scaled",
-        "fallback",
-        "max KKT",
-    ]
-    return _table(rows, header)
+# -------------------------------------------------------------------------------------- run
+def _chain(args: argparse.Namespace) -> tuple[str, list[str]]:
+    """The solver tried first and the fallback chain (``--solver`` repeated, then ``--fallback``)."""
+    first = _unique(args.solver) or [DEFAULT_SOLVER]
+    rest = list(DEFAULT_FALLBACK) if args.fallback is None else args.fallback
+    chain = _unique([*first, *rest])
+    return chain[0], chain[1:]
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     scenario = _scenario(args)
-    names = args.controller or list(CONTROLLERS)
-    controllers = [get_controller(name) for name in names]
-    chain = [args.solver, *_fallback(args.fallback)]
-    for name in chain:
-        get_solver(name)
-    out = Path(args.out or f"results/{scenario.name}")
+    controllers = _unique(args.controller) or list(CONTROLLERS)
+    solver, fallback = _chain(args)
+    out = _out(args, safe(scenario.name))
     runs: dict[str, Run] = {}
+    stopped: dict[str, NoSolution] = {}
     start = time.perf_counter()
-    for controller in controllers:
-        runs[controller.name] = simulate(
-            scenario, controller, solver=args.solver, fallback=_fallback(args.fallback)
-        )
+    with Progress(f"run {scenario.name}", len(controllers), "controller") as bar:
+        for name in controllers:
+            bar.note(name)
+            try:
+                runs[name] = simulate(scenario, name, solver=solver, fallback=fallback)
+            except NoSolution as exc:
+                stopped[name] = exc
+                partial = getattr(exc, "run", None)
+                if isinstance(partial, Run):
+                    runs[name] = partial
+            bar.step()
     elapsed = time.perf_counter() - start
-    with atomic_output(out) as staging:
-        results = write_run_folder(
-            staging, scenario, runs, solver=args.solver, fallback=_fallback(args.fallback)
-        )
-    print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
-    print(summary_table(results))
+    finished = [name for name in runs if name not in stopped]
+    if runs:
+        details = {
+            name: {"step": getattr(exc, "step", None), "reason": str(exc)}
+            for name, exc in stopped.items()
+        }
+        with atomic_output(out, command="emdm run") as staging:
+            results = write_run_folder(
+                staging, scenario, runs, solver=solver, fallback=fallback, stopped=details
+            )
+        print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
+        print(summary_table(results))
+    if stopped:
+        first, *others = stopped.items()
+        message = f"run stopped: {_stopped(*first)}"
+        if others:
+            message += "; also stopped: " + ", ".join(
+                _stopped(n, e).split(":")[0] for n, e in others
+            )
+        if runs:
+            kept = f"{', '.join(finished)} finished" if finished else "none finished"
+            partial = [n for n in stopped if n in runs]
+            message += f"; {kept}; written to {out}/"
+            if partial:
+                message += f" with the partial run{'s' if len(partial) > 1 else ''} of {', '.join(partial)}"
+        else:
+            message += "; nothing was written"
+        raise RunStopped(message)
     return 0
 
 
-def lab_table(summary: dict[str, dict[str, Any]]) -> str:
-    """The solver comparison as a readable table."""
-    rows = []
-    for name, s in summary.items():
-        ttg = s.get("time_to_goal")
-        rows.append(
-            [
-                name,
-                s["family"],
-                f"{s['median_time'] * 1e3:.3f}",
-                f"{s['p95_time'] * 1e3:.3f}",
-                f"{s['median_iterations']:.0f}",
-                f"{s['median_evaluations']:.0f}",
-                f"{s['max_abs_gap']:.1e}",
-                f"{s['max_violation']:.1e}",
-                str(s["failures"]),
-                "yes" if s.get("reached") else "no",
-                f"{ttg:.2f}" if ttg is not None else "-",
-            ]
-        )
-    header = [
-        "solver",
-        "family",
-        "median[ms]",
-        "p95[ms]",
-        "iters",
-        "evals",
-        "max|gap|",
-        "max viol",
-        "failed",
-        "reached",
-        "t_goal[s]",
-    ]
-    return _table(rows, header)
-
-
+# ---------------------------------------------------------------------------------- solvers
 def cmd_solvers(args: argparse.Namespace) -> int:
     from ..outputs.lab_plots import lab_figures
     from ..solvers import available_solvers
     from ..studies.lab import DEFAULT_LAB_SOLVERS, lab_header, lab_json, lab_rows, run_lab
 
     scenario = _scenario(args)
-    controller = get_controller(args.controller)
-    if args.solvers:
-        names = [n.strip() for n in args.solvers.split(",") if n.strip()]
-        for name in names:
-            get_solver(name)
-    else:
-        names = [n for n in DEFAULT_LAB_SOLVERS if n in available_solvers()]
-    out = Path(args.out or f"results/{scenario.name}-solvers")
+    controllers = _unique(args.controller) or ["C-EMDM"]
+    solvers = _unique(args.solver) or [n for n in DEFAULT_LAB_SOLVERS if n in available_solvers()]
+    out = _out(args, f"{safe(scenario.name)}-solvers")
     start = time.perf_counter()
-
-    def progress(name: str) -> None:
-        print(f"  {name} done ({time.perf_counter() - start:.1f} s)", file=sys.stderr, flush=True)
-
-    lab = run_lab(
-        scenario,
-        controller,
-        names,
-        sample=None if args.sample <= 0 else args.sample,
-        repeats=args.repeats,
-        budget=args.budget,
-        workers=args.workers,
-        progress=progress,
-    )
-    data = lab_json(lab)
-    data["wall_time"] = time.perf_counter() - start
-    table = lab_table(data["solvers"])
-    with atomic_output(out) as staging:
-        write_json(staging / "solvers.json", data)
-        for name in lab.studies:
-            write_csv(
-                staging / "solvers" / f"{name}.csv",
-                lab_header(lab),
-                ([cell(v) for v in row] for row in lab_rows(lab, name)),
+    labs = {}
+    with Progress(f"solvers {scenario.name}", len(solvers) * len(controllers), "solver") as bar:
+        for controller in controllers:
+            bar.note(f"{controller}: reference run and programs")
+            labs[controller] = run_lab(
+                scenario,
+                controller,
+                solvers,
+                sample=None if args.sample == 0 else args.sample,
+                repeats=args.repeats,
+                budget=args.budget,
+                workers=args.workers or 2,
+                progress=lambda name, c=controller: bar.step(note=f"{c}: {name} done"),
             )
-        (staging / "solvers.txt").write_text(table + "\n", encoding="utf-8")
-        if not args.no_figures:
-            lab_figures(lab, staging / "figures")
-    print(
-        f"{scenario.name} {controller.name}: {len(names)} solvers, {len(lab.steps)} steps "
-        f"re-solved in {data['wall_time']:.1f} s -> {out}/"
-    )
-    print(table)
+    wall = time.perf_counter() - start
+    tables = {}
+    with atomic_output(out, command="emdm solvers") as staging:
+        for controller, lab in labs.items():
+            folder = staging if len(labs) == 1 else staging / controller
+            data = lab_json(lab)
+            data["wall_time"] = wall
+            tables[controller] = lab_table(data["solvers"])
+            write_json(folder / "solvers.json", data)
+            for name in lab.studies:
+                write_csv(
+                    folder / "solvers" / f"{name}.csv",
+                    lab_header(lab),
+                    ([cell(v) for v in row] for row in lab_rows(lab, name)),
+                )
+            (folder / "solvers.txt").write_text(tables[controller] + "\n", encoding="utf-8")
+            if not args.no_figures:
+                lab_figures(lab, folder / "figures")
+    for controller, lab in labs.items():
+        print(
+            f"{scenario.name} {controller}: {len(solvers)} solvers, {len(lab.steps)} steps "
+            f"re-solved in {wall:.1f} s -> {out}/"
+        )
+        print(tables[controller])
     return 0
 
 
-def _runs(args: argparse.Namespace, names: Sequence[str]) -> tuple[Scenario, dict[str, Run]]:
-    """The runs of ``names``: read from a folder written by ``emdm run``, or simulated."""
-    from ..outputs.records import read_run
+# ------------------------------------------------------------------------ plot and animate
+def _source(args: argparse.Namespace) -> tuple[Scenario, Path | None]:
+    """The scenario, and the run folder when the argument is one (read cheaply: metrics.json)."""
+    from ..outputs.records import read_scenario
 
     folder = Path(args.scenario)
-    if folder.is_dir():
-        if not (folder / "metrics.json").is_file():
-            raise UsageError(
-                f"{folder}: not a run folder (no metrics.json; write one with emdm run)"
-            )
-        if args.set:
-            raise UsageError("--set applies to scenarios, not to a run folder")
-        available = [n for n in names if (folder / "trajectories" / f"{n}.csv").is_file()]
+    if not folder.is_dir():
+        return _scenario(args), None
+    if args.set:
+        raise UsageError("--set applies to scenarios, not to a run folder")
+    return read_scenario(folder), folder
+
+
+def _runs(
+    scenario: Scenario, folder: Path | None, controllers: Sequence[str], bar: Progress
+) -> dict[str, Run]:
+    """The runs of ``controllers``: read from ``folder`` (those it holds), or simulated."""
+    from ..outputs.records import read_run
+
+    runs: dict[str, Run] = {}
+    if folder is not None:
+        available = [n for n in controllers if (folder / "trajectories" / f"{n}.csv").is_file()]
         if not available:
-            raise UsageError(f"{folder}: none of {', '.join(names)} was run there")
-        runs = {n: read_run(folder, n) for n in available}
-        return next(iter(runs.values())).scenario, runs
-    scenario = _scenario(args)
-    return scenario, {n: simulate(scenario, n) for n in names}
+            raise UsageError(f"{folder}: none of {', '.join(controllers)} was run there")
+        for name in available:
+            bar.note(f"reading {name}")
+            runs[name] = read_run(folder, name)
+        return runs
+    for name in controllers:
+        bar.note(f"simulating {name}")
+        runs[name] = _simulate(scenario, name)
+    return runs
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
     from ..outputs.plots import run_figures
 
-    names = [get_controller(n).name for n in (args.controller or list(CONTROLLERS))]
-    scenario, runs = _runs(args, names)
-    out = Path(args.out or f"results/{scenario.name}-figures")
-    with atomic_output(out) as staging:
-        stems = run_figures(runs, staging)
+    controllers = _unique(args.controller) or list(CONTROLLERS)
+    scenario, folder = _source(args)
+    out = _out(args, f"{safe(scenario.name)}-figures")
+    with Progress(f"plot {scenario.name}") as bar:
+        runs = _runs(scenario, folder, controllers, bar)
+        bar.note("drawing the figures")
+        with atomic_output(out, command="emdm plot") as staging:
+            stems = run_figures(runs, staging)
     print(f"{scenario.name}: {len(stems)} figures (PNG, PDF, SVG) -> {out}/")
     return 0
 
 
+def _check_mp4() -> None:
+    """MP4 needs ffmpeg (the imageio-ffmpeg wheel): say so before any work."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise EmdmError(
+            "animate: MP4 needs ffmpeg: pip install 'emdm[video]', or pass --no-mp4"
+        ) from None
+    try:
+        imageio_ffmpeg.get_ffmpeg_exe()
+    except Exception as exc:
+        raise EmdmError(
+            f"animate: ffmpeg cannot be found ({exc}); pip install 'emdm[video]', or pass --no-mp4"
+        ) from None
+
+
 def cmd_animate(args: argparse.Namespace) -> int:
-    from ..outputs.animate import animate
+    from ..outputs.animate import animate, frame_schedule
     from ..outputs.plots import GROUPS
 
-    if args.speedup <= 0:
-        raise UsageError(f"--speedup must be > 0, got {args.speedup}")
-    pairs = [GROUPS[p] for p in args.pair] if args.pair else [GROUPS["UC"], GROUPS["C"]]
-    names = list(dict.fromkeys(n for pair in pairs for n in pair))
-    scenario, runs = _runs(args, names)
-    out = Path(args.out or f"results/{scenario.name}-animations")
-    written = []
-    with atomic_output(out) as staging:
-        for pair in pairs:
-            chosen = [runs[n] for n in pair if n in runs]
-            if chosen:
-                stem = staging / "_vs_".join(r.controller.name for r in chosen)
-                written += animate(chosen, stem, speedup=args.speedup, mp4=not args.no_mp4)
+    if args.controller and args.pair:
+        raise UsageError("give --controller or --pair, not both")
+    if args.controller:
+        groups = [tuple(_unique(args.controller))]
+    else:
+        groups = [GROUPS[p] for p in _unique(args.pair or ["UC", "C"])]
+    scenario, folder = _source(args)
+    try:
+        frame_schedule(1, scenario.motion.dt, args.speedup, 20.0)
+    except ValueError:
+        raise UsageError(
+            f"--speedup {args.speedup:g}: no frame duration in whole centiseconds fits "
+            f"dt = {scenario.motion.dt:g} s at that speed-up; try 0.5, 1, 2 or 5"
+        ) from None
+    if not args.no_mp4:
+        _check_mp4()
+    out = _out(args, f"{safe(scenario.name)}-animations")
+    controllers = _unique(name for group in groups for name in group)
+    written: list[Path] = []
+    with Progress(f"animate {scenario.name}", len(groups), "animation") as bar:
+        runs = _runs(scenario, folder, controllers, bar)
+        with atomic_output(out, command="emdm animate") as staging:
+            for group in groups:
+                chosen = [runs[n] for n in group if n in runs]
+                if chosen:
+                    bar.note(" vs ".join(r.controller.name for r in chosen))
+                    stem = staging / "_vs_".join(r.controller.name for r in chosen)
+                    written += animate(chosen, stem, speedup=args.speedup, mp4=not args.no_mp4)
+                bar.step()
     print(f"{scenario.name}: {', '.join(p.name for p in written)} -> {out}/")
     return 0
 
 
+# ----------------------------------------------------------------------------------- pareto
 def cmd_pareto(args: argparse.Namespace) -> int:
-    from ..studies.pareto import (
-        default_grid,
-        pareto_figure,
-        pareto_study,
-        trade_off_figure,
-        weight_grid,
-    )
+    from ..outputs.pareto_plots import pareto_figure, trade_off_figure
+    from ..studies.pareto import default_grid, pareto_study, weight_grid
 
+    controllers = _unique(args.controller) or ["UC-EMDM"]
+    for name in controllers:
+        if get_controller(name).method != "EMDM":
+            raise UsageError(f"--controller must be UC-EMDM or C-EMDM, got {name}")
     scenario = _scenario(args)
-    controller = get_controller(args.controller)
-    if controller.method != "EMDM":
-        raise UsageError(f"--controller must be UC-EMDM or C-EMDM, got {controller.name}")
-    out = Path(args.out or f"results/{scenario.name}-pareto-{controller.name}")
-    data, _ = pareto_study(scenario, controller)
-    grid = weight_grid(scenario, controller, default_grid(scenario, args.grid))
-    with atomic_output(out) as staging:
-        write_json(staging / "pareto.json", data)
-        write_json(
-            staging / "weight_grid.json",
-            {"scenario": scenario.name, "controller": controller.name, "runs": grid},
+    tag = controllers[0] if len(controllers) == 1 else "EMDM"
+    out = _out(args, f"{safe(scenario.name)}-pareto-{tag}")
+    grid = default_grid(scenario, args.grid)
+    results = {}
+    with Progress(f"pareto {scenario.name}", len(controllers) * (1 + len(grid)), "run") as bar:
+        for name in controllers:
+            bar.note(f"{name}: fronts along the run")
+            try:
+                data, _ = pareto_study(scenario, name)
+            except NoSolution as exc:
+                raise RunStopped(f"run stopped: {_stopped(name, exc)}") from None
+            bar.step()
+            rows = []
+            for w_e, w_m in grid:
+                bar.note(f"{name}: whole run at w_E={w_e:g}, w_M={w_m:g}")
+                rows += weight_grid(scenario, name, [(w_e, w_m)])
+                bar.step()
+            results[name] = (data, rows)
+    with atomic_output(out, command="emdm pareto") as staging:
+        for name, (data, rows) in results.items():
+            folder = staging if len(results) == 1 else staging / name
+            write_json(folder / "pareto.json", data)
+            write_json(
+                folder / "weight_grid.json",
+                {"scenario": scenario.name, "controller": name, "runs": rows},
+            )
+            pareto_figure(data, folder)
+            trade_off_figure(rows, scenario, name, folder)
+    for name, (data, rows) in results.items():
+        print(
+            f"{scenario.name} {name}: Pareto fronts at k = "
+            f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} weights "
+            f"each), {len(rows)} whole runs -> {out}/"
         )
-        pareto_figure(data, staging)
-        trade_off_figure(grid, scenario, controller.name, staging)
-    print(
-        f"{scenario.name} {controller.name}: Pareto fronts at k = "
-        f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} weights each), "
-        f"{len(grid)} whole runs -> {out}/"
-    )
     return 0
 
 
+# ----------------------------------------------------------------------------------- report
 def cmd_report(args: argparse.Namespace) -> int:
     from ..outputs.report import build_report
 
-    if args.workers is not None and args.workers < 1:
-        raise UsageError(f"--workers must be >= 1, got {args.workers}")
-    out = Path(args.out or "results/report")
+    out = _out(args, "report")
     start = time.perf_counter()
-
-    def progress(message: str) -> None:
-        print(f"  {message}", file=sys.stderr, flush=True)
-
-    print(f"emdm report ({'quick' if args.quick else 'full'}) -> {out}/", file=sys.stderr)
-    build_report(out, quick=args.quick, workers=args.workers, progress=progress)
+    with Progress(f"report ({'quick' if args.quick else 'full'})", unit="part") as bar:
+        build_report(
+            out, quick=args.quick, workers=args.workers, progress=lambda m: bar.step(note=m)
+        )
     print(f"report written in {time.perf_counter() - start:.1f} s: {out / 'index.html'}")
     return 0
 
 
+# ------------------------------------------------------------------------------------ bench
 def cmd_bench(args: argparse.Namespace) -> int:
     import json as _json
 
     from ..studies.bench import bench_table, run_bench
 
-    def progress(message: str) -> None:
-        print(f"  {message}", file=sys.stderr, flush=True)
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_out(out)
+    with Progress("bench", unit="part") as bar:
+        data = run_bench(quick=args.quick, progress=lambda m: bar.step(note=m))
+        table = bench_table(data)
+        if args.dask:
+            from ..studies.bench import dask_table, run_dask_bench
 
-    data = run_bench(quick=args.quick, progress=progress)
-    table = bench_table(data)
-    if args.dask:
-        from ..studies.bench import dask_table, run_dask_bench
-
-        data["dask"] = run_dask_bench(runs=400 if args.quick else 8000, progress=progress)
-        table += "\n\n" + dask_table(data["dask"])
-    if args.out:
-        out = Path(args.out)
-        with atomic_output(out) as staging:
+            data["dask"] = run_dask_bench(
+                runs=400 if args.quick else 8000, progress=lambda m: bar.step(note=m)
+            )
+            table += "\n\n" + dask_table(data["dask"])
+    if out is not None:
+        with atomic_output(out, command="emdm bench") as staging:
             write_json(staging / "bench.json", data)
             (staging / "bench.md").write_text(table + "\n", encoding="utf-8")
     print(_json.dumps(data, indent=2) if args.json else table)
     return 0
 
 
+# ------------------------------------------------------------------------------------ study
 def cmd_study(args: argparse.Namespace) -> int:
+    from ..outputs.study_plots import sweep_trade_off, workspace_maps
     from ..studies.montecarlo import (
         BLOCK,
         TIMING,
@@ -380,47 +419,44 @@ def cmd_study(args: argparse.Namespace) -> int:
         run_sweep,
         study_json,
         study_table,
-        sweep_trade_off,
-        workspace_maps,
     )
 
-    if args.runs < 1:
-        raise UsageError(f"--runs must be >= 1, got {args.runs}")
-    if args.chunk < 1:
-        raise UsageError(f"--chunk must be >= 1, got {args.chunk}")
-    if args.workers is not None and args.workers < 1:
-        raise UsageError(f"--workers must be >= 1, got {args.workers}")
     if args.engine == "local" and (args.scheduler or args.workers):
         raise UsageError("--scheduler and --workers go with --engine dask")
-    overrides = dict(parse_override(text) for text in args.set or [])
-    scenarios = []
-    for name in args.scenario:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            scenarios.append(load_scenario(name, overrides))
+    overrides = _overrides(args)
+    scenarios = [_load(name, overrides) for name in _unique(args.scenario)]
     weights = parse_weights(args.weights) if args.weights else None
     engine = Engine(args.engine, args.scheduler, args.workers)
-    out = Path(args.out or f"results/{scenarios[0].name}-study")
-    results = run_sweep(
-        scenarios,
-        weights,
-        args.runs,
-        args.seed,
-        engine,
-        chunk_blocks=max(1, -(-args.chunk // BLOCK)),
-        keep_runs=args.keep_runs,
-    )
+    out = _out(args, f"{safe(scenarios[0].name)}-study")
+    studies = len(scenarios) * (len(weights) if weights else 1)
+    with Progress(f"study ({studies} × {args.runs} runs)", unit="chunk") as bar:
+
+        def chunk_done(done: int, total: int) -> None:
+            if bar.bar.total != total * studies:
+                bar.bar.total = total * studies
+            bar.step()
+
+        results = run_sweep(
+            scenarios,
+            weights,
+            args.runs,
+            args.seed,
+            engine,
+            chunk_blocks=max(1, -(-args.chunk // BLOCK)),
+            keep_runs=args.keep_runs,
+            progress=chunk_done,
+        )
     single = len(results) == 1
-    with atomic_output(out) as staging:
-        tables = []
+    tables = []
+    with atomic_output(out, command="emdm study") as staging:
         for result in results:
             scenario = next(s for s in scenarios if s.name == result["scenario"])
             tag = (
                 ""
                 if single
-                else (
+                else safe(
                     f"{result['scenario']}-wE{result['weights']['effort']:g}"
-                    f"-wM{result['weights']['manipulability']:g}/"
+                    f"-wM{result['weights']['manipulability']:g}"
                 )
             )
             folder = staging / tag if tag else staging
@@ -429,9 +465,7 @@ def cmd_study(args: argparse.Namespace) -> int:
             workspace_maps(result, scenario, folder)
             if args.keep_runs:
                 np.savez_compressed(folder / "runs.npz", **result["records"])
-            tables.append(
-                study_table(result) if single else f"[{tag.rstrip('/')}]\n" + study_table(result)
-            )
+            tables.append(study_table(result) if single else f"[{tag}]\n" + study_table(result))
         if not single:
             write_json(
                 staging / "sweep.json",
@@ -452,9 +486,16 @@ def cmd_study(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------- scenario, play, list
 def cmd_scenario(args: argparse.Namespace) -> int:
     print(_scenario(args).to_toml(), end="")
     return 0
+
+
+def cmd_play(args: argparse.Namespace) -> int:
+    from ..play import serve
+
+    return serve(_scenario(args), port=args.port, open_browser=not args.no_browser)
 
 
 def cmd_list(args: argparse.Namespace) -> int:
@@ -467,6 +508,19 @@ def cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------------- parser
+def _fallback(text: str) -> list[str]:
+    """``--fallback`` names, or ``none``."""
+    if text.strip().lower() == "none":
+        return []
+    return names("solver")(text)
+
+
+def _command(sub: Any, name: str, summary: str, description: str) -> argparse.ArgumentParser:
+    parser: argparse.ArgumentParser = sub.add_parser(name, help=summary, description=description)
+    return parser
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="emdm",
@@ -475,162 +529,175 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"emdm {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    run = sub.add_parser(
+    run = _command(
+        sub,
         "run",
-        help="run controllers on a scenario; write metrics.json and CSVs",
-        description="Run controllers in closed loop and record every step.",
+        "run controllers on a scenario; write metrics.json and CSVs",
+        "Run controllers in closed loop and record every step: metrics.json, "
+        "trajectories/<controller>.csv and diagnostics/<controller>.csv.",
     )
-    _add_scenario_args(run)
-    run.add_argument(
-        "--controller",
-        action="append",
-        metavar="NAME",
-        help=f"controller to run (repeatable; default all: {', '.join(CONTROLLERS)})",
-    )
+    add_scenario(run)
+    add_controllers(run, "controller to run")
     run.add_argument(
         "--solver",
-        default=DEFAULT_SOLVER,
+        action="extend",
+        type=names("solver"),
         metavar="NAME",
-        help=f"solver tried first at every step (default {DEFAULT_SOLVER}; see emdm list)",
+        help=f"solver tried first at every step (default {DEFAULT_SOLVER}; repeatable: "
+        "tried in order; see emdm list)",
     )
     run.add_argument(
         "--fallback",
-        metavar="A,B",
-        help=f"fallback chain when it fails (default {','.join(DEFAULT_FALLBACK)})",
+        action="extend",
+        type=_fallback,
+        metavar="NAME",
+        help=f"solver tried when those fail (repeatable; default {','.join(DEFAULT_FALLBACK)}; "
+        "none: no fallback)",
     )
-    _add_out(run, "results/<scenario name>")
+    add_out(run, "results/<scenario>")
     run.set_defaults(func=cmd_run)
 
-    lab = sub.add_parser(
+    lab = _command(
+        sub,
         "solvers",
-        help="compare solvers on a controller's per-step programs (the solver lab)",
-        description="Run the controller with each solver in closed loop, and re-solve the "
-        "programs along the exact trajectory with each, against the exact optimum.",
+        "compare solvers on a controller's per-step programs (the solver lab)",
+        "Run the controller with each solver in closed loop, and re-solve the programs along "
+        "the exact trajectory with each, against the exact optimum.",
     )
-    _add_scenario_args(lab, default="task2")
+    add_scenario(lab, default="task2")
+    add_controllers(lab, "controller whose programs are solved", "C-EMDM")
     lab.add_argument(
-        "--controller",
-        default="C-EMDM",
+        "--solver",
+        action="extend",
+        type=names("solver"),
         metavar="NAME",
-        help="controller whose programs are solved (default C-EMDM)",
+        help="solver to compare (repeatable; default every installed one of the standard set)",
     )
     lab.add_argument(
-        "--solvers",
-        metavar="A,B,...",
-        help="solvers to compare (default: every installed one of the standard set)",
+        "--solvers", dest="solver", action="extend", type=names("solver"), help=argparse.SUPPRESS
     )
     lab.add_argument(
         "--sample",
-        type=int,
+        type=integer(0),
         default=100,
         metavar="N",
         help="re-solve N evenly spaced steps (0: every step; default 100)",
     )
     lab.add_argument(
         "--repeats",
-        type=int,
+        type=integer(1, 1000),
         default=5,
-        metavar="R",
+        metavar="N",
         help="timing repeats per step, median taken (default 5)",
     )
     lab.add_argument(
         "--budget",
-        type=int,
+        type=integer(1),
         metavar="N",
         help="evaluation budget of the gradient-free methods (default 2000)",
     )
-    lab.add_argument(
-        "--workers",
-        type=int,
-        default=2,
-        metavar="W",
-        help="processes to spread the solvers over (default 2)",
-    )
+    add_workers(lab, "2")
     lab.add_argument("--no-figures", action="store_true", help="skip the figures")
-    _add_out(lab, "results/<scenario>-solvers")
+    add_out(lab, "results/<scenario>-solvers")
     lab.set_defaults(func=cmd_solvers)
 
-    plot = sub.add_parser(
+    plot = _command(
+        sub,
         "plot",
-        help="time series and workspace figures of the controllers",
-        description="Figures of runs, from a scenario or a folder of emdm run.",
+        "time series and workspace figures of the controllers",
+        "Figures of runs (PNG, PDF, SVG), from a scenario or from a folder written by emdm run.",
     )
-    _add_scenario_args(plot, run_dir=True)
-    plot.add_argument(
-        "--controller",
-        action="append",
-        metavar="NAME",
-        help="controller to include (repeatable; default all four)",
-    )
-    _add_out(plot, "results/<scenario>-figures")
+    add_scenario(plot, run_dir=True)
+    add_controllers(plot, "controller to include")
+    add_out(plot, "results/<scenario>-figures")
     plot.set_defaults(func=cmd_plot)
 
-    anim = sub.add_parser(
+    anim = _command(
+        sub,
         "animate",
-        help="GIF/MP4 of the arm with its manipulability ellipse",
-        description="Animate controller pairs side by side.",
+        "GIF/MP4 of the arm with its manipulability ellipse",
+        "Animate controllers side by side (GIF, and MP4 with ffmpeg), from a scenario or from "
+        "a folder written by emdm run.",
     )
-    _add_scenario_args(anim, run_dir=True)
+    add_scenario(anim, run_dir=True)
+    add_controllers(
+        anim, "controller drawn side by side with the others given", "the UC and C pairs"
+    )
     anim.add_argument(
         "--pair",
         action="append",
         choices=["UC", "C", "all"],
-        help="which controllers side by side (repeatable; default UC and C)",
+        help="a standard group side by side: UC-IVKC and UC-EMDM, C-IVKC and C-EMDM, or all "
+        "four (repeatable; default UC and C)",
     )
-    anim.add_argument("--speedup", type=float, default=1.0, help="playback speed-up (default 1)")
+    anim.add_argument(
+        "--speedup",
+        type=positive(100.0),
+        default=1.0,
+        metavar="X",
+        help="playback speed-up, in (0, 100] (default 1)",
+    )
     anim.add_argument("--no-mp4", action="store_true", help="write the GIF only")
-    _add_out(anim, "results/<scenario>-animations")
+    add_out(anim, "results/<scenario>-animations")
     anim.set_defaults(func=cmd_animate)
 
-    par = sub.add_parser(
+    par = _command(
+        sub,
         "pareto",
-        help="Pareto fronts of effort against manipulability rate",
-        description="Weight sweeps at four steps of a run, and over whole runs.",
+        "Pareto fronts of effort against manipulability rate",
+        "Weight sweeps at four steps of a run, and over whole runs.",
     )
-    _add_scenario_args(par)
-    par.add_argument("--controller", default="UC-EMDM", help="UC-EMDM (default) or C-EMDM")
+    add_scenario(par)
+    add_controllers(par, "UC-EMDM or C-EMDM", "UC-EMDM")
     par.add_argument(
         "--grid",
-        type=int,
+        type=integer(2, 1000),
         default=13,
         metavar="N",
         help="weight ratios in the whole-run sweep (default 13)",
     )
-    _add_out(par, "results/<scenario>-pareto-<controller>")
+    add_out(par, "results/<scenario>-pareto-<controller>")
     par.set_defaults(func=cmd_pareto)
 
-    rep = sub.add_parser(
+    rep = _command(
+        sub,
         "report",
-        help="the whole study of the brief: HTML, LaTeX and data",
-        description="Run every experiment of the brief and write index.html, "
-        "latex/ and the data behind every number.",
+        "the whole study of the brief: HTML, LaTeX and data",
+        "Run every experiment of the brief and write index.html, latex/ and the data behind "
+        "every number.",
     )
-    rep.add_argument(
-        "--quick", action="store_true", help="a reduced study in about 20 s (demos, tests)"
-    )
-    rep.add_argument(
-        "--workers",
-        type=int,
-        metavar="W",
-        help="processes to spread the work over (default: up to 2)",
-    )
-    _add_out(rep, "results/report")
+    add_quick(rep, "a reduced study in about 20 s (demos, tests)")
+    add_workers(rep, "up to 2")
+    add_out(rep, "results/report")
     rep.set_defaults(func=cmd_report)
 
-    study = sub.add_parser(
+    study = _command(
+        sub,
         "study",
-        help="Monte-Carlo study over goals and starts (fast path)",
-        description="Every controller on the same random reachable goals and "
-        "starts: success, time to goal, manipulability gain, workspace maps.",
+        "Monte-Carlo study over goals and starts (fast path)",
+        "Every controller on the same random reachable goals and starts: success, time to "
+        "goal, manipulability gain, workspace maps.",
     )
-    _add_scenario_args(study, many=True)
+    add_scenario(study, many=True)
     study.add_argument(
         "--weights",
         metavar="WE:WM,...",
         help="sweep weight pairs, e.g. 0.1:0,0.1:0.5,0.1:5 (one study each)",
     )
-    study.add_argument("--runs", type=int, default=1000, help="runs per controller (default 1000)")
-    study.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    study.add_argument(
+        "--runs",
+        type=integer(1, 10**9),
+        default=1000,
+        metavar="N",
+        help="runs per controller (default 1000)",
+    )
+    study.add_argument(
+        "--seed",
+        type=integer(0, 2**64 - 1),
+        default=0,
+        metavar="S",
+        help="random seed, >= 0 (default 0)",
+    )
     study.add_argument(
         "--engine",
         choices=["local", "dask"],
@@ -642,17 +709,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="ADDRESS",
         help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (dask engine)",
     )
-    study.add_argument(
-        "--workers",
-        type=int,
-        metavar="N",
-        help="workers of the LocalCluster started when no scheduler is given",
-    )
+    add_workers(study, "2; the LocalCluster started by --engine dask without --scheduler")
     study.add_argument(
         "--chunk",
-        type=int,
+        type=integer(1, 10**7),
         default=2048,
-        metavar="RUNS",
+        metavar="N",
         help="runs per task, rounded up to whole blocks of 256 (default 2048)",
     )
     study.add_argument(
@@ -660,17 +722,18 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="also keep every run's outcome (runs.npz); memory grows with --runs",
     )
-    _add_out(study, "results/<scenario>-study")
+    add_out(study, "results/<scenario>-study")
     study.set_defaults(func=cmd_study)
 
-    bench = sub.add_parser(
+    bench = _command(
+        sub,
         "bench",
-        help="per-step cost against the standard stack; batch speed",
-        description="Benchmark the reference and fast paths against numpy + "
-        "qpsolvers (daqp, quadprog) in one process; medians over repeats.",
+        "per-step cost against the standard stack; batch speed",
+        "Benchmark the reference and fast paths against numpy + qpsolvers (daqp, quadprog) in "
+        "one process; medians over repeats.",
     )
     bench.add_argument("--json", action="store_true", help="print JSON instead of tables")
-    bench.add_argument("--quick", action="store_true", help="one repeat, a small batch (tests)")
+    add_quick(bench, "one repeat, a small batch (tests)")
     bench.add_argument(
         "--dask",
         action="store_true",
@@ -679,40 +742,52 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", metavar="DIR", help="also write bench.json and bench.md there")
     bench.set_defaults(func=cmd_bench)
 
-    show = sub.add_parser("scenario", help="print a scenario as validated TOML (a starting point)")
-    _add_scenario_args(show)
-    _add_out(show, "none: prints to the terminal")
+    show = _command(
+        sub,
+        "scenario",
+        "print a scenario as validated TOML (a starting point)",
+        "Print a preset or a scenario file, with --set applied, as validated TOML: every value "
+        "written out, a template for your own scenario.",
+    )
+    add_scenario(show)
     show.set_defaults(func=cmd_scenario)
 
-    lst = sub.add_parser("list", help="list controllers, presets and solvers")
-    _add_out(lst, "none: prints to the terminal")
+    play = _command(
+        sub,
+        "play",
+        "the live playground in the browser (drag the goal, move the weights)",
+        "Serve the playground on 127.0.0.1 and open it in the browser.",
+    )
+    add_scenario(play, default="task1")
+    play.add_argument(
+        "--port",
+        type=integer(0, 65535),
+        default=5006,
+        metavar="N",
+        help="port (default 5006; 0: any free)",
+    )
+    play.add_argument("--no-browser", action="store_true", help="only print the address")
+    play.set_defaults(func=cmd_play)
+
+    lst = _command(
+        sub,
+        "list",
+        "list controllers, presets and solvers",
+        "List the controllers, the preset scenarios and the solvers (installed, or the extra "
+        "that installs them).",
+    )
     lst.set_defaults(func=cmd_list)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``emdm`` command; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
+
+    def command() -> int:
+        args = build_parser().parse_args(argv)
         return int(args.func(args))
-    except NoSolution as exc:
-        print(f"emdm: run stopped: {exc}", file=sys.stderr)
-        return 1
-    except EmdmError as exc:
-        print(f"emdm: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(f"emdm: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("emdm: interrupted; nothing was written", file=sys.stderr)
-        return 130
-    except Exception as exc:  # an internal error: one line, the traceback on request
-        if os.environ.get("EMDM_DEBUG"):
-            raise
-        print(
-            f"emdm: internal error: {type(exc).__name__}: {exc} (EMDM_DEBUG=1 shows the traceback)",
-            file=sys.stderr,
-        )
-        return 1
+
+    return run_command(command)
+
+
+__all__ = ["build_parser", "main", "safe", "say"]

@@ -298,14 +298,18 @@ def run_study(
     engine: Engine | None = None,
     chunk_blocks: int = DEFAULT_CHUNK_BLOCKS,
     keep_runs: bool = False,
-    progress: bool = True,
+    progress: bool | Callable[[int, int], None] = True,
 ) -> dict[str, Any]:
-    """A whole study: every controller on the same ``runs`` draws, reduced."""
+    """A whole study: every controller on the same ``runs`` draws, reduced.
+
+    ``progress``: a bar on stderr (``True``), none, or ``progress(chunks_done, chunks)``."""
     engine = engine or Engine()
     start = time.perf_counter()
 
     def bar(done: int, total: int) -> None:
-        if progress:
+        if callable(progress):
+            progress(done, total)
+        elif progress:
             fill = "#" * int(30 * done / total)
             print(
                 f"\r  [{fill:<30}] {done}/{total} chunks, {time.perf_counter() - start:.1f} s",
@@ -430,7 +434,7 @@ def run_sweep(
     *,
     chunk_blocks: int = DEFAULT_CHUNK_BLOCKS,
     keep_runs: bool = False,
-    progress: bool = True,
+    progress: bool | Callable[[int, int], None] = True,
 ) -> list[dict[str, Any]]:
     """A study for every scenario and weight pair, on one engine (one cluster for all)."""
     cluster = None

@@ -1,0 +1,250 @@
+"""The one error boundary of the command line, and its signals.
+
+Every failure becomes one line on stderr and an exit status: 2 for what the user can act on (the
+input, the environment: a full disk, a permission, a missing program; a run that stopped), 1 and
+"internal error" only for a bug. SIGINT, SIGTERM and SIGHUP stop the command the same way: worker
+processes (process pools, Dask workers, ffmpeg) are stopped, the staging folder is removed, the
+earlier results stay, and the exit status is 128 + the signal (130, 143, 129).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import logging
+import multiprocessing
+import os
+import signal
+import sys
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from types import FrameType
+
+from ..errors import EmdmError, NoSolution, one_line
+from ..outputs import records
+from .args import ArgumentsError
+
+HANDLED: dict[int, str] = {
+    signal.SIGINT: "interrupted",
+    signal.SIGTERM: "terminated (SIGTERM)",
+    signal.SIGHUP: "hung up (SIGHUP)",
+}
+
+
+class Interrupted(KeyboardInterrupt):
+    """The command was stopped by ``signum``."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+class RunStopped(EmdmError):
+    """A run stopped part-way; what finished was kept (the message says what and where)."""
+
+
+class _State:
+    owner = 0
+    stopping = False
+
+
+# ------------------------------------------------------------------------------ child processes
+def _parent_of(pid: int) -> tuple[int, str] | None:
+    """``(parent pid, state)`` of ``pid`` from /proc, ``None`` when it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii", errors="replace") as handle:
+            fields = handle.read().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return int(fields[1]), fields[0]
+
+
+def _helpers() -> set[int]:
+    """multiprocessing's resource tracker: it ignores SIGTERM and ends when this process does."""
+    from multiprocessing import resource_tracker
+
+    pid = getattr(resource_tracker._resource_tracker, "_pid", None)
+    return {pid} if isinstance(pid, int) else set()
+
+
+def descendants(pid: int | None = None) -> list[int]:
+    """Live processes started by ``pid`` (default: this one, not counting multiprocessing's
+    resource tracker), at any depth, nearest first."""
+    root = os.getpid() if pid is None else pid
+    if not os.path.isdir("/proc/self"):
+        return [p.pid for p in multiprocessing.active_children() if p.pid is not None]
+    parents: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            info = _parent_of(int(entry))
+            if info is not None and info[1] != "Z":
+                parents.setdefault(info[0], []).append(int(entry))
+    helpers = _helpers() if pid is None else set()
+    found, queue = [], [root]
+    while queue:
+        children = [c for c in parents.get(queue.pop(0), []) if c not in helpers]
+        found += children
+        queue += children
+    return found
+
+
+def _alive(pid: int) -> bool:
+    info = _parent_of(pid)
+    return info is not None and info[1] != "Z"
+
+
+def stop_children(grace: float = 2.0) -> None:
+    """Stop every process this one started (SIGTERM, then SIGKILL after ``grace`` seconds)."""
+    pids = descendants()
+    for pid in pids:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGTERM)
+    deadline = time.monotonic() + grace
+    while any(_alive(pid) for pid in pids) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    for pid in pids:
+        if _alive(pid):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+    for child in multiprocessing.active_children():  # reaps the ones multiprocessing started
+        child.join(timeout=0.1)
+
+
+def _no_dask_restarts() -> None:
+    """Tell the nannies of this process's Dask clusters not to restart the workers stopped now."""
+    spec = sys.modules.get("distributed.deploy.spec")
+    if spec is None:
+        return
+    for cluster in list(spec.SpecCluster._instances):
+        for nanny in list(getattr(cluster, "workers", {}).values()):
+            with contextlib.suppress(Exception):
+                nanny.close_gracefully()
+
+
+def _close_dask() -> None:
+    """Close the Dask clusters a failed or stopped command left open (quietly: their workers may
+    be gone already), so that Dask's exit hook does not try again and print a traceback."""
+    spec = sys.modules.get("distributed.deploy.spec")
+    if spec is None:
+        return
+    for cluster in list(spec.SpecCluster._instances):
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=5)
+        spec.SpecCluster._instances.discard(cluster)
+
+
+# ------------------------------------------------------------------------------------ signals
+def _handler(signum: int, frame: FrameType | None) -> None:
+    if os.getpid() != _State.owner:  # a forked worker process: stop at once, as by default
+        os._exit(128 + signum)
+    if records.deferring():  # results are being swapped in: finish that first
+        records.defer(signum)
+        return
+    if _State.stopping:  # already stopping: let the cleanup finish
+        return
+    _State.stopping = True
+    logging.disable(logging.CRITICAL)  # workers that vanish are expected now, not news
+    warnings.simplefilter("ignore")
+    _no_dask_restarts()
+    stop_children()
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def handling_signals() -> Iterator[None]:
+    """SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` (in the main thread only)."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _State.owner, _State.stopping = os.getpid(), False
+    previous = {}
+    for signum in HANDLED:
+        with contextlib.suppress(ValueError, OSError):
+            previous[signum] = signal.signal(signum, _handler)
+    filters = list(warnings.filters)
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+        if _State.stopping:  # the handler silenced logging and warnings while stopping
+            logging.disable(logging.NOTSET)
+            warnings.filters[:] = filters  # type: ignore[index]
+
+
+# ----------------------------------------------------------------------------------- boundary
+def _print(line: str) -> None:
+    with contextlib.suppress(OSError, ValueError):
+        print(one_line(line), file=sys.stderr, flush=True)
+
+
+def _os_message(exc: OSError) -> str:
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    reason = reason[0].lower() + reason[1:]
+    if exc.filename is None:
+        return reason
+    where = os.fsdecode(exc.filename)
+    if exc.filename2 is not None:
+        where += f" -> {os.fsdecode(exc.filename2)}"
+    return f"{where}: {reason}"
+
+
+def _quiet_stdout() -> None:
+    """After a broken pipe on stdout, send what is left to /dev/null (no message at exit)."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+
+
+def run_command(command: Callable[[], int]) -> int:
+    """Run ``command`` inside the boundary; returns the exit status."""
+    records.COMMITTED.clear()
+    try:
+        with handling_signals():
+            try:
+                return int(command())
+            except BaseException:
+                _close_dask()
+                raise
+            finally:
+                if descendants():  # nothing this command started outlives it
+                    stop_children()
+    except SystemExit as exc:  # --help, --version
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    except ArgumentsError as exc:
+        _print(str(exc))
+        return 2
+    except NoSolution as exc:
+        _print(f"emdm: error: run stopped: {exc}")
+        return 2
+    except EmdmError as exc:
+        _print(f"emdm: error: {exc}")
+        return 2
+    except KeyboardInterrupt as exc:
+        signum = exc.signum if isinstance(exc, Interrupted) else signal.SIGINT
+        written = ", ".join(str(p) for p in records.COMMITTED)
+        outcome = f"{written} was written before that" if written else "nothing was written"
+        _print(f"emdm: {HANDLED.get(signum, 'stopped')}; {outcome}")
+        return 128 + signum
+    except BrokenPipeError:  # the reader went away (emdm list | head -1): nothing to say
+        _quiet_stdout()
+        return 0
+    except MemoryError:
+        _print("emdm: error: out of memory (try a shorter motion.max_time or fewer runs)")
+        return 2
+    except OSError as exc:
+        if exc.errno == errno.EPIPE:
+            _quiet_stdout()
+            return 0
+        _print(f"emdm: error: {_os_message(exc)}")
+        return 2
+    except Exception as exc:  # a bug: one line, the traceback on request
+        if os.environ.get("EMDM_DEBUG"):
+            raise
+        _print(
+            f"emdm: internal error: {type(exc).__name__}: {exc} (EMDM_DEBUG=1 shows the traceback)"
+        )
+        return 1
