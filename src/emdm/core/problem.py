@@ -106,45 +106,6 @@ class QP:
         )
 
 
-def effort(n: int, weight: float = 1.0) -> Objective:
-    """``w_E E(qd) = w_E/2 ||qd||^2`` (rad^2/s^2)."""
-    return Objective(weight * np.eye(n), np.zeros(n))
-
-
-def manipulability_rate(Jm: Vector, weight: float) -> Objective:
-    """``-w_M M(qd) = -w_M Jm^T qd``: minimising it maximises the manipulability rate."""
-    return Objective(np.zeros((Jm.size, Jm.size)), -weight * Jm)
-
-
 def slack_penalty(weight: float, k: int = 2) -> Objective:
     """``w_S/2 ||delta||^2`` over the ``k`` task-slack variables."""
     return Objective(weight * np.eye(k), np.zeros(k))
-
-
-def task_program(
-    objective: Objective,
-    J: Matrix,
-    v: Vector,
-    qd_lo: Vector,
-    qd_hi: Vector,
-    *,
-    slack: Objective | None = None,
-    slack_lo: Vector | None = None,
-    slack_hi: Vector | None = None,
-) -> QP:
-    """Assemble ``J qd (+ delta) = v`` with the joint bounds and, optionally, a slack block."""
-    n = J.shape[1]
-    if slack is None:
-        return QP(objective.P, objective.c, J, v, qd_lo, qd_hi, n_joints=n)
-    assert slack_lo is not None and slack_hi is not None
-    total = objective.stack(slack)
-    k = J.shape[0]
-    return QP(
-        P=total.P,
-        c=total.c,
-        A=np.hstack((J, np.eye(k))),
-        b=v,
-        lb=np.concatenate((qd_lo, slack_lo)),
-        ub=np.concatenate((qd_hi, slack_hi)),
-        n_joints=n,
-    )
