@@ -1,0 +1,155 @@
+"""Signals: SIGTERM (schedulers, timeout, docker stop) and SIGHUP stop a command like SIGINT. The
+workers it started stop with it, its staging is removed, the earlier results stay, and it exits
+with 128 + the signal and one line."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from emdm.cli import main
+from emdm.cli.boundary import _alive, descendants
+
+COMMAND = [sys.executable, "-m", "emdm.cli"]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def compiled():
+    """The control loop compiled (or loaded) before any test reads stderr."""
+    import emdm
+
+    emdm.simulate(emdm.load_scenario("task2"), "C-EMDM")
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()
+    }
+
+
+def stop_when(args: list[str], ready, sig: int, timeout: float = 240.0):
+    """Start ``emdm args``; once ``ready(children)`` holds, send ``sig``. Returns the finished
+    process, its stderr and every process it had started."""
+    env = {**os.environ, "EMDM_PROGRESS": "0"}
+    process = subprocess.Popen(
+        [*COMMAND, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    seen: set[int] = set()
+    deadline = time.monotonic() + timeout
+    try:
+        while time.monotonic() < deadline and process.poll() is None:
+            children = descendants(process.pid)
+            seen.update(children)
+            if ready(children):
+                break
+            time.sleep(0.05)
+        assert process.poll() is None, "the command ended before the signal"
+        seen.update(descendants(process.pid))
+        process.send_signal(sig)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    return process, err, seen
+
+
+def gone(pids: set[int], wait: float = 5.0) -> list[int]:
+    deadline = time.monotonic() + wait
+    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return [p for p in pids if _alive(p)]
+
+
+def last_line(err: str) -> str:
+    """The command's own message (a compile notice may come before it)."""
+    return err.strip().splitlines()[-1]
+
+
+@pytest.mark.slow
+def test_sigterm_stops_report_and_its_pool(tmp_path):
+    out = tmp_path / "report"
+    process, err, seen = stop_when(
+        ["report", "--quick", "--out", str(out)], lambda kids: len(kids) >= 2, signal.SIGTERM
+    )
+    assert process.returncode == 143, err
+    assert last_line(err) == "emdm: terminated (SIGTERM); nothing was written"
+    assert len(seen) >= 2 and gone(seen) == []  # the pool's workers went with it
+    assert list(tmp_path.iterdir()) == []  # no staging, nothing half-written
+
+
+@pytest.mark.slow
+def test_sighup_stops_the_solver_lab_and_keeps_earlier_results(tmp_path):
+    out = tmp_path / "lab"
+    assert main(["run", "task2", "--controller", "UC-IVKC", "--out", str(out)]) == 0
+    before = snapshot(out)  # earlier results, to be replaced only by a complete lab
+    args = ["solvers", "task2", "--solver", "slsqp,nelder-mead", "--sample", "5", "--no-figures"]
+    process, err, seen = stop_when(
+        [*args, "--out", str(out)],
+        lambda kids: len(kids) >= 2,
+        signal.SIGHUP,
+    )
+    assert process.returncode == 129, err
+    assert last_line(err) == "emdm: hung up (SIGHUP); nothing was written"
+    assert gone(seen) == []
+    assert snapshot(out) == before and [p.name for p in tmp_path.iterdir()] == ["lab"]
+
+
+@pytest.mark.slow
+def test_sigterm_stops_a_dask_study(tmp_path):
+    pytest.importorskip("distributed")
+    out = tmp_path / "study"
+    args = ["study", "task1", "--runs", "100000", "--engine", "dask", "--workers", "2"]
+    process, err, seen = stop_when(
+        [*args, "--out", str(out)], lambda kids: len(kids) >= 3, signal.SIGTERM
+    )
+    assert process.returncode == 143, err
+    assert err.strip().endswith("emdm: terminated (SIGTERM); nothing was written"), err
+    assert "Traceback" not in err and gone(seen) == []
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_in_process_removes_the_staging(tmp_path, monkeypatch, capsys):
+    """The handler itself, without a subprocess: SIGTERM while results are being written."""
+    out = tmp_path / "out"
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    before = snapshot(out)
+    from emdm.outputs import records
+
+    real = records.write_csv
+
+    def terminated(*args, **kwargs):
+        real(*args, **kwargs)
+        signal.raise_signal(signal.SIGTERM)
+
+    monkeypatch.setattr(records, "write_csv", terminated)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 143
+    err = capsys.readouterr().err
+    assert err == "emdm: terminated (SIGTERM); nothing was written\n"
+    assert snapshot(out) == before and [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL  # restored after the command
+
+
+def test_a_signal_during_the_swap_waits_for_it(tmp_path, monkeypatch, capsys):
+    """SIGTERM in the middle of the swap: the swap finishes, then the command stops; the
+    message says the results were written."""
+    from emdm.outputs import records
+
+    out = tmp_path / "out"
+    real = records._commit
+
+    def commit(*args, **kwargs):
+        signal.raise_signal(signal.SIGTERM)
+        real(*args, **kwargs)
+
+    monkeypatch.setattr(records, "_commit", commit)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 143
+    err = capsys.readouterr().err
+    assert err == f"emdm: terminated (SIGTERM); {out} was written before that\n"
+    assert (out / "metrics.json").is_file() and [p.name for p in tmp_path.iterdir()] == ["out"]
