@@ -1,0 +1,36 @@
+// Play the motion in real time: advance the scrub bar by the elapsed time times the speed.
+// args: toggle (Toggle), scrub (Slider), speed (RadioButtonGroup), speeds (its factors).
+const key = "emdm_play_" + toggle.id
+if (window[key] != null) {
+  cancelAnimationFrame(window[key])
+  window[key] = null
+}
+toggle.label = toggle.active ? "\u275a\u275a Pause" : "\u25b6 Play"
+if (toggle.active) {
+  const dt = scrub.step
+  if (scrub.value >= scrub.end - dt / 2) {
+    scrub.value = scrub.start
+  }
+  let t = scrub.value
+  let last = performance.now()
+  const tick = (now) => {
+    if (!toggle.active) {
+      return
+    }
+    if (Math.abs(scrub.value - t) > dt) {
+      t = scrub.value // moved by the user or the server: continue from there
+    }
+    t = Math.min(scrub.end, t + (now - last) / 1000 * speeds[speed.active])
+    last = now
+    const shown = Math.min(scrub.end, Math.round(t / dt) * dt)
+    if (shown != scrub.value) {
+      scrub.value = shown
+    }
+    if (t >= scrub.end) {
+      toggle.active = false
+      return
+    }
+    window[key] = requestAnimationFrame(tick)
+  }
+  window[key] = requestAnimationFrame(tick)
+}

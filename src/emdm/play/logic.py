@@ -1,0 +1,607 @@
+"""What the playground computes, free of any browser code (tested without a browser).
+
+A session holds a *base* scenario (a preset or the file given to ``emdm play``, optionally with
+another number of links) and the *overrides* set on the page (``{"section.key": value}``, the
+``--set`` keys). Every change rebuilds the scenario through :meth:`Scenario.with_overrides`, so the
+page accepts exactly what a scenario file accepts and explains a refusal in the same words.
+
+For the page, a run becomes flat arrays: the joint positions of every state, the manipulability
+ellipse of every state, the joint states (free, in a damper's influence zone, pinned at a bound,
+past a limit) and the time series. The page only picks the rows of the scrubbed state; everything
+it shows is computed here.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..core.controllers import Controller, get_controller
+from ..core.scenario import POLICIES, Scenario, parse_override, scenario_from_dict
+from ..errors import EmdmError, NoSolution, ScenarioError, one_line
+from ..sim.loop import Run, simulate
+from ..studies.pareto import front_at, ratios
+
+PAIRS: dict[str, tuple[str, str]] = {"C": ("C-EMDM", "C-IVKC"), "UC": ("UC-EMDM", "UC-IVKC")}
+"""Controller pairs: EMDM and its IVKC baseline (drawn as a ghost), constrained or not."""
+
+MIN_LINKS, MAX_LINKS = 2, 8
+ELLIPSE_SHARE = 0.3
+"""The largest possible ellipse is drawn this share of the arm's reach (see :func:`ellipse_scale`)."""
+
+FREE, ZONE, PINNED, PAST, TIP = 0, 1, 2, 3, 4
+JOINT_STATES = ("free", "in a damper's influence zone", "at a bound", "past its limit", "end")
+"""Codes of :func:`joint_states`, in the order of the page's colours."""
+
+
+# ------------------------------------------------------------------------------------ controls
+@dataclass(frozen=True)
+class Control:
+    """One slider: the scenario key(s) it sets, its range, and log or linear scale.
+
+    A log control's slider holds ``log10(value)``; with ``zero_at_start`` its leftmost position
+    means 0. A ``symmetric`` control sets ``key`` to ``value`` and its ``lower`` key to ``-value``.
+    """
+
+    name: str
+    label: str
+    key: str
+    start: float
+    end: float
+    step: float
+    log: bool = False
+    zero_at_start: bool = False
+    lower: str | None = None
+
+    def value(self, scenario: Scenario) -> float:
+        """The scenario's value (the first joint's, for a per-joint key)."""
+        section, _, key = self.key.partition(".")
+        raw = getattr(getattr(scenario, section), key)
+        return float(np.ravel(raw)[0])
+
+    def to_slider(self, value: float) -> float:
+        """The slider position showing ``value`` (clamped to the slider's range)."""
+        if self.log:
+            pos = self.start if value <= 0 else math.log10(value)
+        else:
+            pos = value
+        return min(self.end, max(self.start, pos))
+
+    def from_slider(self, position: float) -> float:
+        """The value at slider ``position``, rounded to what the slider can show."""
+        if not math.isfinite(position):
+            raise ScenarioError("page", self.key, f"must be a number, got {position}")
+        position = min(self.end, max(self.start, position))
+        if self.log:
+            if self.zero_at_start and position <= self.start + self.step / 2:
+                return 0.0
+            return float(f"{10.0**position:.3g}")
+        snapped = self.start + round((position - self.start) / self.step) * self.step
+        return float(f"{min(self.end, snapped):.10g}")
+
+    def overrides(self, value: float) -> dict[str, Any]:
+        """The overrides that set this control to ``value``."""
+        out: dict[str, Any] = {self.key: value}
+        if self.lower is not None:
+            out[self.lower] = -value
+        return out
+
+
+CONTROLS: tuple[Control, ...] = (
+    Control("w_E", "w_E  effort weight", "weights.effort", -3.0, 2.0, 0.05, log=True),
+    Control(
+        "w_M",
+        "w_M  manipulability weight (left end: 0)",
+        "weights.manipulability",
+        -3.0,
+        3.0,
+        0.05,
+        log=True,
+        zero_at_start=True,
+    ),
+    Control("c_S", "c_S  slack weight (2 links)", "weights.slack", -2.0, 3.0, 0.05, log=True),
+    Control("K_p", "K_p  task gain (1/s)", "motion.kp", 0.1, 5.0, 0.1),
+    Control("influence", "damper influence i (rad)", "damper.influence", 0.05, 1.5, 0.01),
+    Control("stop", "damper stop s (rad)", "damper.stop", 0.0, 0.5, 0.005),
+    Control("gain", "damper gain K_safe", "damper.gain", 0.1, 5.0, 0.05),
+    Control(
+        "qd_max", "velocity limit |qd| (rad/s)", "arm.qd_max", 0.1, 5.0, 0.05, lower="arm.qd_min"
+    ),
+    Control("dt", "dt  sampling time (s)", "motion.dt", 0.01, 0.2, 0.005),
+)
+CONTROL = {c.name: c for c in CONTROLS}
+
+
+# ---------------------------------------------------------------------------- the scenario
+@dataclass
+class Settings:
+    """What a session has chosen: the base scenario, the number of links, the pair, the overrides."""
+
+    scenario: str
+    links: int | None = None
+    pair: str = "C"
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+
+def with_links(scenario: Scenario, n: int) -> Scenario:
+    """``scenario`` with ``n`` equal links of the same total reach.
+
+    Per-joint settings take the first joint's value; the start keeps the first angle and spreads
+    the others' sum evenly, kept clear of the stop zones. The goal is kept.
+    """
+    if n == scenario.n:
+        return scenario
+    if not MIN_LINKS <= n <= MAX_LINKS:
+        raise ScenarioError("page", "links", f"must be {MIN_LINKS} to {MAX_LINKS}, got {n}")
+    data = scenario.to_dict()
+    for section in ("arm", "damper"):
+        for key, value in data[section].items():
+            data[section][key] = value[0]
+    data["arm"]["lengths"] = [float(scenario.arm.lengths.sum()) / n] * n
+    q0 = scenario.motion.q0
+    start = np.array([float(q0[0])] + [float(q0[1:].sum()) / (n - 1)] * (n - 1))
+    margin = scenario.damper.stop[0] + 1e-3
+    start = np.clip(start, scenario.arm.q_min[0] + margin, scenario.arm.q_max[0] - margin)
+    data["motion"]["q0"] = [float(v) for v in start]
+    data["name"] = f"{scenario.name}-{n}links"
+    return scenario_from_dict(data, source=scenario.source)
+
+
+def build_scenario(bases: Mapping[str, Scenario], settings: Settings) -> Scenario:
+    """The scenario of ``settings``; raises :class:`ScenarioError` with the page's wording."""
+    if settings.scenario not in bases:
+        raise ScenarioError(
+            "page", "scenario", f"unknown {settings.scenario!r} (known: {', '.join(bases)})"
+        )
+    if settings.pair not in PAIRS:
+        raise ScenarioError("page", "pair", f"must be C or UC, got {settings.pair!r}")
+    base = bases[settings.scenario]
+    if settings.links is not None:
+        base = with_links(base, settings.links)
+    return base.with_overrides(settings.overrides)
+
+
+def parse_query(
+    arguments: Mapping[str, Sequence[bytes | str]], bases: Sequence[str]
+) -> tuple[Settings, list[str]]:
+    """Settings from the page address (``?scenario=task2&pair=UC&links=4&weights.effort=0.2``).
+
+    Returns the settings and one message per value it could not use (those values are ignored).
+    """
+    errors: list[str] = []
+    settings = Settings(scenario=bases[0])
+    for name, values in arguments.items():
+        if not values:
+            continue
+        raw = values[-1]
+        text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else str(raw)
+        text = one_line(text)[:200]
+        if name == "scenario":
+            if text in bases:
+                settings.scenario = text
+            else:
+                errors.append(f"scenario: unknown {text!r} (known: {', '.join(bases)})")
+        elif name == "pair":
+            if text.upper() in PAIRS:
+                settings.pair = text.upper()
+            else:
+                errors.append(f"pair: must be C or UC, got {text!r}")
+        elif name == "links":
+            if text.isdigit() and MIN_LINKS <= int(text) <= MAX_LINKS:
+                settings.links = int(text)
+            else:
+                errors.append(f"links: must be {MIN_LINKS} to {MAX_LINKS}, got {text!r}")
+        elif "." in name:
+            try:
+                key, value = parse_override(f"{one_line(name)[:100]}={text}")
+            except EmdmError as exc:
+                errors.append(str(exc))
+                continue
+            settings.overrides[key] = value
+        else:
+            errors.append(
+                f"{one_line(name)[:100]}: unknown parameter (scenario, pair, links or section.key)"
+            )
+    return settings, errors
+
+
+def export_toml(scenario: Scenario) -> str:
+    """The scenario as TOML, the layout every command reads (``emdm run FILE``)."""
+    return scenario.to_toml()
+
+
+def message(exc: EmdmError) -> str:
+    """An error as the page shows it: the key and the problem, without the source prefix."""
+    if isinstance(exc, ScenarioError):
+        return f"{exc.key}: {exc.problem}" if exc.key else exc.problem
+    return str(exc)
+
+
+# ------------------------------------------------------------------------------------- runs
+@dataclass(frozen=True, eq=False)
+class Outcome:
+    """One controller's run: the record (partial when a step had no solution), or why none."""
+
+    controller: Controller
+    run: Run | None
+    error: str | None
+    seconds: float
+
+    @property
+    def name(self) -> str:
+        return self.controller.name
+
+
+def run_controller(scenario: Scenario, name: str) -> Outcome:
+    """Simulate ``name`` on ``scenario``; a step without solution ends the run with its message."""
+    controller = get_controller(name)
+    start = time.perf_counter()
+    try:
+        run: Run | None = simulate(scenario, controller)
+        error = None
+    except NoSolution as exc:
+        run, error = getattr(exc, "run", None), str(exc)
+    return Outcome(controller, run, error, time.perf_counter() - start)
+
+
+def run_pair(scenario: Scenario, pair: str) -> tuple[Outcome, Outcome]:
+    """EMDM and its IVKC baseline of ``pair`` (``C`` or ``UC``) on ``scenario``."""
+    emdm, ivkc = PAIRS[pair]
+    return run_controller(scenario, emdm), run_controller(scenario, ivkc)
+
+
+def step_at(t: float, dt: float, steps: int) -> int:
+    """The state index shown at time ``t`` (s): the nearest, clipped to ``0..steps``."""
+    if not math.isfinite(t):
+        return 0
+    return min(max(0, round(t / dt)), steps)
+
+
+# ---------------------------------------------------------------------------- scene arrays
+def joint_positions(lengths: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Base, joints and end effector for every row of ``q``: ``(K, n + 1, 2)`` (m).
+
+    The whole run at once (as :meth:`PlanarArm.joint_positions` does one state; tested equal).
+    """
+    th = np.cumsum(q, axis=1)
+    links = np.stack((np.cos(th), np.sin(th)), axis=-1) * lengths[None, :, None]
+    out = np.zeros((q.shape[0], q.shape[1] + 1, 2))
+    out[:, 1:] = np.cumsum(links, axis=1)
+    return out
+
+
+def ellipse_scale(scenario: Scenario) -> float:
+    """Drawing scale of the manipulability ellipse (m per m/s), fixed for an arm.
+
+    The largest singular value of ``J`` is at most ``||J||_F = sqrt(sum_j r_j^2)`` with ``r_j`` the
+    length from joint ``j`` to the tip, reached when the arm is stretched; that ellipse is drawn
+    ``ELLIPSE_SHARE`` of the reach long, so sizes compare across runs, drags and time.
+    """
+    lengths = scenario.arm.lengths
+    tips = np.cumsum(lengths[::-1])[::-1]
+    return ELLIPSE_SHARE * float(lengths.sum()) / float(np.sqrt(tips @ tips))
+
+
+def ellipses(points: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Width, height (m) and angle (rad) of the scaled ellipse ``{x : x^T (J J^T)^-1 x <= 1}``
+    at every state, from the joint positions ``(K, n + 1, 2)``.
+
+    Column ``j`` of ``J`` is the tip vector ``r_j = p - P_j`` turned by 90 degrees, so
+    ``J J^T = [[sum ry^2, -sum rx ry], [-sum rx ry, sum rx^2]]``; its eigenvalues are the squared
+    semi-axes (the ellipse of :func:`emdm.outputs.animate.ellipse_points`; tested equal).
+    """
+    r = points[:, -1:, :] - points[:, :-1, :]
+    rx, ry = r[..., 0], r[..., 1]
+    a, c, b = (ry * ry).sum(axis=1), (rx * rx).sum(axis=1), -(rx * ry).sum(axis=1)
+    mean, half = (a + c) / 2, np.hypot((a - c) / 2, b)
+    major, minor = np.sqrt(mean + half), np.sqrt(np.maximum(mean - half, 0.0))
+    angle = 0.5 * np.arctan2(2 * b, a - c)
+    return 2 * scale * major, 2 * scale * minor, angle
+
+
+BOUND_TOL = 1e-12
+"""A command within this (rad/s) of a bound counts as at the bound (a damper closing to 0 leaves
+the command a few 1e-16 inside it)."""
+
+
+def at_bounds(run: Run) -> np.ndarray:
+    """Per command and joint: -1 at the lower bound, +1 at the upper, 0 free; ``(K, n)``."""
+    up = run.active > 0
+    up |= np.isfinite(run.hi) & (run.qd >= run.hi - BOUND_TOL)
+    down = run.active < 0
+    down |= np.isfinite(run.lo) & (run.qd <= run.lo + BOUND_TOL)
+    return np.where(up, 1, np.where(down, -1, 0)).astype(np.int8)
+
+
+def joint_states(run: Run) -> np.ndarray:
+    """Per state and joint: FREE, ZONE (inside the damper's influence zone), PINNED (its command
+    sits at a bound of the program; the final state shows the last command's) or PAST (outside
+    its position limits); ``(K + 1, n)``."""
+    sc = run.scenario
+    q = run.q
+    margin = np.minimum(q - sc.arm.q_min, sc.arm.q_max - q)
+    states = np.where(margin < sc.damper.influence, ZONE, FREE)
+    pinned = np.zeros(q.shape, dtype=bool)
+    pinned[: run.steps] = at_bounds(run) != 0
+    if run.steps:
+        pinned[-1] = pinned[-2]  # the final state has no command: it shows the last one's
+    states = np.where(pinned, PINNED, states)
+    states = np.where(margin < 0, PAST, states)
+    return np.asarray(states, dtype=np.int8)
+
+
+def scene_data(run: Run, scale: float) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The arrays the page draws from: ``(points, steps)``.
+
+    ``points`` has ``(K + 1)(n + 1)`` rows (state by state: base, joints, end effector) with
+    ``x, y, s`` (joint state code, TIP for the end effector). ``steps`` has ``K + 1`` rows: ``t``,
+    the ellipse ``ex, ey, ew, eh, ea``, the series ``m, E, err, alpha`` (``E`` and ``alpha`` are
+    per command: NaN at the final state) and ``q1..qn``.
+    """
+    sc = run.scenario
+    K, n = run.steps, sc.n
+    pts = joint_positions(sc.arm.lengths, run.q)
+    codes = np.full((K + 1, n + 1), TIP, dtype=np.int8)
+    codes[:, :n] = joint_states(run)
+    ew, eh, ea = ellipses(pts, scale)
+    pad = np.full(1, np.nan)
+    steps: dict[str, np.ndarray] = {
+        "t": run.t,
+        "ex": run.p[:, 0],
+        "ey": run.p[:, 1],
+        "ew": ew,
+        "eh": eh,
+        "ea": ea,
+        "m": run.m,
+        "E": np.concatenate((run.effort, pad)),
+        "err": run.error_norm,
+        "alpha": np.concatenate((run.alpha, pad)),
+    }
+    for j in range(n):
+        steps[f"q{j + 1}"] = run.q[:, j]
+    points = {"x": pts[..., 0].ravel(), "y": pts[..., 1].ravel(), "s": codes.ravel()}
+    return points, steps
+
+
+# ------------------------------------------------------------------------------------ status
+def _joints(indices: Sequence[int]) -> str:
+    names = [str(j + 1) for j in indices]
+    if len(names) == 1:
+        return f"joint {names[0]}"
+    return "joints " + ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def explain(scenario: Scenario, outcome: Outcome) -> str:
+    """Why the run ended as it did, in one or two sentences read from its record."""
+    run = outcome.run
+    if outcome.error is not None:
+        where = f" after {run.t[-1]:.2f} s" if run is not None else ""
+        return f"stopped{where}: {outcome.error}"
+    assert run is not None
+    notes = []
+    past = np.flatnonzero((run.q < scenario.arm.q_min) | (run.q > scenario.arm.q_max))
+    if past.size:
+        k = int(past[0]) // scenario.n
+        joints = np.flatnonzero(
+            np.any((run.q < scenario.arm.q_min) | (run.q > scenario.arm.q_max), axis=0)
+        )
+        notes.append(
+            f"{_joints(joints.tolist())} passed {'its' if joints.size == 1 else 'their'} "
+            f"position limit from t = {run.t[k]:.2f} s (no limits in UC programs)"
+        )
+    scaled = np.flatnonzero(run.alpha < 1.0)
+    if scaled.size and run.reached:
+        notes.append(
+            f"the task was scaled down (alpha < 1) on {scaled.size} of {run.steps} steps, "
+            f"from t = {run.t[scaled[0]]:.2f} s"
+        )
+    if run.reached:
+        head = f"reached the goal at t = {run.t[-1]:.2f} s"
+        return head + ("; " + "; ".join(notes) if notes else "") + "."
+    err = run.error_norm
+    head = f"did not reach the goal: ||e|| = {err[-1]:.3g} m at t = {run.t[-1]:.2f} s (max_time)"
+    arm = scenario.planar_arm
+    radius = float(np.hypot(*scenario.motion.goal))
+    if radius > arm.reach or radius < arm.inner_reach:
+        why = (
+            f"the goal is {radius:.3g} m from the base, outside the reachable annulus "
+            f"[{arm.inner_reach:.3g}, {arm.reach:.3g}] m"
+        )
+    elif run.steps and run.alpha[-1] < 0.01:
+        moving = np.flatnonzero(run.alpha >= 0.01)
+        stalled = int(moving[-1]) + 1 if moving.size else 0
+        sides = at_bounds(run)[-1]
+        held = [_held(run, int(j), int(sides[j])) for j in np.flatnonzero(sides)]
+        who = " and ".join(held) if held else "the joint bounds close every direction"
+        why = (
+            f"stalled from t = {run.t[stalled]:.2f} s: {who}, so no admissible motion keeps the "
+            f"task direction and the task is scaled to alpha = {run.alpha[-1]:.2g}"
+        )
+    else:
+        tail = max(1, run.steps // 10)
+        if err[-1] < err[-1 - tail] * 0.98:
+            why = "still approaching when time ran out (raise K_p, or max_time in the file)"
+        else:
+            why = f"||e|| stopped falling (it was {err[-1 - tail]:.3g} m at t = {run.t[-1 - tail]:.2f} s)"
+    return f"{head}: {why}" + ("; " + "; ".join(notes) if notes else "") + "."
+
+
+def _held(run: Run, j: int, side: int) -> str:
+    """How joint ``j`` is held at the last command (``side``: +1 upper bound, -1 lower)."""
+    value = run.hi[-1, j] if side > 0 else run.lo[-1, j]
+    q = run.q[-1, j]
+    if abs(value) < 1e-6:
+        return f"joint {j + 1} is at its damper stop (q{j + 1} = {q:.3g} rad)"
+    return f"joint {j + 1} is at its {'upper' if side > 0 else 'lower'} bound ({value:+.2f} rad/s)"
+
+
+def _bound_kind(run: Run, k: int, j: int, side: int) -> str:
+    sc = run.scenario
+    limit = sc.arm.qd_max[j] if side > 0 else sc.arm.qd_min[j]
+    value = run.hi[k, j] if side > 0 else run.lo[k, j]
+    kind = "velocity limit" if value == limit else "damper"
+    return f"{j + 1}: {kind} {value:+.2f} rad/s"
+
+
+def status_rows(outcome: Outcome, t: float) -> list[tuple[str, str]]:
+    """The state of one run at time ``t``: (label, value) rows for the status table."""
+    run = outcome.run
+    if run is None:
+        return [("state", "no run")]
+    K = run.steps
+    k = step_at(t, run.scenario.motion.dt, K)
+    rows = [
+        ("t", f"{run.t[k]:.2f} s (step {k} of {K})"),
+        ("||e||", f"{run.error_norm[k]:.3g} m"),
+        ("m", f"{run.m[k]:.4f}"),
+    ]
+    if k == K:
+        end = "goal reached" if run.reached else ("stopped" if outcome.error else "time out")
+        rows += [("command", f"none: final state ({end})")]
+        return rows
+    alpha = run.alpha[k]
+    rows.append(("alpha", "1 (full task)" if alpha >= 1.0 else f"{alpha:.3f} (task scaled)"))
+    if run.policy[k] == "slack":
+        rows[-1] = ("alpha", "1 (free slack: the task is relaxed)")
+    sides = at_bounds(run)[k]
+    active = np.flatnonzero(sides).tolist()
+    text = "; ".join(_bound_kind(run, k, j, int(sides[j])) for j in active)
+    rows.append(("joints at a bound", text or "none"))
+    solver = run.solver[k] + (" (fallback)" if run.fallback[k] else "")
+    its = int(run.iterations[k])
+    rows.append(("solver", f"{solver}, {its} iteration{'' if its == 1 else 's'}"))
+    rows.append(("KKT residual", f"{run.kkt[k]:.1e}"))
+    return rows
+
+
+def time_to_goal(outcome: Outcome) -> str:
+    run = outcome.run
+    if run is None or not run.reached:
+        return "not reached"
+    return f"{run.t[-1]:.2f} s"
+
+
+# ------------------------------------------------------------------------------------ Pareto
+@dataclass(frozen=True, eq=False)
+class Front:
+    """The Pareto front of the program at one state: ``E`` and ``M`` for each ``w_M / w_E``."""
+
+    t: float
+    E: np.ndarray
+    M: np.ndarray
+    ratio: np.ndarray
+    dominated: np.ndarray
+    current: int
+    message: str = ""
+
+    @property
+    def single(self) -> bool:
+        """True when every weight gives the same command (the bounds leave one, or the task
+        fixes it): the front is one point."""
+        if self.E.size == 0:
+            return False
+        size = max(1.0, float(np.abs(self.E).max()), float(np.abs(self.M).max()))
+        return bool(np.ptp(self.E) <= 1e-9 * size and np.ptp(self.M) <= 1e-9 * size)
+
+
+def front(scenario: Scenario, outcome: Outcome, t: float) -> Front:
+    """The front of EMDM's program at the state shown at ``t``, the current weights marked.
+
+    The weight sweep of :func:`emdm.studies.pareto.ratios` with the current ratio added, solved by
+    :func:`emdm.studies.pareto.front_at` (``w_E`` fixed, ``w_M = ratio w_E``).
+    """
+    empty = np.zeros(0)
+    run = outcome.run
+    if run is None:
+        return Front(t, empty, empty, empty, empty.astype(bool), -1, "no run")
+    k = step_at(t, scenario.motion.dt, run.steps)
+    current = scenario.weights.manipulability / scenario.weights.effort
+    sweep = ratios()
+    if current > 0:
+        sweep = np.unique(np.append(sweep, current))
+    try:
+        points = front_at(scenario, outcome.controller, run.q[k], sweep)
+    except EmdmError as exc:
+        return Front(float(run.t[k]), empty, empty, empty, empty.astype(bool), -1, message(exc))
+    ratio = np.array([p["w_manip"] / p["w_effort"] for p in points])
+    index = int(np.argmin(np.abs(ratio - current)))
+    return Front(
+        float(run.t[k]),
+        np.array([p["E"] for p in points]),
+        np.array([p["M"] for p in points]),
+        ratio,
+        np.array([p["dominated"] for p in points]),
+        index,
+    )
+
+
+# ------------------------------------------------------------------------------- start pose
+def moved_point(old: np.ndarray, new: np.ndarray, tol: float = 1e-9) -> int | None:
+    """Index of the point that moved most between ``old`` and ``new`` (``(N, 2)``), or None."""
+    if old.shape != new.shape or old.size == 0:
+        return None
+    shift = np.hypot(*(new - old).T)
+    i = int(np.argmax(shift))
+    return i if shift[i] > tol else None
+
+
+def drag_start(scenario: Scenario, index: int, point: Sequence[float]) -> np.ndarray:
+    """The start configuration after dragging point ``index`` (1: second joint, ..., n: the end
+    effector) to ``point``: the link ending there turns about its joint, the links beyond it
+    follow rigidly. The angle is kept out of the stop zones (the scenario would refuse it)."""
+    q0 = np.array(scenario.motion.q0, dtype=float)
+    n = q0.size
+    if not 1 <= index <= n:
+        raise ScenarioError(
+            "page", "motion.q0", f"point {index} is not a joint that can be dragged"
+        )
+    x, y = float(point[0]), float(point[1])
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ScenarioError("page", "motion.q0", "the dragged point is not a finite position")
+    pts = scenario.planar_arm.joint_positions(q0)
+    j = index - 1
+    pivot = pts[j]
+    if math.hypot(x - pivot[0], y - pivot[1]) < 1e-12:
+        return q0
+    before = float(q0[:j].sum())
+    absolute = math.atan2(y - pivot[1], x - pivot[0])
+    turn = math.remainder(absolute - before - q0[j], 2 * math.pi)
+    low = scenario.arm.q_min[j] + scenario.damper.stop[j] + 1e-3
+    high = scenario.arm.q_max[j] - scenario.damper.stop[j] - 1e-3
+    q0[j] = float(np.clip(q0[j] + turn, low, high))
+    return q0
+
+
+__all__ = [
+    "CONTROL",
+    "CONTROLS",
+    "JOINT_STATES",
+    "PAIRS",
+    "POLICIES",
+    "Control",
+    "Front",
+    "Outcome",
+    "Settings",
+    "build_scenario",
+    "drag_start",
+    "ellipse_scale",
+    "ellipses",
+    "explain",
+    "export_toml",
+    "front",
+    "joint_positions",
+    "joint_states",
+    "message",
+    "moved_point",
+    "parse_query",
+    "run_pair",
+    "scene_data",
+    "status_rows",
+    "step_at",
+    "with_links",
+]

@@ -1,0 +1,795 @@
+"""The playground page: one Bokeh document per browser tab, drawn from :mod:`emdm.play.logic`.
+
+The server computes everything (runs, frames, status, fronts); the page's scripts only pick the
+scrubbed row of arrays the server sent, play the scrub bar in real time, and download files.
+Changes are coalesced: a burst of slider or drag events costs one recomputation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import html
+import logging
+import math
+import time
+from collections.abc import Callable, Sequence
+from functools import cache, partial
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from bokeh.document import Document
+from bokeh.layouts import column, gridplot, row
+from bokeh.models import (
+    BasicTicker,
+    ColumnDataSource,
+    CustomJS,
+    CustomJSTickFormatter,
+    InlineStyleSheet,
+    LinearColorMapper,
+    PointDrawTool,
+    Range1d,
+)
+from bokeh.models.annotations import BoxAnnotation, Label, Span, Title
+from bokeh.models.widgets import Button, Div, RadioButtonGroup, Select, Slider, Spinner, Toggle
+from bokeh.plotting import figure
+
+from ..core.scenario import POLICIES, Scenario
+from ..errors import EmdmError
+from ..outputs.style import CONTROLLER_STYLE, OKABE_ITO
+from . import logic
+from .logic import CONTROLS, PAIRS, Control, Outcome, Settings
+
+log = logging.getLogger("emdm.play")
+
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+JOINT_COLORS = ("white", "#F0E442", "#CC79A7", "black", "#444444")
+"""Fill of the joint markers by state (see :data:`emdm.play.logic.JOINT_STATES`)."""
+SCENE, PLOT_W, PLOT_H = 560, 290, 210
+
+
+@cache
+def asset(name: str) -> str:
+    """A file of ``emdm/play/assets`` (scripts and the style sheet)."""
+    return resources.files("emdm.play").joinpath("assets", name).read_text(encoding="utf-8")
+
+
+@cache
+def template() -> Any:
+    """Bokeh's page without the scripts the playground never uses (MathJax, tables, WebGL):
+    about 2.5 MB less to parse at every page load."""
+    from bokeh.core.templates import get_env
+
+    skip = ("bokeh-mathjax", "bokeh-tables", "bokeh-gl")
+    return get_env().from_string(
+        '{% extends "file.html.jinja" %}{% block js_resources %}'
+        '{% for line in bokeh_js.split("\\n") %}'
+        "{% if not (" + " or ".join(f"{name!r} in line" for name in skip) + ") %}"
+        "{{ line }}\n{% endif %}{% endfor %}{% endblock %}"
+    )
+
+
+def _style(fig: Any) -> None:
+    fig.title.text_font_size = "15px"
+    for axis in (*fig.xaxis, *fig.yaxis):
+        axis.axis_label_text_font_size = "14px"
+        axis.major_label_text_font_size = "12px"
+    fig.toolbar.logo = None
+
+
+def _set(model: Any, **values: Any) -> None:
+    """Set only the properties that change (each change is validated and sent to the page)."""
+    changed = {key: value for key, value in values.items() if getattr(model, key) != value}
+    if changed:
+        model.update(**changed)
+
+
+def _log_format(control: Control) -> CustomJSTickFormatter:
+    zero = f"tick <= {control.start + control.step / 2} ? '0' : " if control.zero_at_start else ""
+    return CustomJSTickFormatter(code=f"return {zero}Number(Math.pow(10, tick).toPrecision(3))")
+
+
+class Session:
+    """The state and widgets of one tab; every callback goes through :meth:`_guard`."""
+
+    def __init__(self, doc: Document, bases: dict[str, Scenario]) -> None:
+        self.doc, self.bases = doc, bases
+        request = getattr(doc.session_context, "request", None)
+        arguments = dict(request.arguments) if request is not None else {}
+        self.settings, notes = logic.parse_query(arguments, list(bases))
+        self.scenario: Scenario | None = None
+        self.outcomes: tuple[Outcome, ...] = ()
+        self.t = 0.0
+        self.timing = {"change": 0.0, "runs": 0.0, "front": 0.0}
+        self._syncing = False
+        self._pending: set[str] = set()
+        self._scheduled = False
+        layout = self._build()
+        self._recompute(replay=False, notes=notes)
+        self._refresh_front()
+        # attached last: every change to a document's model graph walks the whole graph
+        self.doc.add_root(layout)
+        self.doc.title = "emdm play"
+        self.doc.template = template()
+
+    # ------------------------------------------------------------------------- building
+    def _build(self) -> Any:
+        self.points = [ColumnDataSource({"x": [], "y": [], "s": []}) for _ in range(2)]
+        self.steps = [ColumnDataSource({"t": []}, name=f"steps{i}") for i in range(2)]
+        self.arms = [ColumnDataSource({"x": [], "y": [], "s": []}) for _ in range(2)]
+        self.ells = [
+            ColumnDataSource({"x": [], "y": [], "w": [], "h": [], "a": []}) for _ in range(2)
+        ]
+        self.qlines = [ColumnDataSource({"xs": [], "ys": [], "color": []}) for _ in range(2)]
+        self.goal = ColumnDataSource({"x": [], "y": []}, name="goal")
+        self.handles = ColumnDataSource({"x": [], "y": []}, name="handles")
+        self.start = ColumnDataSource({"x": [], "y": []})
+        self.annulus = ColumnDataSource({"x": [0.0], "y": [0.0], "inner": [0.0], "outer": [1.0]})
+        self.front_src = ColumnDataSource({"M": [], "E": [], "fill": []}, name="front")
+        self.front_now = ColumnDataSource({"M": [], "E": []})
+        self.coloured: list[list[Any]] = [[], []]  # renderers drawn in each run's colour
+        self.goal.on_change("data", self._guard(self._on_goal))
+        self.handles.on_change("data", self._guard(self._on_handles))
+
+        self.scene = self._scene()
+        self.plots = self._plots()
+        controls = self._controls()
+        transport = self._transport()
+        sheet: list[Any] = [InlineStyleSheet(css=asset("play.css"))]
+        self.status = Div(width=2 * PLOT_W, stylesheets=sheet, name="status")
+        self.banner = Div(width=280 + SCENE + 2 * PLOT_W, stylesheets=sheet, name="banner")
+        self.legend = Div(width=SCENE, stylesheets=sheet)
+        header = Div(
+            text="<b>emdm playground</b> &nbsp; drag the &#9733; goal or the hollow joints of "
+            "the start pose; move a slider; press Play",
+            styles={"font-size": "18px"},
+        )
+        middle = column(self.scene, transport, self.legend)
+        layout = column(header, self.banner, row(controls, middle, column(self.plots, self.status)))
+        frame = CustomJS(
+            args={
+                "scrub": self.scrub,
+                "runs": [
+                    {"points": p, "steps": s, "arm": a, "ell": e}
+                    for p, s, a, e in zip(
+                        self.points, self.steps, self.arms, self.ells, strict=True
+                    )
+                ],
+                "cursors": self.cursors,
+                "clock": self.clock,
+            },
+            code=asset("frame.js"),
+        )
+        self.doc.js_on_event("document_ready", frame)
+        self.scrub.js_on_change("value", frame)
+        self.scrub.js_on_change("step", frame)
+        for source in (*self.points, *self.steps):
+            source.js_on_change("data", frame)
+        return layout
+
+    def _scene(self) -> Any:
+        fig = figure(
+            width=SCENE,
+            height=SCENE,
+            x_range=Range1d(start=-1, end=1),
+            y_range=Range1d(start=-1, end=1),
+            match_aspect=True,
+            tools=[],
+            toolbar_location=None,
+            title="workspace",
+            x_axis_label="x (m)",
+            y_axis_label="y (m)",
+            name="scene",
+            stylesheets=[":host(:focus), :host(:focus-visible) { outline: none; }"],
+        )
+        _style(fig)
+        fig.annulus(
+            "x",
+            "y",
+            inner_radius="inner",
+            outer_radius="outer",
+            source=self.annulus,
+            fill_color="#000000",
+            fill_alpha=0.06,
+            line_color=None,
+        )
+        fig.scatter([0], [0], marker="square", size=12, color="#333333")
+        fig.line("x", "y", source=self.start, color="#888888", line_width=2, line_dash="dotted")
+        cmap = LinearColorMapper(palette=list(JOINT_COLORS), low=-0.5, high=4.5)
+        for i in (1, 0):  # the baseline (ghost) first, under EMDM
+            ghost = i == 1
+            trace = fig.line(
+                "ex",
+                "ey",
+                source=self.steps[i],
+                line_width=2,
+                line_dash="dashed" if ghost else "solid",
+                name=f"trace{i}",
+            )
+            ellipse = fig.ellipse(
+                "x",
+                "y",
+                width="w",
+                height="h",
+                angle="a",
+                source=self.ells[i],
+                fill_alpha=0.08 if ghost else 0.22,
+                line_alpha=0.5 if ghost else 0.9,
+                line_dash="dashed" if ghost else "solid",
+                name=f"ellipse{i}",
+            )
+            links = fig.line(
+                "x",
+                "y",
+                source=self.arms[i],
+                line_width=5 if ghost else 7,
+                line_alpha=0.45 if ghost else 1.0,
+                line_cap="round",
+                name=f"arm{i}",
+            )
+            self.coloured[i] += [trace, ellipse, links]
+            fig.scatter(
+                "x",
+                "y",
+                source=self.arms[i],
+                size=11 if ghost else 14,
+                line_color="black",
+                line_alpha=0.5 if ghost else 1.0,
+                fill_alpha=0.6 if ghost else 1.0,
+                fill_color={"field": "s", "transform": cmap},
+            )
+        handles = fig.scatter(
+            "x",
+            "y",
+            source=self.handles,
+            size=24,
+            fill_alpha=0,
+            line_color="#555555",
+            line_width=2.5,
+            name="handle-markers",
+        )
+        goal = fig.scatter(
+            "x",
+            "y",
+            source=self.goal,
+            marker="star",
+            size=30,
+            fill_color="#FFD700",
+            line_color="black",
+            line_width=1.5,
+            name="goal-marker",
+        )
+        draggable: list[Any] = [goal, handles]
+        tool = PointDrawTool(renderers=draggable, add=False, drag=True)
+        fig.add_tools(tool)
+        fig.toolbar.active_multi = tool
+        self.clock = Label(
+            x=8,
+            y=8,
+            x_units="screen",
+            y_units="screen",
+            text="t = 0.00 s",
+            text_font_size="16px",
+            text_color="#222222",
+        )
+        self.scale_note = Label(
+            x=SCENE - 300,
+            y=8,
+            x_units="screen",
+            y_units="screen",
+            text="",
+            text_font_size="12px",
+            text_color="#666666",
+        )
+        fig.add_layout(self.clock)
+        fig.add_layout(self.scale_note)
+        return fig
+
+    def _plots(self) -> Any:
+        self.time_range = Range1d(start=0, end=1)
+        self.cursors: list[Span] = []
+        specs = [
+            ("m", "manipulability m", "m"),
+            ("E", "effort E = \u00bd\u2016q\u0307\u2016\u00b2 (rad\u00b2/s\u00b2)", "E"),
+            ("err", "error \u2016e\u2016 (m)", "err"),
+            ("alpha", "task scale \u03b1", "alpha"),
+        ]
+        figs = []
+        for key, title, column_name in specs:
+            fig = figure(
+                width=PLOT_W,
+                height=PLOT_H,
+                x_range=self.time_range,
+                title=title,
+                tools=[],
+                toolbar_location=None,
+                name=f"plot-{key}",
+            )
+            _style(fig)
+            for i in (1, 0):
+                line = fig.line(
+                    "t",
+                    column_name,
+                    source=self.steps[i],
+                    line_width=2.5,
+                    line_dash="dashed" if i else "solid",
+                    name=f"{key}{i}",
+                )
+                self.coloured[i].append(line)
+            figs.append(fig)
+        joints = figure(
+            width=PLOT_W,
+            height=PLOT_H,
+            x_range=self.time_range,
+            title="joint angles q (rad)",
+            tools=[],
+            toolbar_location=None,
+            x_axis_label="t (s)",
+        )
+        _style(joints)
+        # the influence zones (yellow) and the stop zones (purple) of joint 1 at both limits
+        self.zones = [
+            BoxAnnotation(fill_color=color, fill_alpha=0.3)
+            for color in ("#F0E442", "#F0E442", "#CC79A7", "#CC79A7")
+        ]
+        self.limits = [
+            Span(dimension="width", line_color="black", line_width=1.5) for _ in range(2)
+        ]
+        for item in (*self.zones, *self.limits):
+            joints.add_layout(item)
+        for i in (1, 0):
+            joints.multi_line(
+                "xs",
+                "ys",
+                source=self.qlines[i],
+                line_color="color",
+                line_width=2.5,
+                line_dash="dashed" if i else "solid",
+                line_alpha=0.6 if i else 1.0,
+            )
+        figs.append(joints)
+        pareto = figure(
+            width=PLOT_W,
+            height=PLOT_H,
+            title="Pareto front",
+            tools=[],
+            toolbar_location=None,
+            x_axis_label="manip. rate M",
+            y_axis_label="effort E",
+            name="plot-pareto",
+        )
+        _style(pareto)
+        pareto.line("M", "E", source=self.front_src, color="#999999", line_width=1.5)
+        pareto.scatter(
+            "M",
+            "E",
+            source=self.front_src,
+            size=8,
+            fill_color="fill",
+            line_color="#0072B2",
+        )
+        pareto.scatter(
+            "M",
+            "E",
+            source=self.front_now,
+            size=20,
+            fill_color=None,
+            line_color="#D55E00",
+            line_width=3,
+        )
+        self.front_label = Label(
+            x=6,
+            y=PLOT_H - 95,
+            x_units="screen",
+            y_units="screen",
+            text="",
+            text_font_size="13px",
+            text_color="#D55E00",
+        )
+        pareto.add_layout(self.front_label)
+        pareto.xaxis[0].ticker = BasicTicker(desired_num_ticks=3)
+        pareto.yaxis[0].ticker = BasicTicker(desired_num_ticks=4)
+        self.pareto_title = Title(text="Pareto front", text_font_size="15px")
+        pareto.title = self.pareto_title
+        self.pareto = pareto
+        for fig in figs:
+            span = Span(location=0, dimension="height", line_color="#D55E00", line_width=1.5)
+            fig.add_layout(span)
+            self.cursors.append(span)
+        figs[2].xaxis.axis_label = "t (s)"
+        figs[3].xaxis.axis_label = "t (s)"
+        return gridplot(
+            [figs[0], figs[1], figs[2], figs[3], figs[4], pareto], ncols=2, toolbar_location=None
+        )
+
+    def _controls(self) -> Any:
+        self.choose = Select(
+            title="Scenario", options=list[Any](self.bases), value=self.settings.scenario, width=260
+        )
+        self.links = Spinner(
+            title="Number of links",
+            low=logic.MIN_LINKS,
+            high=logic.MAX_LINKS,
+            step=1,
+            value=2,
+            width=260,
+        )
+        self.pair = RadioButtonGroup(
+            labels=["C: constrained", "UC: unconstrained"], active=0, width=260
+        )
+        self.policy = Select(
+            title="When infeasible (C pair)",
+            options=list[Any](map(str, POLICIES)),
+            value="scale",
+            width=260,
+        )
+        self.choose.on_change("value", self._guard(self._on_choose))
+        self.links.on_change("value", self._guard(self._on_links))
+        self.pair.on_change("active", self._guard(self._on_pair))
+        self.policy.on_change("value", self._guard(self._on_policy))
+        self.sliders: dict[str, Slider] = {}
+        for control in CONTROLS:
+            slider = Slider(
+                title=control.label,
+                start=control.start,
+                end=control.end,
+                step=control.step,
+                value=control.start,
+                width=260,
+                name=f"slider-{control.name}",
+                format=_log_format(control) if control.log else "0[.]000",
+            )
+            slider.on_change("value", self._guard(partial(self._on_slider, control)))
+            self.sliders[control.name] = slider
+        reset = Button(label="Reset to the scenario", width=260)
+        reset.on_click(lambda: self._safe(self._on_choose, "value", None, self.settings.scenario))
+        self.save_toml = Button(
+            label="Export scenario (TOML)", width=260, button_type="primary", name="save-toml"
+        )
+        self.save_png = Button(label="Export view (PNG)", width=260, name="save-png")
+        self.save_toml.js_on_click(
+            CustomJS(args={"button": self.save_toml}, code=asset("save_toml.js"))
+        )
+        self.save_png.js_on_click(
+            CustomJS(
+                args={"button": self.save_png, "scene": self.scene, "plots": self.plots},
+                code=asset("save_png.js"),
+            )
+        )
+        return column(
+            self.choose,
+            self.links,
+            self.pair,
+            self.policy,
+            *self.sliders.values(),
+            reset,
+            self.save_toml,
+            self.save_png,
+            width=280,
+        )
+
+    def _transport(self) -> Any:
+        self.play = Toggle(label="\u25b6 Play", active=False, width=90, name="play")
+        self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=200)
+        self.scrub = Slider(
+            title="t (s)", start=0.0, end=1.0, step=0.05, value=0.0, width=SCENE, name="scrub"
+        )
+        self.play.js_on_change(
+            "active",
+            CustomJS(
+                args={
+                    "toggle": self.play,
+                    "scrub": self.scrub,
+                    "speed": self.speed,
+                    "speeds": list(SPEEDS),
+                },
+                code=asset("play.js"),
+            ),
+        )
+        self.scrub.on_change("value", self._guard(self._on_scrub))
+        return column(row(self.play, self.speed), self.scrub)
+
+    # ------------------------------------------------------------------------ callbacks
+    def _safe(self, callback: Callable[..., None], *args: Any) -> None:
+        """Run ``callback``; any failure is shown on the page and logged, never raised."""
+        if self._syncing:
+            return
+        try:
+            callback(*args)
+        except Exception as exc:  # the server must survive anything a page sends
+            log.exception("playground callback failed")
+            self._show([f"internal error: {type(exc).__name__}: {exc}"], [])
+
+    def _guard(self, callback: Callable[[str, Any, Any], None]) -> Callable[[str, Any, Any], None]:
+        """``callback`` as a property-change callback run through :meth:`_safe`."""
+
+        def on_change(attr: str, old: Any, new: Any) -> None:
+            self._safe(callback, attr, old, new)
+
+        return on_change
+
+    def _request(self, what: str) -> None:
+        """Recompute on the next tick; requests arriving before then are served together."""
+        self._pending.add(what)
+        if not self._scheduled:
+            self._scheduled = True
+            self.doc.add_next_tick_callback(lambda: self._safe(self._flush))
+
+    def _flush(self) -> None:
+        self._scheduled = False
+        pending, self._pending = self._pending, set()
+        if "run" in pending or "replay" in pending:
+            self._recompute(replay="replay" in pending)
+            self._request("front")  # after the trajectory has gone to the page
+        elif "front" in pending:
+            self._refresh_front()
+
+    def _on_choose(self, attr: str, old: Any, new: Any) -> None:
+        self.settings = Settings(scenario=str(new), pair=self.settings.pair)
+        self._request("replay")
+
+    def _on_links(self, attr: str, old: Any, new: Any) -> None:
+        self.settings.links = int(new)
+        self.settings.overrides.pop("motion.q0", None)
+        self._request("replay")
+
+    def _on_pair(self, attr: str, old: Any, new: Any) -> None:
+        self.settings.pair = list(PAIRS)[int(new)]
+        self._request("run")
+
+    def _on_policy(self, attr: str, old: Any, new: Any) -> None:
+        self.settings.overrides["controller.on_infeasible"] = str(new)
+        self._request("run")
+
+    def _on_slider(self, control: Control, attr: str, old: Any, position: Any) -> None:
+        try:
+            value = control.from_slider(float(position))
+        except EmdmError as exc:
+            self._show([logic.message(exc)], [])
+            return
+        self.settings.overrides.update(control.overrides(value))
+        self._request("run")
+
+    def _on_goal(self, attr: str, old: Any, new: Any) -> None:
+        x, y = list(new.get("x", [])), list(new.get("y", []))
+        if self.scenario is None or len(x) != 1 or len(y) != 1:
+            self._request("run")  # redraw what the page lost
+            return
+        point = [float(x[0]), float(y[0])]
+        if not all(math.isfinite(v) for v in point):
+            self._show(["motion.goal: the dragged goal is not a finite position"], [])
+            return
+        if np.allclose(point, self.scenario.motion.goal, rtol=0, atol=1e-12):
+            return
+        self.settings.overrides["motion.goal"] = [round(v, 4) for v in point]
+        self._request("replay")
+
+    def _on_handles(self, attr: str, old: Any, new: Any) -> None:
+        if self.scenario is None:
+            return
+        was = self.scenario.planar_arm.joint_positions(self.scenario.motion.q0)[1:]
+        try:
+            now = np.column_stack((np.asarray(new["x"], float), np.asarray(new["y"], float)))
+        except (KeyError, TypeError, ValueError):
+            now = np.zeros(0)
+        moved = logic.moved_point(was, now)
+        if moved is None:
+            if now.shape != was.shape:
+                self._request("run")
+            return
+        try:
+            q0 = logic.drag_start(self.scenario, moved + 1, now[moved])
+        except EmdmError as exc:
+            self._show([logic.message(exc)], [])
+            return
+        self.settings.overrides["motion.q0"] = [round(float(v), 6) for v in q0]
+        self._request("replay")
+
+    def _on_scrub(self, attr: str, old: Any, new: Any) -> None:
+        self.t = float(new) if math.isfinite(float(new)) else 0.0
+        self._request("front")
+
+    # ------------------------------------------------------------------------- updating
+    def _show(self, errors: Sequence[str], notes: Sequence[str]) -> None:
+        items = [f'<div class="error">{html.escape(e)}</div>' for e in errors]
+        items += [f'<div class="note">{html.escape(n)}</div>' for n in notes]
+        self.banner.text = "".join(items)
+
+    def _recompute(self, *, replay: bool, notes: Sequence[str] = ()) -> None:
+        start = time.perf_counter()
+        try:
+            scenario = logic.build_scenario(self.bases, self.settings)
+        except EmdmError as exc:
+            shown = "the page shows the last valid settings" if self.scenario else "nothing to show"
+            self._show([f"Not applied: {logic.message(exc)} ({shown})"], notes)
+            if self.scenario is None:
+                self.settings = Settings(scenario=self.settings.scenario)
+                self._recompute(replay=replay, notes=[*notes, f"Not applied: {logic.message(exc)}"])
+            return
+        ran = time.perf_counter()
+        outcomes = logic.run_pair(scenario, self.settings.pair)
+        self.timing["runs"] = time.perf_counter() - ran
+        self.scenario, self.outcomes = scenario, outcomes
+        end = max([scenario.motion.dt] + [float(o.run.t[-1]) for o in outcomes if o.run])
+        self.t = 0.0 if replay else min(self.t, end)
+        self.doc.hold("combine")  # one message; the Python callbacks of held changes run later
+        try:
+            self._draw(scenario, outcomes, end)
+            self._show([], [*notes, *scenario.warnings])
+        finally:
+            self.doc.unhold()
+        self._syncing = True  # not held: these changes call back now, and are muted
+        try:
+            self._sync_widgets(scenario, end, replay)
+        finally:
+            self._syncing = False
+        self.timing["change"] = time.perf_counter() - start
+        self._refresh_status()
+
+    def _draw(self, scenario: Scenario, outcomes: Sequence[Outcome], end: float) -> None:
+        scale = logic.ellipse_scale(scenario)
+        palette = [OKABE_ITO[j % len(OKABE_ITO)] for j in range(scenario.n)]
+        for i, outcome in enumerate(outcomes):
+            color = CONTROLLER_STYLE[outcome.name]["color"]
+            run = outcome.run
+            if run is None:
+                self.points[i].data = {"x": [], "y": [], "s": []}
+                self.steps[i].data = {"t": [], "ex": [], "ey": []}
+                self.qlines[i].data = {"xs": [], "ys": [], "color": []}
+                continue
+            points, steps = logic.scene_data(run, scale)
+            self.points[i].data = points
+            self.steps[i].data = steps
+            self.qlines[i].data = {
+                "xs": [run.t] * scenario.n,
+                "ys": [run.q[:, j] for j in range(scenario.n)],
+                "color": palette,
+            }
+            for renderer in self.coloured[i]:
+                fill = {"fill_color": color} if renderer.name.startswith("ellipse") else {}
+                _set(renderer.glyph, line_color=color, **fill)
+        arm = scenario.planar_arm
+        reach = arm.reach * 1.1
+        for rng in (self.scene.x_range, self.scene.y_range):
+            _set(rng, start=-reach, end=reach)
+        if self.annulus.data["outer"] != [arm.reach] or self.annulus.data["inner"] != [
+            arm.inner_reach
+        ]:
+            self.annulus.data = {
+                "x": [0.0],
+                "y": [0.0],
+                "inner": [arm.inner_reach],
+                "outer": [arm.reach],
+            }
+        start = arm.joint_positions(scenario.motion.q0)
+        _set(self.time_range, start=0.0, end=end)
+        self.start.data = {"x": start[:, 0].tolist(), "y": start[:, 1].tolist()}
+        _set(self.scale_note, text=f"ellipse: {scale:.2g} m per m/s of tip speed")
+        self._limits(scenario)
+        name = f"{scenario.name}-play"
+        toml = logic.export_toml(dataclasses.replace(scenario, name=name))
+        self.save_toml.tags = [toml, f"{name}.toml"]
+        self.save_png.tags = [f"{name}.png", self._caption(scenario, outcomes)]
+        _set(self.legend, text=self._legend(outcomes))
+
+    def _sync_widgets(self, scenario: Scenario, end: float, replay: bool) -> None:
+        """Show the scenario's values: goal, start pose, widgets, scrub bar; ``replay`` plays
+        the motion from the start. Called with the callbacks muted."""
+        start = scenario.planar_arm.joint_positions(scenario.motion.q0)
+        goal = scenario.motion.goal
+        self.goal.data = {"x": [float(goal[0])], "y": [float(goal[1])]}
+        self.handles.data = {"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()}
+        self.goal.selected.indices = []
+        self.handles.selected.indices = []
+        self.scrub.update(end=end, step=scenario.motion.dt, value=self.t)
+        _set(self.choose, value=self.settings.scenario)
+        _set(self.links, value=scenario.n)
+        _set(self.pair, active=list(PAIRS).index(self.settings.pair))
+        _set(self.policy, value=str(scenario.controller.on_infeasible))
+        for control in CONTROLS:
+            slider = self.sliders[control.name]
+            position = control.to_slider(control.value(scenario))
+            if abs(slider.value - position) > control.step / 2:
+                slider.value = position
+        if replay:
+            self.play.active = False
+            self.play.active = True
+
+    def _limits(self, scenario: Scenario) -> None:
+        arm, damper = scenario.arm, scenario.damper
+        low, high = float(arm.q_min[0]), float(arm.q_max[0])
+        inf, stop = float(damper.influence[0]), float(damper.stop[0])
+        bands = [
+            (high - inf, high - stop),
+            (low + stop, low + inf),
+            (high - stop, high),
+            (low, low + stop),
+        ]
+        for box, (bottom, top) in zip(self.zones, bands, strict=True):
+            _set(box, bottom=bottom, top=top)
+        _set(self.limits[0], location=low)
+        _set(self.limits[1], location=high)
+
+    def _caption(self, scenario: Scenario, outcomes: Sequence[Outcome]) -> str:
+        w = scenario.weights
+        parts = [f"{o.name}: {logic.time_to_goal(o)}" for o in outcomes]
+        return (
+            f"emdm playground: {scenario.name}, {scenario.n} links, w_E = {w.effort:g}, "
+            f"w_M = {w.manipulability:g}, goal ({scenario.motion.goal[0]:.2f}, "
+            f"{scenario.motion.goal[1]:.2f}) m; " + "; ".join(parts)
+        )
+
+    def _legend(self, outcomes: Sequence[Outcome]) -> str:
+        line = '<span class="line {}" style="border-color:{}"></span>'
+        swatch = '<span class="sw" style="background:{}"></span>'
+        items = []
+        for outcome, kind, what in zip(outcomes, ("solid", "ghost"), ("", ", ghost"), strict=True):
+            color = CONTROLLER_STYLE[outcome.name]["color"]
+            items.append(f"{line.format(kind, color)}{outcome.name}{what}")
+        for code, text in enumerate(logic.JOINT_STATES[:4]):
+            items.append(f"{swatch.format(JOINT_COLORS[code])}{text}")
+        return (
+            '<div class="legend">'
+            + "".join(f'<span class="item">{i}</span>' for i in items)
+            + "</div>"
+        )
+
+    def _refresh_status(self) -> None:
+        scenario = self.scenario
+        if scenario is None:
+            return
+        rows: dict[str, list[str]] = {}
+        for outcome in self.outcomes:
+            for label, text in logic.status_rows(outcome, self.t):
+                rows.setdefault(label, []).append(text)
+        head = "".join(f"<th>{html.escape(o.name)}</th>" for o in self.outcomes)
+        body = "".join(
+            f"<tr><td>{html.escape(label)}</td>"
+            + "".join(f"<td>{html.escape(v)}</td>" for v in values)
+            + "</tr>"
+            for label, values in rows.items()
+        )
+        why = "".join(
+            f"<p><b>{html.escape(o.name)}</b>: {html.escape(logic.explain(scenario, o))}</p>"
+            for o in self.outcomes
+        )
+        ms = {key: f"{value * 1e3:.1f}" for key, value in self.timing.items()}
+        timing = (
+            f'<p class="timing">server: this change <span class="change">{ms["change"]}</span> ms '
+            f'(both runs <span class="runs">{ms["runs"]}</span> ms); Pareto front '
+            f'<span class="front">{ms["front"]}</span> ms</p>'
+        )
+        self.status.text = (
+            f'<table class="status"><tr><th></th>{head}</tr>{body}</table>{why}{timing}'
+        )
+
+    def _refresh_front(self) -> None:
+        scenario = self.scenario
+        if scenario is None or not self.outcomes:
+            return
+        start = time.perf_counter()
+        result = logic.front(scenario, self.outcomes[0], self.t)
+        self.timing["front"] = time.perf_counter() - start
+        self.doc.hold("combine")
+        try:
+            fill = np.where(result.dominated, "white", "#0072B2")
+            self.front_src.data = {"M": result.M, "E": result.E, "fill": fill}
+            if result.current >= 0:
+                self.front_label.text = f"\u25ef w_M / w_E = {result.ratio[result.current]:.3g}"
+                self.front_now.data = {
+                    "M": [result.M[result.current]],
+                    "E": [result.E[result.current]],
+                }
+            else:
+                self.front_label.text = ""
+                self.front_now.data = {"M": [], "E": []}
+            title = f"Pareto front, t = {result.t:.2f} s" + (" (1 point)" if result.single else "")
+            self.pareto_title.text = title if not result.message else f"no front: {result.message}"
+            self._refresh_status()
+        finally:
+            self.doc.unhold()
+
+
+def build(doc: Document, bases: dict[str, Scenario]) -> None:
+    """The Bokeh application: a new :class:`Session` for every page load."""
+    Session(doc, bases)

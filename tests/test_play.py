@@ -1,0 +1,525 @@
+"""emdm play: the playground's logic without a browser, its page as a Bokeh document, its server
+as a process, and the page in a real browser (Debian's chromium and chromedriver)."""
+
+from __future__ import annotations
+
+import html
+import math
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import tomllib
+import urllib.error
+import urllib.request
+import warnings
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import emdm
+from emdm.cli import main
+from emdm.errors import ScenarioError
+from emdm.outputs.animate import ellipse_points
+from emdm.play import logic
+from emdm.play.logic import CONTROL, PAST, PINNED, TIP, ZONE, Settings
+from emdm.studies.pareto import front_at
+
+
+@pytest.fixture(scope="module")
+def bases():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {name: emdm.load_scenario(name) for name in ("task1", "task2")}
+
+
+@pytest.fixture(scope="module")
+def task2_c(bases):
+    return logic.run_pair(bases["task2"], "C")
+
+
+# ------------------------------------------------------------------------------- controls
+def test_sliders_show_and_set_scenario_values(bases):
+    sc = bases["task1"]
+    for control in logic.CONTROLS:
+        value = control.value(sc)
+        back = control.from_slider(control.to_slider(value))
+        assert back == pytest.approx(value, rel=0.02, abs=control.step), control.name
+        assert control.start <= control.to_slider(value) <= control.end
+    w_m = CONTROL["w_M"]
+    assert w_m.from_slider(w_m.start) == 0.0  # the left end of the manipulability weight is 0
+    assert w_m.from_slider(1.0) == 10.0
+    assert CONTROL["qd_max"].overrides(2.0) == {"arm.qd_max": 2.0, "arm.qd_min": -2.0}
+    assert CONTROL["dt"].from_slider(0.0351) == 0.035
+    with pytest.raises(ScenarioError, match="must be a number"):
+        CONTROL["K_p"].from_slider(math.nan)
+
+
+def test_a_refused_combination_is_explained_in_the_scenario_words(bases):
+    settings = Settings("task1", overrides={"damper.stop": 0.9})
+    with pytest.raises(ScenarioError) as info:
+        logic.build_scenario(bases, settings)
+    assert logic.message(info.value).startswith("damper.stop: must be < damper.influence")
+    with pytest.raises(ScenarioError, match="unknown 'nope'"):
+        logic.build_scenario(bases, Settings("nope"))
+    with pytest.raises(ScenarioError, match="pair"):
+        logic.build_scenario(bases, Settings("task1", pair="X"))
+
+
+def test_the_address_may_carry_settings_and_bad_values_get_a_message():
+    settings, errors = logic.parse_query(
+        {
+            "scenario": [b"task2"],
+            "pair": [b"uc"],
+            "links": [b"4"],
+            "weights.effort": [b"0.3"],
+            "motion.goal": [b"[0.1, 0.5]"],
+        },
+        ["task1", "task2"],
+    )
+    assert errors == []
+    assert settings == Settings(
+        "task2", 4, "UC", {"weights.effort": 0.3, "motion.goal": [0.1, 0.5]}
+    )
+    settings, errors = logic.parse_query(
+        {"scenario": [b"/etc/passwd"], "links": [b"99"], "pair": [b"Z"], "x": [b"\n1"]},
+        ["task1"],
+    )
+    assert settings == Settings("task1")
+    assert len(errors) == 4 and all("\n" not in e for e in errors)
+    assert "scenario: unknown '/etc/passwd'" in errors[0]
+
+
+def test_links_keep_the_reach_and_a_valid_start(bases):
+    sc = bases["task1"]
+    for n in range(logic.MIN_LINKS, logic.MAX_LINKS + 1):
+        arm = logic.with_links(sc, n)
+        assert arm.n == n and arm.arm.lengths.sum() == pytest.approx(sc.arm.lengths.sum())
+        assert np.all(np.abs(arm.motion.q0) < sc.arm.q_max[0] - sc.damper.stop[0])
+        assert arm.motion.goal.tolist() == sc.motion.goal.tolist()
+    assert logic.with_links(sc, 3) is sc
+    with pytest.raises(ScenarioError, match="links"):
+        logic.with_links(sc, 9)
+
+
+# ----------------------------------------------------------------------------- scene arrays
+def test_scene_geometry_equals_the_arm_model_and_the_animation_ellipse(bases):
+    sc = logic.with_links(bases["task1"], 5)
+    q = np.random.default_rng(1).uniform(-2, 2, (20, 5))
+    points = logic.joint_positions(sc.arm.lengths, q)
+    scale = logic.ellipse_scale(sc)
+    w, h, a = logic.ellipses(points, scale)
+    arm = sc.planar_arm
+    for k in range(q.shape[0]):
+        np.testing.assert_allclose(points[k], arm.joint_positions(q[k]), atol=1e-14)
+        boundary = ellipse_points(arm.jacobian(q[k]), points[k, -1], scale) - points[k, -1]
+        c, s = math.cos(a[k]), math.sin(a[k])
+        u = (c * boundary[:, 0] + s * boundary[:, 1]) / (w[k] / 2)
+        v = (-s * boundary[:, 0] + c * boundary[:, 1]) / (h[k] / 2)
+        np.testing.assert_allclose(u**2 + v**2, 1.0, atol=1e-9)
+    stretched = logic.ellipses(logic.joint_positions(sc.arm.lengths, np.zeros((1, 5))), scale)
+    assert stretched[0][0] == pytest.approx(2 * logic.ELLIPSE_SHARE * arm.reach)
+
+
+def test_joint_states_show_zones_pins_and_broken_limits(bases, task2_c):
+    emdm_run, ivkc = task2_c
+    states = logic.joint_states(ivkc.run)
+    assert states[-1, 1] == PINNED  # C-IVKC ends held at joint 2's damper stop
+    assert np.any(logic.joint_states(emdm_run.run) == ZONE)
+    uc = logic.run_controller(bases["task2"], "UC-IVKC").run
+    assert np.any(logic.joint_states(uc) == PAST)  # UC programs ignore the limits
+    points, steps = logic.scene_data(emdm_run.run, 0.2)
+    K, n = emdm_run.run.steps, 2
+    assert points["x"].size == (K + 1) * (n + 1) and np.all(points["s"][n :: n + 1] == TIP)
+    assert all(v.size == K + 1 for v in steps.values())
+    assert math.isnan(steps["E"][-1]) and math.isnan(steps["alpha"][-1])
+
+
+# ------------------------------------------------------------------------------ status text
+def test_status_says_why_a_run_ended(bases, task2_c):
+    emdm_run, ivkc = task2_c
+    assert logic.explain(bases["task2"], emdm_run).startswith("reached the goal at t = 16.45 s")
+    why = logic.explain(bases["task2"], ivkc)
+    assert "did not reach the goal" in why and "stalled from t = 3.00 s" in why
+    assert "joint 2 is at its damper stop" in why
+    far = bases["task2"].with_overrides({"motion.goal": [2.0, 0.0], "motion.max_time": 2.0})
+    assert "outside the reachable annulus [0.1, 0.9] m" in logic.explain(
+        far, logic.run_controller(far, "C-EMDM")
+    )
+    strict = bases["task2"].with_overrides({"controller.on_infeasible": "error"})
+    stopped = logic.run_controller(strict, "C-IVKC")
+    assert stopped.error is not None and "stopped" in logic.explain(strict, stopped)
+    uc = logic.run_controller(bases["task2"], "UC-EMDM")
+    assert "passed their position limit" in logic.explain(bases["task2"], uc)
+
+
+def test_status_rows_at_the_scrubbed_step(task2_c):
+    emdm_run, ivkc = task2_c
+    rows = dict(logic.status_rows(ivkc, 25.0))
+    assert rows["t"] == "25.00 s (step 500 of 600)"
+    assert rows["alpha"].endswith("(task scaled)")
+    assert rows["joints at a bound"].startswith("2: damper")
+    assert rows["solver"].startswith("active-set") and "e-" in rows["KKT residual"]
+    end = dict(logic.status_rows(emdm_run, 1e9))
+    assert end["command"] == "none: final state (goal reached)"
+    assert logic.step_at(math.nan, 0.05, 10) == 0 and logic.step_at(0.074, 0.05, 10) == 1
+
+
+def test_the_front_at_the_scrubbed_step_marks_the_current_weights(bases):
+    sc = bases["task1"].with_overrides({"weights.manipulability": 0.7})
+    outcome = logic.run_controller(sc, "UC-EMDM")
+    result = logic.front(sc, outcome, 2.0)
+    k = logic.step_at(2.0, sc.motion.dt, outcome.run.steps)
+    assert result.t == pytest.approx(outcome.run.t[k])
+    assert result.ratio[result.current] == pytest.approx(7.0)
+    reference = front_at(sc, outcome.controller, outcome.run.q[k], np.array([7.0]))
+    assert result.E[result.current] == pytest.approx(reference[1]["E"], abs=1e-12)
+    assert result.M[result.current] == pytest.approx(reference[1]["M"], abs=1e-12)
+    assert not result.single and np.any(~result.dominated)
+    c_emdm = logic.run_controller(bases["task1"], "C-EMDM")
+    assert logic.front(bases["task1"], c_emdm, 0.0).single  # the velocity box leaves one command
+
+
+# ------------------------------------------------------------------------------ start pose
+def test_dragging_a_joint_turns_its_link_and_stays_out_of_the_stop_zones(bases):
+    sc = bases["task1"]
+    q0 = sc.motion.q0
+    pts = sc.planar_arm.joint_positions(q0)
+    tip = pts[2] + 0.3 * np.array([math.cos(0.2), math.sin(0.2)])  # turn the last link to 0.2 rad
+    q = logic.drag_start(sc, 3, tip)
+    np.testing.assert_allclose(q[:2], q0[:2])
+    assert q[:3].sum() == pytest.approx(0.2)
+    elbow = logic.drag_start(sc, 1, [-0.2, 0.0])  # the first link would point backwards: clipped
+    assert elbow[0] == pytest.approx(sc.arm.q_max[0] - sc.damper.stop[0] - 1e-3)
+    np.testing.assert_allclose(elbow[1:], q0[1:])
+    assert logic.moved_point(pts, pts) is None
+    moved = pts.copy()
+    moved[2] += 0.1
+    assert logic.moved_point(pts, moved) == 2
+    with pytest.raises(ScenarioError):
+        logic.drag_start(sc, 0, [0.0, 0.0])
+
+
+def test_the_exported_scenario_loads_back_identically(bases, tmp_path):
+    sc = logic.build_scenario(
+        bases, Settings("task2", links=4, overrides={"weights.manipulability": 0.5})
+    )
+    path = tmp_path / "play.toml"
+    path.write_text(logic.export_toml(sc))
+    back = emdm.load_scenario(path)
+    assert back.to_dict() == sc.to_dict()
+    assert tomllib.loads(path.read_text())["arm"]["lengths"] == [0.225] * 4
+
+
+# ------------------------------------------------------------------- the page, no browser
+@pytest.fixture
+def session(bases):
+    pytest.importorskip("bokeh")
+    from bokeh.document import Document
+
+    from emdm.play.page import Session
+
+    def make(**query):
+        doc = Document()
+        arguments = {k: [v.encode()] for k, v in query.items()}
+        context = SimpleNamespace(request=SimpleNamespace(arguments=arguments))
+        doc._session_context = lambda: context
+        return Session(doc, dict(bases))
+
+    return make
+
+
+def _settle(s) -> None:
+    """Run what the server loop would run on its next ticks."""
+    for _ in range(3):
+        if s._scheduled:
+            s._safe(s._flush)
+
+
+def test_the_page_recomputes_on_a_goal_drag(session):
+    s = session()
+    before = s.status.text
+    assert "C-EMDM" in before and "C-IVKC" in before and s.banner.text == ""
+    s.goal.data = {"x": [0.3], "y": [0.7]}
+    _settle(s)
+    assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
+    assert s.steps[0].data["ex"][-1] == pytest.approx(0.3, abs=2e-3)
+    assert s.status.text != before and s.play.active  # the new motion plays from the start
+    assert s.save_toml.tags[1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.save_toml.tags[0]
+
+
+def test_the_page_drags_the_start_and_switches_pair_links_and_scenario(session):
+    s = session(scenario="task2")
+    q0 = s.scenario.motion.q0.copy()
+    x, y = list(s.handles.data["x"]), list(s.handles.data["y"])
+    x[1], y[1] = x[0] + 0.4, y[0]  # the end effector, straight out from the elbow
+    s.handles.data = {"x": x, "y": y}
+    _settle(s)
+    assert s.scenario.motion.q0[0] == q0[0] and s.scenario.motion.q0.sum() == pytest.approx(0)
+    s.pair.active = 1
+    _settle(s)
+    assert [o.name for o in s.outcomes] == ["UC-EMDM", "UC-IVKC"]
+    s.links.value = 4
+    _settle(s)
+    assert s.scenario.n == 4 and len(s.qlines[0].data["ys"]) == 4
+    s.choose.value = "task1"
+    _settle(s)
+    assert s.scenario.name == "task1" and s.settings.pair == "UC"
+
+
+def test_the_page_explains_a_refused_slider_and_keeps_the_last_valid_view(session):
+    s = session()
+    good = s.scenario
+    s.sliders["stop"].value = 0.5
+    s.sliders["influence"].value = 0.3
+    _settle(s)
+    assert "Not applied: damper.stop: must be < damper.influence" in html.unescape(s.banner.text)
+    assert s.scenario is good
+    s.sliders["stop"].value = 0.1
+    _settle(s)
+    assert s.banner.text == "" and s.scenario.damper.influence[0] == 0.3
+
+
+def test_bad_address_values_are_listed_on_the_page(session):
+    s = session(links="nine", **{"weights.effort": "-1", "damper.stop": "x"})
+    assert "links: must be 2 to 8" in s.banner.text
+    assert "Not applied" in s.banner.text and s.scenario is not None
+    assert s.scenario.weights.effort == 0.1  # the defaults are shown
+
+
+def test_a_failing_callback_is_shown_and_the_session_survives(session, monkeypatch):
+    s = session()
+
+    def broken(*args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(logic, "run_pair", broken)
+    s.sliders["w_M"].value = 1.0
+    _settle(s)
+    assert "internal error: RuntimeError: boom" in s.banner.text
+    monkeypatch.undo()
+    s.sliders["w_M"].value = 1.5
+    _settle(s)
+    assert s.banner.text == "" and s.scenario.weights.manipulability == pytest.approx(31.6)
+
+
+def test_the_scrub_bar_moves_the_status_and_the_front(session):
+    s = session()
+    s.scrub.value = 2.0
+    _settle(s)
+    assert "2.00 s (step 40 of 163)" in s.status.text
+    assert s.pareto_title.text == "Pareto front, t = 2.00 s"
+    assert len(s.front_src.data["E"]) == len(emdm.studies.pareto.ratios()) + 2  # w_M = 0, 50
+
+
+# ------------------------------------------------------------------------------ the server
+def test_command_line_errors_are_one_line(capsys):
+    assert main(["play", "--port", "70000", "--no-browser"]) == 2
+    assert main(["play", "nope.toml", "--no-browser"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "--port" in err[0] and "65535" in err[0] and "nope.toml" in err[1]
+
+
+def start_server(*args: str) -> tuple[subprocess.Popen[str], str]:
+    """``emdm play --port 0 --no-browser ARGS`` in its own process; returns it and its address."""
+    pytest.importorskip("bokeh")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "emdm.cli", "play", "--port", "0", "--no-browser", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    line = proc.stdout.readline() if proc.stdout else ""
+    found = re.search(r"http://127\.0\.0\.1:\d+/", line)
+    if not found:
+        proc.kill()
+        pytest.fail(f"no address printed: {line!r} {proc.stderr.read() if proc.stderr else ''}")
+    return proc, found.group(0)
+
+
+def stop_server(proc: subprocess.Popen[str], sig: int) -> str:
+    """Send ``sig``; the server must exit with status 0 and say so. Returns its stderr."""
+    proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise
+    assert proc.returncode == 0, err
+    assert "emdm play: stopped" in err and "Traceback" not in err
+    return err
+
+
+@pytest.mark.slow
+def test_the_server_is_local_offline_and_stops_on_sigterm():
+    proc, url = start_server("task2")
+    try:
+        page = urllib.request.urlopen(url, timeout=10).read().decode()
+        scripts = re.findall(r'<script[^>]*src="([^"]+)"', page)
+        assert scripts and all(s.startswith(("/static/", url)) for s in scripts), scripts
+        assert "cdn." not in page
+        for src in scripts:
+            full = src if src.startswith("http") else url.rstrip("/") + src
+            assert urllib.request.urlopen(full, timeout=10).status == 200
+        with pytest.raises(urllib.error.HTTPError) as info:
+            urllib.request.urlopen(url + "nothing-here", timeout=10)
+        assert info.value.code == 404
+    finally:
+        stop_server(proc, signal.SIGTERM)
+
+
+# ------------------------------------------------------------------------- in a real browser
+def _browser(download: Path):
+    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
+    if not chromium or not driver_path:
+        pytest.skip("no chromium/chromedriver installed (.ci/run installs them)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--window-size=1500,1000",
+    ):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(driver_path), options=options)
+    driver.execute_cdp_cmd(
+        "Browser.setDownloadBehavior", {"behavior": "allow", "downloadPath": str(download)}
+    )
+    return driver
+
+
+READY = "return window.Bokeh != null && Bokeh.documents.length > 0 && Bokeh.index.roots.length > 0"
+MODEL = "return Bokeh.documents[0].get_model_by_name(arguments[0])"
+WHERE = """
+const [name, x, y] = arguments;
+const view = Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name(name));
+const box = view.el.getBoundingClientRect();
+return [box.left + view.frame.x_scale.compute(x), box.top + view.frame.y_scale.compute(y)];
+"""
+HANDLE = """
+const view = Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name(arguments[0]));
+const handle = view.shadow_el.querySelector('.noUi-handle').getBoundingClientRect();
+const bar = view.shadow_el.querySelector('.noUi-base').getBoundingClientRect();
+return [handle.left + handle.width / 2, handle.top + handle.height / 2, bar.left];
+"""
+
+
+def _wait(driver, script: str, *args, timeout: float = 5.0):
+    """Poll ``script`` until it returns something truthy."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = driver.execute_script(script, *args)
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for: {script.strip()[:80]}")
+
+
+def _drag(driver, start, end, steps: int = 8) -> None:
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
+    actions = ActionBuilder(driver)
+    actions.pointer_action.move_to_location(round(start[0]), round(start[1])).pointer_down()
+    for i in range(1, steps + 1):
+        f = i / steps
+        x, y = start[0] + f * (end[0] - start[0]), start[1] + f * (end[1] - start[1])
+        actions.pointer_action.move_to_location(round(x), round(y))
+    actions.pointer_action.pointer_up()
+    actions.perform()
+
+
+def _text(driver, name: str) -> str:
+    return str(driver.execute_script(MODEL + ".text", name))
+
+
+def _series(driver, column: str) -> list[float]:
+    return list(driver.execute_script(MODEL + f".data.{column}", "steps0"))
+
+
+CHANGED = """
+const [name, column, before] = arguments;
+const now = Bokeh.documents[0].get_model_by_name(name).data[column];
+return now.length != before.length || now.some((v, i) => Math.abs(v - before[i]) > 1e-9);
+"""
+
+
+@pytest.mark.slow
+def test_the_page_in_a_real_browser(tmp_path):
+    driver = _browser(tmp_path)
+    proc, url = start_server()
+    try:
+        driver.get(url)
+        _wait(driver, READY)
+        _wait(driver, MODEL + ".text.includes('C-EMDM')", "status")
+        status, trace = _text(driver, "status"), _series(driver, "ex")
+        assert "0.00 s (step 0 of 163)" in status
+
+        # drag the goal: a new trajectory ends there and the status changes
+        goal = driver.execute_script(WHERE, "scene", -0.7, 0.5)
+        target = driver.execute_script(WHERE, "scene", 0.3, 0.7)
+        _drag(driver, goal, target)
+        _wait(driver, CHANGED, "steps0", "ex", trace)
+        ex, ey = (driver.execute_script(MODEL + f".data.{c}", "steps0") for c in ("ex", "ey"))
+        assert math.hypot(ex[-1] - 0.3, ey[-1] - 0.7) < 0.02
+        _wait(driver, MODEL + ".text != arguments[1]", "status", status)
+        assert "of 163" not in _text(driver, "status")
+
+        # move the manipulability-weight slider to its left end (w_M = 0): EMDM becomes IVKC
+        x, y, left = driver.execute_script(HANDLE, "slider-w_M")
+        before = _series(driver, "m")
+        _drag(driver, (x, y), (max(1, left - 10), y), steps=4)
+        _wait(driver, "const m = Bokeh.documents[0].get_model_by_name(arguments[0]); "
+              "return m.value == m.start", "slider-w_M")  # fmt: skip
+        _wait(driver, CHANGED, "steps0", "m", before)
+        _wait(driver, MODEL + ".tags[0].includes('manipulability = 0.0\\n')", "save-toml")
+        assert "w_M = 0," in driver.execute_script(MODEL + ".tags[1]", "save-png")
+
+        # export the scenario and run it with emdm run
+        driver.execute_script(
+            "Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name('save-toml'))"
+            ".shadow_el.querySelector('button').click()"
+        )
+        exported = tmp_path / "task1-play.toml"
+        end = time.monotonic() + 5
+        while not exported.is_file() and time.monotonic() < end:
+            time.sleep(0.05)
+        data = tomllib.loads(exported.read_text())
+        assert data["weights"]["manipulability"] == 0.0
+        assert data["motion"]["goal"] == pytest.approx([0.3, 0.7], abs=2e-3)
+        out = tmp_path / "run"
+        done = subprocess.run(
+            [sys.executable, "-m", "emdm.cli", "run", str(exported), "--out", str(out),
+             "--controller", "C-EMDM"],
+            capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert (out / "metrics.json").is_file()
+
+        # a second tab is a session of its own
+        driver.switch_to.new_window("tab")
+        driver.get(url + "?scenario=task2&links=x")
+        _wait(driver, READY)
+        _wait(driver, MODEL + ".text.includes('C-EMDM')", "status")
+        assert "links: must be 2 to 8" in _text(driver, "banner")
+        assert driver.execute_script(MODEL + ".data.x[0]", "goal") == -0.3
+        driver.switch_to.window(driver.window_handles[0])
+        assert driver.execute_script(MODEL + ".data.x[0]", "goal") == pytest.approx(0.3, abs=2e-3)
+        severe = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        assert not severe, severe
+    finally:
+        driver.quit()
+        stop_server(proc, signal.SIGINT)
