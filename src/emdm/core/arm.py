@@ -35,9 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
-from .jit import plain
-from .kernels import kin_work
-from .kernels import kinematics as _kinematics
+from .kernels import kinematics_of
 
 Vector = NDArray[np.float64]
 Matrix = NDArray[np.float64]
@@ -141,5 +139,5 @@ class PlanarArm:
         kernel :func:`emdm.core.kernels.kinematics` (the one implementation of these formulas)."""
         q_arr = np.ascontiguousarray(self._check_q(q))
         p, J, Jm = np.empty(2), np.empty((2, self.n)), np.empty(self.n)
-        m = _kinematics(self._kernel_lengths, q_arr, p, J, Jm, plain(kin_work)(self.n))
+        m = kinematics_of(self._kernel_lengths, q_arr, p, J, Jm)
         return Kinematics(p=p, J=J, m=m, Jm=Jm)

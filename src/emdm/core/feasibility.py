@@ -25,7 +25,6 @@ import numpy as np
 
 from . import kernels
 from .arm import Matrix, Vector
-from .jit import plain
 from .kernels import FEASIBILITY_TOL, RANK_TOL
 
 __all__ = ["FEASIBILITY_TOL", "RANK_TOL", "feasible_point", "task_scale"]
@@ -112,9 +111,8 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
     whose columns have rank < 2, more task rows).
     """
     if A.shape[0] == 2:
-        nx = A.shape[1]
         Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-        alpha = kernels.task_scale(Ac, bc, lbc, ubc, plain(kernels.feas_work)(nx))
+        alpha = kernels.task_scale_of(Ac, bc, lbc, ubc)
         if alpha != -2.0:
             return None if alpha == -1.0 else alpha
     Q, G, bounded = _project(A, lb, ub)
@@ -132,7 +130,7 @@ def feasible_point(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> Vector | Non
     if A.shape[0] == 2:
         x = np.empty(A.shape[1])
         Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-        code, _ = kernels.feasible_point(Ac, bc, lbc, ubc, x, plain(kernels.feas_work)(x.size))
+        code, _ = kernels.feasible_point_of(Ac, bc, lbc, ubc, x)
         if code != kernels.NEEDS_REFERENCE:
             return x if code == kernels.OK else None
     Q, G, bounded = _project(A, lb, ub)

@@ -4,7 +4,7 @@ Every kernel is compiled with ``cache=True``: the first process on a machine com
 20 s, announced by :func:`ensure_compiled` in one line) and writes the machine code to a cache
 folder, where every later process, and every Dask worker on the same machine, loads it in a
 fraction of a second. The folder is ``$XDG_CACHE_HOME/emdm/kernels-<hash>`` (``~/.cache`` by
-default), the hash covering every source file of the package: numba checks only the file of a
+default), the hash covering every module that defines kernels: numba checks only the file of a
 kernel itself, so a change to a kernel it calls would otherwise load stale machine code. Setting
 ``NUMBA_CACHE_DIR`` chooses the folder instead.
 
@@ -29,30 +29,63 @@ from typing import Any, TypeVar, cast
 import numba
 from llvmlite import ir
 from numba import types
+from numba.core import caching
 from numba.extending import intrinsic
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
-def _cache_folder() -> None:
-    """Point numba's cache at a folder named after the package's sources (see the module notes)."""
+PACKAGE = Path(__file__).resolve().parent.parent
+
+
+@functools.cache
+def _cache_folder() -> str | None:
+    """``$XDG_CACHE_HOME/emdm/kernels-<hash of the compiled sources>``, or None when
+    ``NUMBA_CACHE_DIR`` is set (numba's own choice then stands). The compiled sources are the
+    modules that define kernels (they mention ``@kernel``), this one included."""
     if os.environ.get("NUMBA_CACHE_DIR"):
-        return
-    package = Path(__file__).resolve().parent.parent
+        return None
     digest = hashlib.sha256()
-    for path in sorted(package.rglob("*.py")):
-        digest.update(path.relative_to(package).as_posix().encode())
-        digest.update(path.read_bytes())
+    for path in sorted(PACKAGE.rglob("*.py")):
+        text = path.read_bytes()
+        if b"@kernel" in text or b"@parallel_kernel" in text or path.name == "jit.py":
+            digest.update(path.relative_to(PACKAGE).as_posix().encode())
+            digest.update(text)
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    folder = base / "emdm" / f"kernels-{digest.hexdigest()[:16]}"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:  # no writable home: numba's own choice (beside the sources) stands
+    return str(base / "emdm" / f"kernels-{digest.hexdigest()[:16]}")
+
+
+def _register_cache_locator() -> None:
+    """Make numba cache emdm's kernels (and only those) in :func:`_cache_folder`."""
+    base = getattr(caching, "UserProvidedCacheLocator", None) or getattr(
+        caching, "_UserProvidedCacheLocator", None
+    )
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    if base is None or impl is None:  # another numba layout: its default locators stand
         return
-    setattr(numba.config, "CACHE_DIR", str(folder))  # noqa: B010 - untyped module attribute
+
+    class SourceHashLocator(base):  # type: ignore[misc, valid-type]
+        def __init__(self, py_func: Any, py_file: str, folder: str) -> None:
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            self._cache_path = os.path.join(folder, self.get_suitable_cache_subpath(py_file))
+
+        @classmethod
+        def from_function(cls, py_func: Any, py_file: str) -> Any:
+            folder = _cache_folder()
+            if folder is None or not Path(py_file).resolve().is_relative_to(PACKAGE):
+                return None
+            try:
+                locator = cls(py_func, py_file, folder)
+                locator.ensure_cache_path()
+            except OSError:  # not writable: numba's next locator
+                return None
+            return locator
+
+    impl._locator_classes.insert(0, SourceHashLocator)
 
 
-_cache_folder()  # before any kernel below (or in other modules) is decorated
+_register_cache_locator()  # before any kernel below (or in other modules) is decorated
 
 
 def kernel(function: F) -> F:
@@ -98,7 +131,7 @@ _lock = threading.Lock()
 
 
 def ensure_compiled(
-    warm_up: Callable[[], object], *, what: str = "the control loop", notice_after: float = 0.5
+    warm_up: Callable[[], object], *, what: str = "the control loop", notice_after: float = 2.0
 ) -> None:
     """Run ``warm_up`` (which calls a group of kernels once) the first time in this process.
 

@@ -147,6 +147,13 @@ def kinematics(lengths: F64, q: F64, p: F64, J: F64, Jm: F64, w: KinWork) -> flo
     return m
 
 
+@kernel
+def kinematics_of(lengths: F64, q: F64, p: F64, J: F64, Jm: F64) -> float:
+    """:func:`kinematics` with its own buffers: the entry point for callers in Python (arrays
+    only, so numba types the call quickly)."""
+    return kinematics(lengths, q, p, J, Jm, kin_work(q.size))
+
+
 # ------------------------------------------------------------------------------ joint bounds
 @kernel
 def joint_bounds(arm: ArmData, q: F64, lo: F64, hi: F64) -> None:
@@ -330,6 +337,12 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 
 
 @kernel
+def task_scale_of(A: F64, b: F64, lb: F64, ub: F64) -> float:
+    """:func:`task_scale` with its own buffers (the entry point for callers in Python)."""
+    return task_scale(A, b, lb, ub, feas_work(A.shape[1]))
+
+
+@kernel
 def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
     """Fill ``x`` with a feasible point; returns ``(OK | INFEASIBLE | NEEDS_REFERENCE, unique)``.
 
@@ -457,3 +470,9 @@ def build_program(
             A[1, n + i] = 1.0 if i == 1 else 0.0
             lb[n + i], ub[n + i] = prog.s_min[i], prog.s_max[i]
     b[0], b[1] = v[0], v[1]
+
+
+@kernel
+def feasible_point_of(A: F64, b: F64, lb: F64, ub: F64, x: F64) -> tuple[int, bool]:
+    """:func:`feasible_point` with its own buffers (the entry point for callers in Python)."""
+    return feasible_point(A, b, lb, ub, x, feas_work(x.size))

@@ -26,7 +26,6 @@ import numpy as np
 
 from ..core.arm import Matrix, Vector
 from ..core.feasibility import RANK_TOL, feasible_point
-from ..core.jit import plain
 from ..core.problem import QP
 from . import kernels
 from .base import SolverResult, kkt_report
@@ -100,8 +99,7 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
         P, c, A, b, lb, ub = (
             np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
         )
-        buffers = plain(kernels.qp_work)(qp.n)
-        code, iterations = kernels.active_set(P, c, A, b, lb, ub, x, buffers, np.empty(4))
+        code, iterations = kernels.active_set_of(P, c, A, b, lb, ub, x, np.empty(4))
         if code == kernels.OK:
             return SolverResult(x, "optimal", iterations, time.perf_counter() - start)
         if code == kernels.INFEASIBLE:

@@ -23,10 +23,9 @@ from typing import Protocol
 import numpy as np
 
 from ..core.arm import Vector
-from ..core.jit import plain
 from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
-from .kernels import BOUND_TOL, KKT_TOL, certify, qp_work
+from .kernels import BOUND_TOL, KKT_TOL, certify_of
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,7 +75,7 @@ def kkt_report(qp: QP, x: Vector) -> KKTReport:
         np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, x)
     )
     out = np.empty(4)
-    certify(P, c, A, b, lb, ub, xc, plain(qp_work)(qp.n), out)
+    certify_of(P, c, A, b, lb, ub, xc, out)
     return KKTReport(*map(float, out))
 
 

@@ -499,3 +499,17 @@ def active_set(
             if free_rank(A, free) == 2:
                 work[block] = side
     return MAX_ITER_EXCEEDED, limit
+
+
+@kernel
+def active_set_of(
+    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64
+) -> tuple[int, int]:
+    """:func:`active_set` with its own buffers (the entry point for callers in Python)."""
+    return active_set(P, c, A, b, lb, ub, x, qp_work(x.size), out)
+
+
+@kernel
+def certify_of(P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64) -> None:
+    """:func:`certify` with its own buffers (the entry point for callers in Python)."""
+    certify(P, c, A, b, lb, ub, x, qp_work(x.size), out)
