@@ -163,3 +163,28 @@ def test_huge_multipliers_do_not_certify_a_wrong_point():
     np.testing.assert_allclose(
         result.x, reference_solve(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub), atol=1e-8
     )
+
+
+def test_a_vertex_where_task_rows_and_two_bounds_meet_is_certified():
+    """Three joints, two task rows and two joints at their upper bounds: the scaled task leaves
+    one point, and its multipliers need a bound column the task rows nearly span. The NNLS once
+    kept a 1e-289 coefficient on a task column, found the entering column dependent and stopped
+    at a stationarity residual of 3e-2 (a random study goal of task1, C-EMDM, step 5)."""
+    A = np.array(
+        [
+            [-0.8682595613619262, -0.8830029922987822, -0.2999665071436429],
+            [0.3366363200856075, 0.13718048225625204, -0.00448269919164926],
+        ]
+    )
+    qp = QP(np.eye(3) * 0.1, np.array([0.0, -0.04720420215796386, -0.582044603968533]), A,
+            np.array([-0.5285428887973733, -0.06471706987635965]), -np.ones(3),
+            np.array([1.0, 0.725520852990033, 1.0]), n_joints=3)  # fmt: skip
+    import reference
+
+    for x2 in (0.725520852990033, 0.7255208529900328):  # at the bound, and one ulp inside
+        x = np.array([-0.4745823954593569, x2, 1.0])
+        assert reference.kkt_residual(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, x) <= 1e-12
+        assert kkt_report(qp, x).is_optimal(), x2
+    result = solve_active_set(qp)
+    assert kkt_report(qp, result.x).is_optimal()
+    np.testing.assert_allclose(result.x, x, atol=1e-12)

@@ -73,6 +73,7 @@ class QPWork(NamedTuple):
     w: F64
     r: F64
     passive: NDArray[np.bool_]
+    skip: NDArray[np.bool_]
     B: F64
 
 
@@ -96,6 +97,7 @@ def qp_work(nx: int) -> QPWork:
         np.empty(cols),
         np.empty(cols),
         np.empty(nx),
+        np.empty(cols, dtype=np.bool_),
         np.empty(cols, dtype=np.bool_),
         np.empty((nx, cols + 1)),
     )
@@ -247,6 +249,7 @@ def best_multipliers(
     """
     n = x.size
     M, z, s, wv, r, passive, B, g = w.M, w.z, w.s, w.w, w.r, w.passive, w.B, w.g
+    skip = w.skip
     for j in range(n):
         acc = c[j]
         for i in range(n):
@@ -278,12 +281,13 @@ def best_multipliers(
     for k in range(cols):
         zv[k] = 0.0
         pv[k] = False
+        skip[k] = False
     for j in range(n):
         r[j] = g[j]
     for _ in range(3 * cols):
         best, t = tol, -1
         for k in range(cols):
-            if not pv[k]:
+            if not pv[k] and not skip[k]:
                 acc = 0.0
                 for j in range(n):
                     acc += Mv[j, k] * r[j]
@@ -305,19 +309,29 @@ def best_multipliers(
                 for k in range(cols):
                     zv[k] = sv[k]
                 break
-            alpha = 1.0
+            alpha, leaving = 1.0, -1
             for k in range(cols):
                 if pv[k] and sv[k] <= 0:
-                    alpha = min(alpha, zv[k] / (zv[k] - sv[k]))
+                    step = zv[k] / (zv[k] - sv[k])
+                    if step < alpha or leaving < 0:
+                        alpha, leaving = min(alpha, step), k
+            largest = 0.0
             for k in range(cols):
                 zv[k] += alpha * (sv[k] - zv[k])
-                if pv[k] and zv[k] <= 1e-300:
+                largest = max(largest, abs(zv[k]))
+            for k in range(cols):  # the blocking coefficient leaves, and any that became dust
+                if pv[k] and (k == leaving or zv[k] <= 1e-15 * largest):
                     pv[k] = False
                     zv[k] = 0.0
         else:
             break
         if not pv[t] and zv[t] == 0.0:
-            break  # the entering column was dependent: nothing more to gain
+            # the entering column depends on the passive ones: try the next best column (a
+            # cone's point is always a non-negative sum of independent generators, Caratheodory)
+            skip[t] = True
+            continue
+        for k in range(cols):
+            skip[k] = False
         for j in range(n):
             acc = g[j]
             for k in range(cols):
