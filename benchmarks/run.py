@@ -1,6 +1,6 @@
 """The benchmark harness: `python benchmarks/run.py` writes benchmarks/latest.{json,md}.
 
-It runs `emdm bench` (see src/emdm/bench.py): per-step cost split into kinematics, program
+It runs `emdm bench` (see src/emdm/studies/bench.py): per-step cost split into kinematics, program
 build, solve and integration on the reference path, the fast path and the standard stack (numpy
 + qpsolvers with daqp and quadprog, the same programs), whole-run times per preset and
 controller, and batch throughput. Medians over repeats, warm-up excluded, all in one process.
@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from emdm.bench import bench_table, run_bench
+from emdm.studies.bench import bench_table, run_bench
 
 
 def main() -> int:
