@@ -13,8 +13,9 @@ import emdm
 from emdm.cli import main
 from emdm.core.controllers import program_at
 from emdm.outputs.animate import Animator, animate, ellipse_points, frame_schedule
-from emdm.outputs.plots import run_figures
+from emdm.outputs.plots import path_figure, run_figures
 from emdm.outputs.records import read_run
+from emdm.outputs.style import formats
 from emdm.studies.pareto import front_at, pareto_steps, pareto_study, ratios
 
 
@@ -53,10 +54,8 @@ def test_read_run_is_exact(tmp_path):
         assert again.reached == run.reached and again.solver == run.solver
 
 
+@pytest.mark.slow  # 26 figures
 def test_run_figures_cover_every_group_in_three_formats(tmp_path, task2_runs):
-    from emdm.outputs.plots import path_figure
-    from emdm.outputs.style import formats
-
     # every figure as PNG (its size is checked below); PDF and SVG on one of them
     with formats((".png",)):
         stems = run_figures(task2_runs, tmp_path)
@@ -102,7 +101,8 @@ def test_plot_command_from_a_run_folder_and_bad_folders(tmp_path, capsys):
         )
         == 0
     )
-    assert main(["plot", str(run_dir), "--out", str(tmp_path / "figs")]) == 0
+    with formats((".png",)):  # the formats are checked above; here what is drawn
+        assert main(["plot", str(run_dir), "--out", str(tmp_path / "figs")]) == 0
     assert (tmp_path / "figs" / "C" / "path.png").exists()
     assert not (tmp_path / "figs" / "UC").exists()  # only what was run
     capsys.readouterr()
@@ -127,8 +127,9 @@ def test_frame_schedule_is_true_to_dt():
 
 
 @pytest.mark.parametrize("speedup", [1.0, 2.0])
-def test_gif_read_back_matches_the_run(tmp_path, task2_runs, speedup):
-    runs = [task2_runs["C-IVKC"], task2_runs["C-EMDM"]]
+def test_gif_read_back_matches_the_run(tmp_path, speedup):
+    sc = emdm.load_scenario("task2", {"motion.max_time": 1.5})  # 30 steps: 31 frames at 1x
+    runs = [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")]
     written = animate(runs, tmp_path / "anim", speedup=speedup, mp4=False)
     steps = max(r.steps for r in runs)
     dt = runs[0].scenario.motion.dt
@@ -266,9 +267,11 @@ def test_dominance_marking():
 
 def test_pareto_command(tmp_path, capsys):
     out = tmp_path / "par"
-    assert (
-        main(["pareto", "task1", "--controller", "C-EMDM", "--grid", "4", "--out", str(out)]) == 0
-    )
+    with formats((".png",)):
+        assert (
+            main(["pareto", "task1", "--controller", "C-EMDM", "--grid", "4", "--out", str(out)])
+            == 0
+        )
     data = json.loads((out / "pareto.json").read_text())
     assert data["controller"] == "C-EMDM" and len(data["steps"]) == 4
     point = data["steps"][1]["points"][0]

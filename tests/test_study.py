@@ -11,7 +11,18 @@ import pytest
 
 import emdm
 from emdm.cli import main
-from emdm.studies.montecarlo import BLOCK, Engine, draw, run_chunks, run_study, study_json
+from emdm.errors import EmdmError
+from emdm.outputs.style import formats
+from emdm.studies.montecarlo import (
+    BLOCK,
+    Accumulator,
+    Engine,
+    EngineKind,
+    draw,
+    run_chunks,
+    run_study,
+    study_json,
+)
 
 
 def small(task: str = "task1") -> emdm.Scenario:
@@ -55,6 +66,12 @@ def test_results_do_not_depend_on_the_chunking():
         assert json.dumps(again, sort_keys=True) == json.dumps(reference, sort_keys=True)
 
 
+def test_engine_kind_is_a_closed_set():
+    assert Engine("dask").kind is EngineKind.DASK and Engine().kind is EngineKind.LOCAL
+    with pytest.raises(EmdmError, match="unknown engine 'cloud' \\(local or dask\\)"):
+        Engine("cloud")
+
+
 @pytest.fixture(scope="module")
 def cluster():
     distributed = pytest.importorskip("dask.distributed")
@@ -64,6 +81,7 @@ def cluster():
         yield local
 
 
+@pytest.mark.slow  # starts a LocalCluster of two worker processes
 def test_dask_gives_the_same_json_as_local(cluster):
     sc = small()
     runs = 2 * BLOCK + 5
@@ -73,6 +91,7 @@ def test_dask_gives_the_same_json_as_local(cluster):
     assert json.dumps(remote, sort_keys=True) == json.dumps(local, sort_keys=True)
 
 
+@pytest.mark.slow
 def test_a_worker_dying_mid_study_costs_a_retry_not_the_study(cluster):
     from dask.distributed import Client
 
@@ -89,10 +108,10 @@ def test_a_worker_dying_mid_study_costs_a_retry_not_the_study(cluster):
             killed.append(pids[0])
 
     engine = Engine("dask", scheduler=cluster.scheduler_address)
-    parts = run_chunks(sc, runs, 13, engine, chunk_blocks=1, progress=kill_one)
-    from emdm.studies.montecarlo import reduce_chunks
-
-    got = reduce_chunks(parts, runs)
+    acc = Accumulator()
+    for part in run_chunks(sc, runs, 13, engine, chunk_blocks=1, progress=kill_one):
+        acc.add(part)
+    got = acc.result(runs)
     assert killed
     assert got["controllers"] == expected["controllers"]
     assert got["manipulability_gain"] == expected["manipulability_gain"]
@@ -121,10 +140,13 @@ def test_unreachable_scheduler_is_one_line(tmp_path, capsys):
 
 def test_study_command(tmp_path, capsys):
     out = tmp_path / "study"
-    assert (
-        main(["study", "task2", "--runs", "40", "--seed", "1", "--keep-runs", "--out", str(out)])
-        == 0
-    )
+    with formats((".png",)):
+        assert (
+            main(
+                ["study", "task2", "--runs", "40", "--seed", "1", "--keep-runs", "--out", str(out)]
+            )
+            == 0
+        )
     data = json.loads((out / "study.json").read_text())
     assert data["runs"] == 40 and set(data["controllers"]) == set(emdm.CONTROLLERS)
     assert "C-EMDM over C-IVKC" in data["manipulability_gain"]
@@ -137,24 +159,9 @@ def test_study_command(tmp_path, capsys):
 
 def test_weight_and_scenario_sweep(tmp_path, capsys):
     out = tmp_path / "sweep"
-    assert (
-        main(
-            [
-                "study",
-                "task1",
-                "task2",
-                "--weights",
-                "0.1:0,0.1:5",
-                "--runs",
-                "30",
-                "--set",
-                "motion.max_time=4",
-                "--out",
-                str(out),
-            ]
-        )
-        == 0
-    )
+    args = ["study", "task1", "task2", "--weights", "0.1:0,0.1:5", "--runs", "30"]
+    with formats((".png",)):  # eight figures: PNG is enough here (vector formats: test_figures)
+        assert main([*args, "--set", "motion.max_time=4", "--out", str(out)]) == 0
     sweep = json.loads((out / "sweep.json").read_text())
     assert [(s["scenario"], s["weights"]["manipulability"]) for s in sweep] == [
         ("task1", 0.0),

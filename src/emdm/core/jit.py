@@ -48,7 +48,7 @@ def _cache_folder() -> str | None:
     digest = hashlib.sha256()
     for path in sorted(PACKAGE.rglob("*.py")):
         text = path.read_bytes()
-        if b"@kernel" in text or b"@parallel_kernel" in text or path.name == "jit.py":
+        if b"@kernel" in text or path.name == "jit.py":
             digest.update(path.relative_to(PACKAGE).as_posix().encode())
             digest.update(text)
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
@@ -91,11 +91,6 @@ _register_cache_locator()  # before any kernel below (or in other modules) is de
 def kernel(function: F) -> F:
     """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel)."""
     return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
-
-
-def parallel_kernel(function: F) -> F:
-    """:func:`kernel` whose ``numba.prange`` loops run on every core (numba's thread pool)."""
-    return cast(F, numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")(function))
 
 
 @intrinsic

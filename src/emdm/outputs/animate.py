@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
+import matplotlib
 import numpy as np
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
@@ -78,7 +78,7 @@ class Animator:
             for q in run.q
         )
         self.scale = 0.3 * arm.reach / biggest if biggest > 0 else 1.0
-        with plt.rc_context(RC):
+        with matplotlib.rc_context(RC):
             self._build(sc, arm)
 
     def _build(self, sc: Scenario, arm: PlanarArm) -> None:
@@ -227,7 +227,7 @@ class Animator:
         return path
 
     def close(self) -> None:
-        """Release the figure (it is not managed by pyplot)."""
+        """Release the figure's artists (the figure is not registered anywhere else)."""
         self.fig.clear()
 
 

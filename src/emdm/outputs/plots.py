@@ -8,6 +8,7 @@ constrained solid, unconstrained dashed.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from enum import StrEnum
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,35 @@ GROUPS = {
 """The overlays the brief asks for, and all four together."""
 
 
+class Quantity(StrEnum):
+    """The scalar quantities :func:`series_figure` draws against time."""
+
+    EFFORT = "effort"
+    MANIPULABILITY = "manipulability"
+    MANIP_RATE = "manip_rate"
+    ERROR = "error"
+    ALPHA = "alpha"
+    SLACK = "slack"
+
+
+class Joints(StrEnum):
+    """What :func:`joints_figure` draws per joint: velocities or positions."""
+
+    VELOCITIES = "qd"
+    POSITIONS = "q"
+
+
+LABELS = {
+    Quantity.EFFORT: "effort E (rad^2/s^2)",
+    Quantity.MANIPULABILITY: "manipulability m",
+    Quantity.MANIP_RATE: "manipulability rate M (1/s)",
+    Quantity.ERROR: "tracking error ||e|| (m)",
+    Quantity.ALPHA: "task scale alpha",
+    Quantity.SLACK: "task slack ||delta|| (m/s)",
+}
+"""The y-axis label of each quantity."""
+
+
 def _style(run: Run, index: int) -> dict[str, object]:
     base = CONTROLLER_STYLE.get(run.controller.name, {"color": color(index), "linestyle": "-"})
     return {**base, "label": run.controller.name}
@@ -37,38 +67,31 @@ def _command_time(run: Run) -> np.ndarray:
     return run.t[:-1]
 
 
-def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
+def series_figure(runs: Sequence[Run], quantity: Quantity, stem: Path) -> Path:
     """One scalar quantity against time, overlaid for ``runs``.
 
-    ``quantity``: ``effort`` (E, rad^2/s^2), ``manipulability`` (m), ``manip_rate`` (M, 1/s),
-    ``error`` (||e||, m, log scale), ``alpha`` (task scale) or ``slack`` (||delta||, m/s).
+    ``quantity``: effort (E, rad^2/s^2, log scale), manipulability (m), manipulability rate
+    (M, 1/s), error (||e||, m, log scale), alpha (task scale) or slack (||delta||, m/s).
     """
-    labels = {
-        "effort": "effort E (rad^2/s^2)",
-        "manipulability": "manipulability m",
-        "manip_rate": "manipulability rate M (1/s)",
-        "error": "tracking error ||e|| (m)",
-        "alpha": "task scale alpha",
-        "slack": "task slack ||delta|| (m/s)",
-    }
+    quantity = Quantity(quantity)
     with figure(stem, width=COLUMN, height=2.0) as (_, ax):
         for i, run in enumerate(runs):
             style = _style(run, i)
-            if quantity == "manipulability":
+            if quantity is Quantity.MANIPULABILITY:
                 ax.plot(run.t, run.m, **style)
-            elif quantity == "error":
+            elif quantity is Quantity.ERROR:
                 ax.semilogy(run.t, np.maximum(run.error_norm, 1e-6), **style)
             else:
                 values = {
-                    "effort": run.effort,
-                    "manip_rate": run.manip_rate,
-                    "alpha": run.alpha,
-                    "slack": np.linalg.norm(run.delta, axis=1),
+                    Quantity.EFFORT: run.effort,
+                    Quantity.MANIP_RATE: run.manip_rate,
+                    Quantity.ALPHA: run.alpha,
+                    Quantity.SLACK: np.linalg.norm(run.delta, axis=1),
                 }[quantity]
                 ax.step(_command_time(run), values, where="post", **style)
-        if quantity == "effort":
+        if quantity is Quantity.EFFORT:
             ax.set_yscale("log")  # spans many decades: the UC start spikes, the goal tends to 0
-        if quantity == "error":
+        if quantity is Quantity.ERROR:
             ax.axhline(
                 runs[0].scenario.motion.tolerance,
                 color="grey",
@@ -76,18 +99,19 @@ def series_figure(runs: Sequence[Run], quantity: str, stem: Path) -> Path:
                 linewidth=0.8,
                 label="tolerance",
             )
-        if quantity == "alpha":
+        if quantity is Quantity.ALPHA:
             ax.set_ylim(-0.05, 1.05)
         ax.set_xlabel("time t (s)")
-        ax.set_ylabel(labels[quantity])
+        ax.set_ylabel(LABELS[quantity])
         ax.set_title(_title(runs))
         ax.legend()
     return stem
 
 
-def joints_figure(runs: Sequence[Run], kind: str, stem: Path) -> Path:
+def joints_figure(runs: Sequence[Run], kind: Joints, stem: Path) -> Path:
     """Joint velocities (``kind="qd"``) with their limits, or joint positions (``"q"``) with the
     limits and the dampers' influence (light) and stop (dark) zones shaded; one panel per joint."""
+    kind = Joints(kind)
     sc = runs[0].scenario
     n = sc.n
     with figure(stem, width=COLUMN, height=0.95 * n + 0.5, nrows=n, sharex=True, squeeze=False) as (
@@ -96,7 +120,7 @@ def joints_figure(runs: Sequence[Run], kind: str, stem: Path) -> Path:
     ):
         for j in range(n):
             ax = axes[j, 0]
-            if kind == "qd":
+            if kind is Joints.VELOCITIES:
                 for i, run in enumerate(runs):
                     ax.step(_command_time(run), run.qd[:, j], where="post", **_style(run, i))
                 for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
@@ -115,7 +139,11 @@ def joints_figure(runs: Sequence[Run], kind: str, stem: Path) -> Path:
                     ax.axhline(bound, color="black", linewidth=0.7)
                 ax.set_ylabel(f"q{j + 1} (rad)")
         axes[-1, 0].set_xlabel("time t (s)")
-        what = "joint velocities and limits" if kind == "qd" else "joint positions, damper zones"
+        what = (
+            "joint velocities and limits"
+            if kind is Joints.VELOCITIES
+            else "joint positions, damper zones"
+        )
         axes[0, 0].set_title(f"{_title(runs)}\n{what}")
         axes[0, 0].legend(ncols=2)
     return stem
@@ -164,13 +192,13 @@ def run_figures(runs: dict[str, Run], out: Path) -> list[Path]:
         if not chosen or (group == "all" and len(chosen) < 3):
             continue
         folder = out / group
-        for quantity in ("effort", "manipulability", "manip_rate", "error", "alpha", "slack"):
-            if quantity == "slack" and not any(np.any(r.delta != 0) for r in chosen):
+        for quantity in Quantity:
+            if quantity is Quantity.SLACK and not any(np.any(r.delta != 0) for r in chosen):
                 continue
-            if quantity == "alpha" and all(np.all(r.alpha == 1.0) for r in chosen):
+            if quantity is Quantity.ALPHA and all(np.all(r.alpha == 1.0) for r in chosen):
                 continue
             stems.append(series_figure(chosen, quantity, folder / quantity))
-        stems.append(joints_figure(chosen, "qd", folder / "joint_velocities"))
-        stems.append(joints_figure(chosen, "q", folder / "joint_positions"))
+        stems.append(joints_figure(chosen, Joints.VELOCITIES, folder / "joint_velocities"))
+        stems.append(joints_figure(chosen, Joints.POSITIONS, folder / "joint_positions"))
         stems.append(path_figure(chosen, folder / "path"))
     return stems

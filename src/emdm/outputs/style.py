@@ -2,6 +2,9 @@
 
 Colours are the Okabe-Ito palette (safe for the common colour-vision deficiencies). Every figure is
 saved as PNG (for screens and the HTML report) and as PDF and SVG (vector, for LaTeX).
+
+Figures are drawn on their own Agg canvas, without pyplot: importing emdm changes no matplotlib
+state (no backend is chosen, no figure is registered), and no display is needed.
 """
 
 from __future__ import annotations
@@ -13,9 +16,8 @@ from typing import Any
 
 import matplotlib
 from cycler import cycler
-
-matplotlib.use("Agg")  # no display needed
-import matplotlib.pyplot as plt
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 COLUMN = 3.5
 """IEEE single-column width (in)."""
@@ -75,22 +77,22 @@ def color(index: int) -> str:
 def figure(
     path_stem: Path, width: float = COLUMN, height: float = 2.4, **subplots: Any
 ) -> Iterator[tuple[Any, Any]]:
-    """Create a styled figure; on exit save it in every format of :data:`FORMATS` and close it."""
-    with plt.rc_context(RC):
-        fig, axes = plt.subplots(figsize=(width, height), **subplots)
-        try:
-            yield fig, axes
-            path_stem.parent.mkdir(parents=True, exist_ok=True)
-            for suffix in FORMATS:
-                fig.savefig(path_stem.with_suffix(suffix))
-        finally:
-            plt.close(fig)
+    """Create a styled figure; on exit save it in every format of :data:`FORMATS`.
+
+    ``subplots`` go to :meth:`matplotlib.figure.Figure.subplots` (``nrows``, ``sharex``, ...).
+    """
+    with matplotlib.rc_context(RC):
+        fig = Figure(figsize=(width, height))
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(**subplots)
+        yield fig, axes
+        path_stem.parent.mkdir(parents=True, exist_ok=True)
+        for suffix in FORMATS:
+            fig.savefig(path_stem.with_suffix(suffix))
 
 
 def figure_canvas(width: float, height: float, dpi: float = 110) -> tuple[Any, Any]:
-    """A styled figure with its Agg canvas, for frame-by-frame rendering (animations)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    """A figure with its Agg canvas, for frame-by-frame rendering (animations); draw it inside
+    ``matplotlib.rc_context(RC)`` for the shared style."""
     fig = Figure(figsize=(width, height), dpi=dpi, layout="constrained")
     return fig, FigureCanvasAgg(fig)

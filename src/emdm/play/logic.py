@@ -452,10 +452,11 @@ def status_rows(outcome: Outcome, t: float) -> list[tuple[str, str]]:
     """The state of one run at time ``t``: (label, value) rows for the status table."""
     run = outcome.run
     if run is None:
-        return [("state", "no run")]
+        return [("time to goal", time_to_goal(outcome))]
     K = run.steps
     k = step_at(t, run.scenario.motion.dt, K)
     rows = [
+        ("time to goal", time_to_goal(outcome)),
         ("t", f"{run.t[k]:.2f} s (step {k} of {K})"),
         ("||e||", f"{run.error_norm[k]:.3g} m"),
         ("m", f"{run.m[k]:.4f}"),
@@ -480,7 +481,10 @@ def status_rows(outcome: Outcome, t: float) -> list[tuple[str, str]]:
 
 
 def time_to_goal(outcome: Outcome) -> str:
+    """``8.15 s``, ``not reached`` or ``stopped at step k``."""
     run = outcome.run
+    if outcome.error is not None:
+        return "no run" if run is None else f"stopped at t = {run.t[-1]:.2f} s"
     if run is None or not run.reached:
         return "not reached"
     return f"{run.t[-1]:.2f} s"

@@ -738,10 +738,9 @@ class Session:
         scenario = self.scenario
         if scenario is None:
             return
-        rows: dict[str, list[str]] = {}
-        for outcome in self.outcomes:
-            for label, text in logic.status_rows(outcome, self.t):
-                rows.setdefault(label, []).append(text)
+        tables = [dict(logic.status_rows(outcome, self.t)) for outcome in self.outcomes]
+        labels = list(dict.fromkeys(label for table in tables for label in table))
+        rows = {label: [table.get(label, "") for table in tables] for label in labels}
         head = "".join(f"<th>{html.escape(o.name)}</th>" for o in self.outcomes)
         body = "".join(
             f"<tr><td>{html.escape(label)}</td>"

@@ -1,6 +1,6 @@
 """Many closed-loop runs at once: the compiled loop on every core, reduced to outcomes.
 
-Each thread of :func:`batch_kernel` owns one record and one set of step buffers and runs its share
+Each thread of :func:`run_all` owns one record and one set of step buffers and runs its share
 of the runs through :func:`emdm.sim.loop.run_kernel`, then reduces each record with
 :func:`emdm.sim.metrics.outcomes`. A run with a step the kernel hands back (see
 :mod:`emdm.sim.loop`) is finished by :func:`emdm.simulate` itself, so every outcome is exact.
@@ -8,6 +8,7 @@ of the runs through :func:`emdm.sim.loop.run_kernel`, then reduces each record w
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -16,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core.controllers import Controller, get_controller
-from ..core.jit import ensure_compiled, kernel, parallel_kernel
+from ..core.jit import ensure_compiled, kernel
 from ..core.kernels import ArmData, ProgramData
 from ..core.scenario import Policy, Scenario
 from .loop import (
@@ -64,8 +65,7 @@ def run_share(
             outcomes(rec.m, rec.effort, rec.qd, rec.e, k, reached, motion.dt, out[r])
 
 
-@parallel_kernel
-def batch_kernel(
+def run_all(
     arm: ArmData,
     motion: Motion,
     prog: ProgramData,
@@ -76,10 +76,18 @@ def batch_kernel(
     codes: NDArray[np.int64],
 ) -> None:
     """Run ``goals[r]`` from ``q0s[r]`` for every ``r`` on ``threads`` threads; ``out[r]`` =
-    outcomes, ``codes[r]`` = how the run ended. (The buffers are made inside :func:`run_share`:
-    NamedTuples of arrays built inside a ``prange`` body do not survive numba's parfor lowering.)"""
-    for t in numba.prange(threads):
-        run_share(arm, motion, prog, goals, q0s, t, threads, out, codes)
+    outcomes, ``codes[r]`` = how the run ended. :func:`run_share` releases the GIL, so plain
+    threads run in parallel (no parallel compile of the whole loop is needed)."""
+    if threads <= 1:
+        run_share(arm, motion, prog, goals, q0s, 0, 1, out, codes)
+        return
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        jobs = [
+            pool.submit(run_share, arm, motion, prog, goals, q0s, t, threads, out, codes)
+            for t in range(threads)
+        ]
+        for job in jobs:
+            job.result()
 
 
 def _warm_up_batch() -> None:
@@ -93,7 +101,7 @@ def _warm_up_batch() -> None:
             goals = np.array([sc.motion.goal], dtype=float)
             out, codes = np.empty((1, len(OUTCOMES))), np.empty(1, dtype=np.int64)
             prog = get_controller(name).program_data(sc)
-            batch_kernel(sc.arm_data, motion_data(sc), prog, goals, q0s, 1, out, codes)
+            run_share(sc.arm_data, motion_data(sc), prog, goals, q0s, 0, 1, out, codes)
 
 
 @dataclass(frozen=True)
@@ -148,7 +156,7 @@ def simulate_batch(
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
         prog = ctrl.program_data(scenario)
         threads = min(numba.get_num_threads(), runs)
-        batch_kernel(scenario.arm_data, motion_data(scenario), prog, g, q, threads, out, codes)
+        run_all(scenario.arm_data, motion_data(scenario), prog, g, q, threads, out, codes)
     redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
     for r in redo:  # finish these runs exactly, through the solver chain where needed
         sc = scenario.with_overrides({"motion.goal": g[r].tolist(), "motion.q0": q[r].tolist()})

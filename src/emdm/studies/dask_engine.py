@@ -1,18 +1,21 @@
-"""Running studies on Dask (``pip install 'emdm[dask]'``): a LocalCluster or a real cluster.
+"""Running work on Dask (``pip install 'emdm[dask]'``): a LocalCluster or a real cluster.
 
-Each chunk is one task, ``emdm.study.run_chunk`` on plain data; a worker that dies costs a retry
-of its tasks (Dask reschedules them on the others), not the study. Results are yielded as they
-complete and combined by the caller in block order, so they do not depend on the cluster.
+The engine knows nothing of what it runs: it is given a work function and the arguments of each
+task (plain data, since they travel to the workers). A worker that dies costs a retry of its
+tasks (Dask reschedules them on the others), not the whole job. Results are yielded as they
+complete, with the key of their task; the caller puts them in order.
 """
 
 from __future__ import annotations
 
 import uuid
-from collections.abc import Iterator, Sequence
-from typing import Any
+from collections.abc import Callable, Hashable, Iterator, Sequence
+from typing import Any, TypeVar
 
 from ..errors import EmdmError
-from .montecarlo import Engine, run_chunk
+
+K = TypeVar("K", bound=Hashable)
+R = TypeVar("R")
 
 
 def local_cluster(workers: int | None) -> Any:
@@ -26,53 +29,44 @@ def local_cluster(workers: int | None) -> Any:
     )
 
 
-def connect(engine: Engine) -> tuple[Any, Any]:
-    """A Dask client for ``engine`` and the LocalCluster it started (``None`` for a scheduler)."""
+def connect(scheduler: str | None, workers: int | None) -> tuple[Any, Any]:
+    """A Dask client for ``scheduler`` (or for a LocalCluster of ``workers`` started here) and
+    the LocalCluster it started (``None`` for a scheduler)."""
     try:
         from dask.distributed import Client
     except ImportError:
         raise EmdmError("the dask engine needs pip install 'emdm[dask]'") from None
-    if engine.scheduler:
+    if scheduler:
         try:
-            return Client(engine.scheduler, timeout="5s"), None
+            return Client(scheduler, timeout="5s"), None
         except (OSError, TimeoutError) as exc:
             reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise EmdmError(
-                f"cannot reach the Dask scheduler at {engine.scheduler}: {reason}"
-            ) from None
-    cluster = local_cluster(engine.workers)
+            raise EmdmError(f"cannot reach the Dask scheduler at {scheduler}: {reason}") from None
+    cluster = local_cluster(workers)
     return Client(cluster), cluster
 
 
-def submit_chunks(
-    engine: Engine,
-    scenario_data: dict[str, Any],
-    seed: int,
-    chunks: Sequence[tuple[int, int]],
-    runs: int,
-    keep_runs: bool,
-) -> Iterator[tuple[int, dict[str, Any]]]:
-    """``(first_block, result)`` for every chunk, in the order they complete."""
+def submit(
+    scheduler: str | None,
+    workers: int | None,
+    work: Callable[..., R],
+    tasks: Sequence[tuple[K, tuple[Any, ...]]],
+    *,
+    name: str = "emdm-task",
+) -> Iterator[tuple[K, R]]:
+    """``(key, work(*args))`` for every ``(key, args)`` of ``tasks``, in the order they complete.
+
+    ``work`` must be importable by the workers (a module-level function); each task is retried
+    up to three times when its worker dies.
+    """
     from dask.distributed import as_completed
 
-    client, cluster = connect(engine)
+    client, cluster = connect(scheduler, workers)
     try:
         tag = uuid.uuid4().hex[:8]
         futures = {
-            client.submit(
-                run_chunk,
-                scenario_data,
-                seed,
-                first,
-                last,
-                runs,
-                keep_runs,
-                1,
-                key=f"emdm-chunk-{tag}-{first}",
-                pure=False,
-                retries=3,
-            ): first
-            for first, last in chunks
+            client.submit(work, *args, key=f"{name}-{tag}-{key}", pure=False, retries=3): key
+            for key, args in tasks
         }
         for future in as_completed(futures):
             yield futures[future], future.result()

@@ -23,6 +23,7 @@ from collections import Counter
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -56,6 +57,14 @@ FEATURES = ("cond_reduced", "w_slack", "cond_J", "m", "alpha", "active")
 """Per-step features recorded with every re-solve (see :func:`step_features`)."""
 
 
+class Representative(StrEnum):
+    """The steps whose convergence histories are recorded (see :func:`representative_steps`)."""
+
+    FIRST = "first"
+    SCALED = "scaled"
+    LAST = "last"
+
+
 @dataclass(frozen=True, eq=False)
 class StepSolve:
     """One solver's answer to one step's program."""
@@ -77,7 +86,7 @@ class SolverStudy:
 
     spec: SolverSpec
     solves: list[StepSolve] = field(default_factory=list)
-    histories: dict[str, tuple[dict[str, float], ...]] = field(default_factory=dict)
+    histories: dict[Representative, tuple[dict[str, float], ...]] = field(default_factory=dict)
     closed_loop: Run | None = None
     closed_loop_error: str | None = None
 
@@ -161,7 +170,7 @@ class LabResult:
     controller: Controller
     reference: Run
     steps: list[int]
-    representative: dict[str, int]
+    representative: dict[Representative, int]
     studies: dict[str, SolverStudy]
     optimum: dict[int, tuple[Vector, float]]
     features: dict[int, dict[str, float]] = field(default_factory=dict)
@@ -177,13 +186,14 @@ def sample_steps(run: Run, sample: int | None) -> list[int]:
     return sorted(chosen)
 
 
-def representative_steps(run: Run) -> dict[str, int]:
+def representative_steps(run: Run) -> dict[Representative, int]:
     """The first step, the first scaled step (if any) and the last step of a run."""
-    reps = {"first": 0}
+    reps = {Representative.FIRST: 0}
     scaled = np.flatnonzero(run.alpha < 1.0)
     if scaled.size:
-        reps["scaled"] = int(scaled[0]) if scaled[0] != 0 else int(scaled[min(1, scaled.size - 1)])
-    reps["last"] = run.steps - 1
+        first = int(scaled[0]) if scaled[0] != 0 else int(scaled[min(1, scaled.size - 1)])
+        reps[Representative.SCALED] = first
+    reps[Representative.LAST] = run.steps - 1
     return reps
 
 
@@ -275,11 +285,13 @@ def _study(
     name: str,
     programs: dict[int, QP],
     optimum: dict[int, tuple[Vector, float]],
-    reps: dict[str, int],
+    reps: dict[Representative, int],
     budget: int | None,
     repeats: int,
     closed_loop: bool,
-) -> tuple[list[StepSolve], dict[str, tuple[dict[str, float], ...]], Run | None, str | None]:
+) -> tuple[
+    list[StepSolve], dict[Representative, tuple[dict[str, float], ...]], Run | None, str | None
+]:
     """One solver's measurements (runs in a worker process when the lab is parallel)."""
     spec = get_solver(name)
     steps = sorted(programs)
@@ -304,7 +316,7 @@ def _study(
                 status=result.status,
             )
         )
-    histories: dict[str, tuple[dict[str, float], ...]] = {}
+    histories: dict[Representative, tuple[dict[str, float], ...]] = {}
     for label, k in reps.items():
         try:
             histories[label] = _call(spec, programs[k], budget, history=True).history

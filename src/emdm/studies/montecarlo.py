@@ -17,9 +17,9 @@ from __future__ import annotations
 import math
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,6 @@ import numpy as np
 from ..core.controllers import CONTROLLERS
 from ..core.scenario import Scenario, scenario_from_dict
 from ..errors import EmdmError
-from ..outputs.style import COLUMN, figure
 
 BLOCK = 256
 """Runs per random block: the unit of the draws (chunks are whole numbers of blocks)."""
@@ -82,7 +81,7 @@ def run_chunk(
     Plain data in and out (it runs on Dask workers). ``threads`` caps numba's threads (one per
     worker process on a cluster, so workers do not compete for cores).
     """
-    from ..sim.fast import simulate_batch
+    from ..sim.batch import simulate_batch
 
     started = time.perf_counter()
     if threads is not None:
@@ -106,7 +105,10 @@ def run_chunk(
     cell = np.clip(np.digitize(goals[:, 1], edges) - 1, 0, GRID - 1) * GRID + np.clip(
         np.digitize(goals[:, 0], edges) - 1, 0, GRID - 1
     )
-    outcomes = {name: simulate_batch(scenario, name, goals=goals, q0s=q0s) for name in CONTROLLERS}
+    outcomes = {
+        name: simulate_batch(scenario, name, goals=goals, q0s=q0s).outcomes()
+        for name in CONTROLLERS
+    }
     # reduce block by block: the same 256 runs make a block whatever the chunking, so sums
     # combined in block order do not depend on how the study was split
     reduced = []
@@ -176,13 +178,29 @@ def _reduce_block(outcomes: dict[str, dict[str, np.ndarray]], cell: np.ndarray) 
 
 
 # --------------------------------------------------------------------------------- engines
+class EngineKind(StrEnum):
+    """Where a study runs: this process (numba on every core) or a Dask cluster."""
+
+    LOCAL = "local"
+    DASK = "dask"
+
+
 @dataclass(frozen=True)
 class Engine:
-    """Where a study runs: ``local`` (this process, numba on every core) or ``dask``."""
+    """Where a study runs: ``local`` or ``dask`` (at ``scheduler``, or on a LocalCluster of
+    ``workers`` processes started for the study)."""
 
-    kind: str = "local"
+    kind: EngineKind = EngineKind.LOCAL
     scheduler: str | None = None
     workers: int | None = None
+
+    def __post_init__(self) -> None:
+        try:
+            kind = EngineKind(self.kind)
+        except ValueError:
+            choices = " or ".join(EngineKind)
+            raise EmdmError(f"unknown engine {self.kind!r} ({choices})") from None
+        object.__setattr__(self, "kind", kind)
 
 
 def _chunks(runs: int, chunk_blocks: int) -> list[tuple[int, int]]:
@@ -208,16 +226,16 @@ def run_chunks(
     data = scenario.to_dict()
     chunks = _chunks(runs, chunk_blocks)
     order = [first for first, _ in chunks]
-    if engine.kind == "local":
+    if engine.kind is EngineKind.LOCAL:
         source: Iterator[tuple[int, dict[str, Any]]] = (
             (first, run_chunk(data, seed, first, last, runs, keep_runs)) for first, last in chunks
         )
-    elif engine.kind == "dask":
-        from .dask_engine import submit_chunks
-
-        source = submit_chunks(engine, data, seed, chunks, runs, keep_runs)
     else:
-        raise EmdmError(f"unknown engine {engine.kind!r} (local or dask)")
+        from .dask_engine import submit
+
+        # one numba thread per worker process, so that workers do not compete for cores
+        tasks = [(first, (data, seed, first, last, runs, keep_runs, 1)) for first, last in chunks]
+        source = submit(engine.scheduler, engine.workers, run_chunk, tasks, name="emdm-chunk")
     pending: dict[int, dict[str, Any]] = {}
     position = done = 0
     for first, result in source:
@@ -282,14 +300,6 @@ class Accumulator:
         }
 
 
-def reduce_chunks(parts: Iterable[dict[str, Any]], runs: int) -> dict[str, Any]:
-    """Combine chunk reductions, given in block order, into the study's results."""
-    acc = Accumulator()
-    for part in parts:
-        acc.add(part)
-    return acc.result(runs)
-
-
 def run_study(
     scenario: Scenario,
     runs: int,
@@ -338,7 +348,7 @@ def run_study(
         seed=seed,
         wall_time_s=elapsed,
         steps_per_second=result["steps"] / elapsed,
-        engine=engine.kind,
+        engine=engine.kind.value,
         chunk_runs=chunk_blocks * BLOCK,
         chunks=chunks,
         compute_s=compute,
@@ -388,28 +398,6 @@ def study_table(data: dict[str, Any]) -> str:
     return "\n".join(rows)
 
 
-def workspace_maps(data: dict[str, Any], scenario: Scenario, out: Path) -> Path:
-    """Heat maps over goal positions: C-EMDM time to goal, and its gain over C-IVKC."""
-    reach = scenario.planar_arm.reach
-    edges = np.linspace(-reach, reach, GRID + 1)
-    chosen = {
-        "C-EMDM mean time to goal (s)": data["maps"]["C-EMDM time to goal"],
-        "C-EMDM mean m gain over C-IVKC (%)": 100 * data["maps"]["C-EMDM gain over C-IVKC"],
-    }
-    stem = out / "workspace_maps"
-    with figure(stem, width=COLUMN, height=5.2, nrows=2) as (_, axes):
-        for ax, (title, values) in zip(axes, chosen.items(), strict=True):
-            mesh = ax.pcolormesh(
-                edges, edges, values.reshape(GRID, GRID), cmap="viridis", shading="flat"
-            )
-            ax.set_aspect("equal")
-            ax.set_xlabel("goal x (m)")
-            ax.set_ylabel("goal y (m)")
-            ax.set_title(f"{title}, per cell", fontsize=7)
-            ax.figure.colorbar(mesh, ax=ax)
-    return stem
-
-
 def parse_weights(text: str) -> list[tuple[float, float]]:
     """``"0.1:0,0.1:5"`` -> ``[(0.1, 0.0), (0.1, 5.0)]`` (w_E:w_M pairs)."""
     pairs = []
@@ -438,11 +426,11 @@ def run_sweep(
 ) -> list[dict[str, Any]]:
     """A study for every scenario and weight pair, on one engine (one cluster for all)."""
     cluster = None
-    if engine.kind == "dask" and not engine.scheduler:
+    if engine.kind is EngineKind.DASK and not engine.scheduler:
         from .dask_engine import local_cluster
 
         cluster = local_cluster(engine.workers)
-        engine = Engine("dask", scheduler=cluster.scheduler_address)
+        engine = Engine(EngineKind.DASK, scheduler=cluster.scheduler_address)
     try:
         results = []
         for scenario in scenarios:
@@ -475,28 +463,19 @@ def run_sweep(
             cluster.close()
 
 
-def sweep_trade_off(
-    results: Sequence[dict[str, Any]], scenarios: Sequence[Scenario], out: Path
-) -> list[Path]:
-    """Whole-run trade-off figures (emdm.pareto.trade_off_figure) from a weight sweep."""
-    from .pareto import trade_off_figure
-
-    stems = []
-    for scenario in scenarios:
-        rows_of = [r for r in results if r["scenario"] == scenario.name]
-        if len(rows_of) < 2:
-            continue
-        for controller in ("UC-EMDM", "C-EMDM"):
-            rows = [
-                {
-                    "w_effort": r["weights"]["effort"],
-                    "w_manip": r["weights"]["manipulability"],
-                    "total_effort": r["controllers"][controller]["mean_total_effort"],
-                    "mean_manipulability": r["controllers"][controller]["mean_manipulability"],
-                    "time_to_goal": r["controllers"][controller]["mean_time_to_goal"],
-                }
-                for r in rows_of
-            ]
-            folder = out / f"trade_off-{scenario.name}-{controller}"
-            stems.append(trade_off_figure(rows, scenario, f"{controller} (study means)", folder))
-    return stems
+def trade_off_rows(
+    results: Sequence[dict[str, Any]], scenario: str, controller: str
+) -> list[dict[str, Any]]:
+    """One row per weight pair of a sweep for ``scenario``: ``controller``'s study means, in the
+    shape of :func:`emdm.studies.pareto.weight_grid`'s rows (whole-run trade-off)."""
+    return [
+        {
+            "w_effort": r["weights"]["effort"],
+            "w_manip": r["weights"]["manipulability"],
+            "total_effort": r["controllers"][controller]["mean_total_effort"],
+            "mean_manipulability": r["controllers"][controller]["mean_manipulability"],
+            "time_to_goal": r["controllers"][controller]["mean_time_to_goal"],
+        }
+        for r in results
+        if r["scenario"] == scenario
+    ]
