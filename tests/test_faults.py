@@ -6,6 +6,7 @@ from __future__ import annotations
 import errno
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,14 @@ import pytest
 from emdm.cli import main
 from emdm.outputs import records
 from emdm.outputs.records import MARKER, OutputError, atomic_output, check_out
+
+
+@pytest.fixture(scope="module", autouse=True)
+def compiled():
+    """The control loop compiled (or loaded) before any test reads stderr."""
+    import emdm
+
+    emdm.simulate(emdm.load_scenario("task2"), "C-EMDM")
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:
@@ -66,8 +75,9 @@ def exdev_exchange(a: Path, b: Path) -> None:
 # ------------------------------------------------------------------------------ the swap itself
 def test_results_replace_the_folder_as_a_whole(tmp_path):
     out = tmp_path / "out"
-    write(out, "v1")
-    (out / "trajectories" / "stale.csv").write_text("from an older run")
+    with atomic_output(out) as stage:  # an older run wrote a file the next one does not
+        (stage / "trajectories").mkdir()
+        (stage / "trajectories" / "stale.csv").write_text("from an older run")
     write(out, "v2")
     assert snapshot(out)["metrics.json"] == b'{"version": "v2"}'
     assert "trajectories/stale.csv" not in snapshot(out)
@@ -289,3 +299,79 @@ def test_full_disk(tmp_path, mounts, monkeypatch, capsys):
     assert "no space left on device" in err and "earlier results are unchanged" in err
     assert err.count("\n") == 1
     assert snapshot(disk / "r") == before and leftovers(disk) == []
+
+
+# ---------------------------------------------------------------------- nothing of yours is lost
+def test_files_emdm_did_not_write_are_never_replaced(tmp_path, capsys):
+    out = tmp_path / "out"
+    write(out, "v1")
+    (out / "figures" / ".DS_Store").write_bytes(b"browser")  # a file browser's: replaced
+    write(out, "v2")
+    (out / "trajectories" / "my notes.txt").write_text("mine")
+    before = snapshot(out)
+    with pytest.raises(OutputError, match=r"holds trajectories/my notes.txt, which emdm did not"):
+        write(out, "v3")
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 2
+    assert "my notes.txt, which emdm did not write" in capsys.readouterr().err
+    assert snapshot(out) == before
+
+
+def test_out_must_not_hold_the_input(tmp_path, capsys):
+    run_dir = tmp_path / "r"
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(run_dir)]) == 0
+    before = snapshot(run_dir)
+    for out in (run_dir, tmp_path):
+        assert main(["plot", str(run_dir), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert "holds the input" in err or "emdm did not write" in err, err
+    assert snapshot(run_dir) == before
+
+
+def test_what_a_killed_emdm_left_is_tidied(tmp_path):
+    """SIGKILL or a power cut leaves a staging folder, or the earlier results moved aside."""
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    dead = gone.pid
+    out = tmp_path / "out"
+    write(out, "v1")
+    (tmp_path / f".out.partial-{dead}-abc").mkdir()  # killed while working
+    write(out, "v2")
+    assert leftovers(tmp_path) == []
+    os.rename(out, tmp_path / f".out.old-{dead}-abc")  # killed between the two renames
+    write(tmp_path / "other", "x")  # another folder: not touched
+    assert not out.exists()
+    write(out, "v3")  # the earlier results came back first, then were replaced
+    assert snapshot(out)["metrics.json"] == b'{"version": "v3"}' and leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    ("where", "message"), [("/", "is the root folder"), ("x" * 300, "longer than 255 bytes")]
+)
+def test_impossible_out_names(tmp_path, monkeypatch, where, message):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(OutputError, match=message):
+        check_out(Path(where))
+
+
+def test_a_full_stdout_is_one_line(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full here")
+    done = subprocess.run(
+        [sys.executable, "-m", "emdm.cli", "list"],
+        stdout=open("/dev/full", "w"),
+        stderr=subprocess.PIPE,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert done.stderr == (
+        "emdm: error: cannot write to the standard output: no space left on device\n"
+    )
+
+
+def test_a_read_only_place_is_refused_before_work(tmp_path, mounts, capsys):
+    place = mounts(tmp_path / "ro", "size=64k", "ro")
+    assert main(["run", "task2", "--out", str(place / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "cannot create folders in" in err and "read-only file system" in err
+    assert err.count("\n") == 1

@@ -10,16 +10,17 @@ earlier results stay, and the exit status is 128 + the signal (130, 143, 129).
 from __future__ import annotations
 
 import contextlib
-import errno
 import logging
 import multiprocessing
 import os
+import select
 import signal
 import sys
 import time
 import warnings
 from collections.abc import Callable, Iterator
 from types import FrameType
+from typing import Any
 
 from ..errors import EmdmError, NoSolution, one_line
 from ..outputs import records
@@ -192,6 +193,70 @@ def _os_message(exc: OSError) -> str:
     return f"{where}: {reason}"
 
 
+def _stdout_broken() -> bool:
+    """The standard output is a pipe whose reader has gone."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        return True
+    except (OSError, ValueError, AttributeError):
+        pass
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(event & select.POLLERR for _, event in poller.poll(0))
+    except (OSError, ValueError, AttributeError):
+        return False
+
+
+def _stdout_failed(exc: OSError) -> bool:
+    """``exc`` came from writing the standard output (no file name, stdout still unflushed)."""
+    if exc.filename is not None:
+        return False
+    try:
+        sys.stdout.flush()
+    except OSError:
+        return True
+    except (ValueError, AttributeError):
+        return False
+    return False
+
+
+class _StdoutFailed(Exception):
+    """Writing the standard output failed (a full disk, an I/O error)."""
+
+    def __init__(self, error: OSError) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+
+class _GuardedStdout:
+    """The standard output, whose write errors (other than a closed pipe) say where they come
+    from: an ``OSError`` without a file name would otherwise read like a failure of the disk."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return int(self._stream.write(text))
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _StdoutFailed(exc) from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise _StdoutFailed(exc) from None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
 def _quiet_stdout() -> None:
     """After a broken pipe on stdout, send what is left to /dev/null (no message at exit)."""
     with contextlib.suppress(OSError, ValueError, AttributeError):
@@ -205,7 +270,10 @@ def run_command(command: Callable[[], int]) -> int:
     try:
         with handling_signals():
             try:
-                return int(command())
+                with contextlib.redirect_stdout(_GuardedStdout(sys.stdout)):
+                    status = int(command())
+                    sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
+                return status
             except BaseException:
                 _close_dask()
                 raise
@@ -229,16 +297,21 @@ def run_command(command: Callable[[], int]) -> int:
         outcome = f"{written} was written before that" if written else "nothing was written"
         _print(f"emdm: {HANDLED.get(signum, 'stopped')}; {outcome}")
         return 128 + signum
-    except BrokenPipeError:  # the reader went away (emdm list | head -1): nothing to say
-        _quiet_stdout()
-        return 0
+    except BrokenPipeError as exc:
+        if _stdout_broken():  # the reader went away (emdm list | head -1): nothing to say
+            _quiet_stdout()
+            return 0
+        _print(f"emdm: error: a program emdm was writing to has stopped ({_os_message(exc)})")
+        return 2
     except MemoryError:
         _print("emdm: error: out of memory (try a shorter motion.max_time or fewer runs)")
         return 2
-    except OSError as exc:
-        if exc.errno == errno.EPIPE:
+    except (OSError, _StdoutFailed) as exc:
+        if isinstance(exc, _StdoutFailed) or _stdout_failed(exc):
+            reason = exc.error if isinstance(exc, _StdoutFailed) else exc
             _quiet_stdout()
-            return 0
+            _print(f"emdm: error: cannot write to the standard output: {_os_message(reason)}")
+            return 2
         _print(f"emdm: error: {_os_message(exc)}")
         return 2
     except Exception as exc:  # a bug: one line, the traceback on request

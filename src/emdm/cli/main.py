@@ -9,7 +9,9 @@ work; results are staged and replace ``--out`` as a whole only when the command 
 from __future__ import annotations
 
 import argparse
+import os
 import re
+import shutil
 import sys
 import time
 import warnings
@@ -81,11 +83,25 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     return _load(args.scenario, _overrides(args))
 
 
-def _out(args: argparse.Namespace, default: str) -> Path:
-    """``--out`` (or ``results/<default>``), checked before any work."""
+def _out(args: argparse.Namespace, default: str, inputs: Iterable[str | Path] = ()) -> Path:
+    """``--out`` (or ``results/<default>``), checked before any work; it must not hold one of
+    the ``inputs`` (a run folder, a scenario file), which replacing it would delete."""
     out = Path(args.out) if args.out else Path("results") / default
     check_out(out)
+    where = Path(os.path.realpath(out))
+    for given in inputs:
+        path = Path(os.path.realpath(given))
+        if path == where or where in path.parents:
+            raise UsageError(
+                f"--out {out} holds the input {given}, which replacing it would delete"
+            )
     return out
+
+
+def _inputs(args: argparse.Namespace) -> list[str]:
+    """The scenario arguments that are files or folders (not presets)."""
+    given = args.scenario if isinstance(args.scenario, list) else [args.scenario]
+    return [name for name in given if os.path.lexists(name)]
 
 
 def _simulate(scenario: Scenario, name: str, **options: Any) -> Run:
@@ -119,7 +135,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     scenario = _scenario(args)
     controllers = _unique(args.controller) or list(CONTROLLERS)
     solver, fallback = _chain(args)
-    out = _out(args, safe(scenario.name))
+    out = _out(args, safe(scenario.name), _inputs(args))
     runs: dict[str, Run] = {}
     stopped: dict[str, NoSolution] = {}
     start = time.perf_counter()
@@ -175,7 +191,7 @@ def cmd_solvers(args: argparse.Namespace) -> int:
     scenario = _scenario(args)
     controllers = _unique(args.controller) or ["C-EMDM"]
     solvers = _unique(args.solver) or [n for n in DEFAULT_LAB_SOLVERS if n in available_solvers()]
-    out = _out(args, f"{safe(scenario.name)}-solvers")
+    out = _out(args, f"{safe(scenario.name)}-solvers", _inputs(args))
     start = time.perf_counter()
     labs = {}
     with Progress(f"solvers {scenario.name}", len(solvers) * len(controllers), "solver") as bar:
@@ -257,7 +273,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
     controllers = _unique(args.controller) or list(CONTROLLERS)
     scenario, folder = _source(args)
-    out = _out(args, f"{safe(scenario.name)}-figures")
+    out = _out(args, f"{safe(scenario.name)}-figures", _inputs(args))
     with Progress(f"plot {scenario.name}") as bar:
         runs = _runs(scenario, folder, controllers, bar)
         bar.note("drawing the figures")
@@ -276,11 +292,16 @@ def _check_mp4() -> None:
             "animate: MP4 needs ffmpeg: pip install 'emdm[video]', or pass --no-mp4"
         ) from None
     try:
-        imageio_ffmpeg.get_ffmpeg_exe()
+        exe = imageio_ffmpeg.get_ffmpeg_exe()
     except Exception as exc:
         raise EmdmError(
             f"animate: ffmpeg cannot be found ({exc}); pip install 'emdm[video]', or pass --no-mp4"
         ) from None
+    if not (os.path.isfile(exe) and os.access(exe, os.X_OK)) and shutil.which(exe) is None:
+        raise EmdmError(
+            f"animate: ffmpeg cannot be found ({exe} is not a program); pip install "
+            "'emdm[video]', or pass --no-mp4"
+        )
 
 
 def cmd_animate(args: argparse.Namespace) -> int:
@@ -303,7 +324,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
         ) from None
     if not args.no_mp4:
         _check_mp4()
-    out = _out(args, f"{safe(scenario.name)}-animations")
+    out = _out(args, f"{safe(scenario.name)}-animations", _inputs(args))
     controllers = _unique(name for group in groups for name in group)
     written: list[Path] = []
     with Progress(f"animate {scenario.name}", len(groups), "animation") as bar:
@@ -314,7 +335,14 @@ def cmd_animate(args: argparse.Namespace) -> int:
                 if chosen:
                     bar.note(" vs ".join(r.controller.name for r in chosen))
                     stem = staging / "_vs_".join(r.controller.name for r in chosen)
-                    written += animate(chosen, stem, speedup=args.speedup, mp4=not args.no_mp4)
+                    try:
+                        written += animate(chosen, stem, speedup=args.speedup, mp4=not args.no_mp4)
+                    except (BrokenPipeError, RuntimeError) as exc:  # from ffmpeg
+                        reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else ""
+                        raise EmdmError(
+                            f"animate: ffmpeg failed on {stem.name}.mp4 "
+                            f"({reason or type(exc).__name__}); pass --no-mp4 for the GIF only"
+                        ) from None
                 bar.step()
     print(f"{scenario.name}: {', '.join(p.name for p in written)} -> {out}/")
     return 0
@@ -331,7 +359,7 @@ def cmd_pareto(args: argparse.Namespace) -> int:
             raise UsageError(f"--controller must be UC-EMDM or C-EMDM, got {name}")
     scenario = _scenario(args)
     tag = controllers[0] if len(controllers) == 1 else "EMDM"
-    out = _out(args, f"{safe(scenario.name)}-pareto-{tag}")
+    out = _out(args, f"{safe(scenario.name)}-pareto-{tag}", _inputs(args))
     grid = default_grid(scenario, args.grid)
     results = {}
     with Progress(f"pareto {scenario.name}", len(controllers) * (1 + len(grid)), "run") as bar:
@@ -374,9 +402,11 @@ def cmd_report(args: argparse.Namespace) -> int:
     out = _out(args, "report")
     start = time.perf_counter()
     with Progress(f"report ({'quick' if args.quick else 'full'})", unit="part") as bar:
-        build_report(
+        prov = build_report(
             out, quick=args.quick, workers=args.workers, progress=lambda m: bar.step(note=m)
         )
+    if prov.get("compiled", {}).get("hint"):
+        print(prov["compiled"]["hint"], file=sys.stderr)
     print(f"report written in {time.perf_counter() - start:.1f} s: {out / 'index.html'}")
     return 0
 
@@ -427,7 +457,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     scenarios = [_load(name, overrides) for name in _unique(args.scenario)]
     weights = parse_weights(args.weights) if args.weights else None
     engine = Engine(args.engine, args.scheduler, args.workers)
-    out = _out(args, f"{safe(scenarios[0].name)}-study")
+    out = _out(args, f"{safe(scenarios[0].name)}-study", _inputs(args))
     studies = len(scenarios) * (len(weights) if weights else 1)
     with Progress(f"study ({studies} × {args.runs} runs)", unit="chunk") as bar:
 
@@ -662,9 +692,9 @@ def build_parser() -> argparse.ArgumentParser:
     rep = _command(
         sub,
         "report",
-        "the whole study of the brief: HTML, LaTeX and data",
-        "Run every experiment of the brief and write index.html, latex/ and the data behind "
-        "every number.",
+        "the whole study of the brief: paper, pitch, HTML and data",
+        "Run every experiment of the brief and write index.html, paper/ (paper and pitch) and "
+        "the data behind every number.",
     )
     add_quick(rep, "a reduced study in about 20 s (demos, tests)")
     add_workers(rep, "up to 2")

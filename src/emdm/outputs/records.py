@@ -8,12 +8,14 @@ earlier results in ``--out`` byte for byte, and no staging folder behind.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import ctypes
 import errno
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import sys
@@ -156,6 +158,8 @@ MARKER = ".emdm-results"
 """The file emdm leaves in every folder it writes: only such folders (or empty ones) are replaced."""
 IGNORED = frozenset({"lost+found"})
 """Entries of an output folder that emdm neither counts nor moves (a mount point's lost+found)."""
+DESKTOP_FILES = frozenset({".DS_Store", "Thumbs.db", "desktop.ini"})
+"""Files a file browser leaves in any folder it shows: not the user's, replaced with the rest."""
 _OURS = (".emdm-partial-", ".emdm-old-", ".emdm-copy-", ".emdm-probe-")
 _NO_EXCHANGE = {errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EXDEV}
 COMMITTED: list[Path] = []
@@ -201,41 +205,91 @@ def _size(number: float) -> str:
     raise AssertionError  # pragma: no cover
 
 
+def _target(out: Path) -> Path:
+    """The folder ``out`` names: absolute, and where a symbolic link points (the link is kept)."""
+    try:
+        return Path(os.path.realpath(out) if os.path.islink(out) else os.path.abspath(out))
+    except ValueError:  # an embedded NUL
+        raise OutputError(out, "is not a valid path") from None
+
+
+def _manifest(folder: Path) -> set[str] | None:
+    """The files listed in ``folder``'s :data:`MARKER` (``None`` without one)."""
+    try:
+        text = (folder / MARKER).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None
+    return {line for line in text.splitlines() if line and not line.startswith("#")}
+
+
+def _files(folder: Path) -> list[str]:
+    """Every file under ``folder`` (POSIX paths, sorted), not counting the marker, lost+found and
+    emdm's folders in flight."""
+    found = []
+    for root, subfolders, files in os.walk(folder):
+        here = Path(root).relative_to(folder)
+        if root == str(folder):
+            subfolders[:] = [d for d in subfolders if d not in IGNORED and not d.startswith(_OURS)]
+            files = [f for f in files if f != MARKER and not f.startswith(_OURS)]
+        found += [(here / name).as_posix() for name in files]
+        found += [(here / d).as_posix() for d in subfolders if os.path.islink(Path(root) / d)]
+    return sorted(found)
+
+
 def check_out(out: Path, *, need: int | None = None) -> None:
     """Check, before any work, that ``out`` can receive results; raise :class:`OutputError` if not.
 
-    ``out`` must be a folder or not exist yet; an existing folder must be empty or written by emdm
-    (it holds :data:`MARKER`), since it is replaced as a whole; every folder in it must be
-    writable (the earlier results are removed once the new ones are in); the nearest existing
-    ancestor must be a folder in which a folder can be created; its filesystem must have ``need``
+    ``out`` must be a folder or not exist yet, and not the root. An existing folder is replaced
+    as a whole, so it must be empty or written by emdm (it holds :data:`MARKER`) and hold no file
+    that emdm did not write there (the marker lists them); every folder in it must be writable
+    (the earlier results are removed once the new ones are in). The nearest existing ancestor
+    must be a folder in which a folder can be created, and its filesystem must have ``need``
     bytes free (default :data:`MIN_FREE`). Nothing is left behind by the check.
     """
-    out = Path(out)
-    if os.path.lexists(out):
-        if not out.is_dir():
+    target = _target(out)
+    if target.name in ("", ".", ".."):
+        raise OutputError(out, "is the root folder: give a folder below it")
+    if len(os.fsencode(target.name)) > 255:
+        raise OutputError(out, "its name is longer than 255 bytes")
+    if os.path.lexists(target):
+        if not target.is_dir():
             raise OutputError(out, "exists and is not a folder")
         try:
-            entries = _entries(out)
+            files = _files(target)
+            entries = _entries(target)
         except OSError as exc:
             raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
-        if entries and not (out / MARKER).is_file():
+        listed = _manifest(target)
+        if entries and listed is None:
             raise OutputError(
                 out,
                 f"holds {len(entries)} file(s) or folder(s) emdm did not write (no {MARKER}); "
                 "emdm replaces its output folder as a whole, so give a new or empty folder",
             )
-        for folder, subfolders, _ in os.walk(out):
+        foreign = [
+            name
+            for name in files
+            if name not in (listed or set()) and Path(name).name not in DESKTOP_FILES
+        ]
+        if foreign:
+            raise OutputError(
+                out,
+                f"holds {foreign[0]}{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}"
+                ", which emdm did not write; emdm replaces its output folder as a whole, so move "
+                "it away or give another folder",
+            )
+        for folder, subfolders, _ in os.walk(target):
             for sub in (folder, *(os.path.join(folder, s) for s in subfolders)):
                 if not os.access(sub, os.W_OK | os.X_OK):
                     raise OutputError(
                         out, f"{sub} is read-only: the earlier results in it could not be replaced"
                     )
-    ancestor = Path(os.path.abspath(out)).parent
+    ancestor = target.parent
     while not os.path.lexists(ancestor):
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise OutputError(out, f"{ancestor} is not a folder")
-    places = [ancestor, out] if _is_mount(out) else [ancestor]
+    places = [ancestor, target] if _is_mount(target) else [ancestor]
     for place in places:
         try:
             os.rmdir(tempfile.mkdtemp(prefix=".emdm-probe-", dir=place))
@@ -247,6 +301,37 @@ def check_out(out: Path, *, need: int | None = None) -> None:
         raise OutputError(
             out, f"only {_size(free)} free on its filesystem, at least {_size(need)} needed"
         )
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process
+        return True
+    return True
+
+
+def _sweep(out: Path) -> None:
+    """Tidy what an emdm killed outright (SIGKILL, a power cut) left beside ``out``: its staging
+    folder is removed; the earlier results it had moved aside are put back if ``out`` is missing
+    (killed between two renames), else removed (killed after the swap)."""
+    pattern = re.compile(rf"\.{re.escape(out.name[:80])}\.(partial|old)-(\d+)-")
+    try:
+        names = sorted(os.listdir(out.parent))
+    except OSError:
+        return
+    for name in names:
+        found = pattern.match(name)
+        if not found or _alive(int(found.group(2))):
+            continue
+        left = out.parent / name
+        if found.group(1) == "old" and not os.path.lexists(out):
+            with contextlib.suppress(OSError):
+                os.rename(left, out)
+                continue
+        _remove(left)
 
 
 class _Critical:
@@ -380,7 +465,7 @@ def _commit(staging: Path, out: Path, inside: bool) -> None:
     except OSError as exc:
         if exc.errno not in _NO_EXCHANGE:
             raise
-    backup = Path(tempfile.mkdtemp(prefix=f".{out.name[:80]}.old-", dir=out.parent))
+    backup = Path(tempfile.mkdtemp(prefix=f".{out.name[:80]}.old-{os.getpid()}-", dir=out.parent))
     os.rmdir(backup)
     try:
         os.rename(out, backup)
@@ -418,16 +503,15 @@ def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
     swap are deferred (:func:`critical_section`). Raises :class:`OutputError` when ``out`` cannot
     receive results, before the block runs.
     """
-    out = Path(out)
-    if os.path.islink(out):  # write where the link points, and keep the link
-        out = Path(os.path.realpath(out))
     check_out(out, need=0)
-    existed = os.path.lexists(out)
+    out = _target(out)
     created = _make_parents(out.parent)
+    _sweep(out)
+    existed = os.path.lexists(out)
     inside = _is_mount(out)
     staging = Path(
         tempfile.mkdtemp(
-            prefix=".emdm-partial-" if inside else f".{out.name[:80]}.partial-",
+            prefix=".emdm-partial-" if inside else f".{out.name[:80]}.partial-{os.getpid()}-",
             dir=out if inside else out.parent,
         )
     )
@@ -441,9 +525,12 @@ def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
                 raise _write_error(out, existed, exc) from exc
             raise  # not about the results (an input file, say): reported as it is
         try:
+            written = _files(staging)
             (staging / MARKER).write_text(
-                f"Written by emdm {_version()}{f' ({command})' if command else ''}. emdm replaces "
-                "folders holding this file as a whole when it writes there again.\n",
+                f"# Written by emdm {_version()}{f' ({command})' if command else ''}. emdm "
+                "replaces this folder as a whole when it writes here again,\n# and refuses to "
+                "while it holds files not listed here (yours).\n"
+                + "".join(f"{name}\n" for name in written),
                 encoding="utf-8",
             )
             with critical_section():
