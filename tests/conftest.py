@@ -18,6 +18,16 @@ def rng():
     return np.random.default_rng(12345)
 
 
+@pytest.fixture(scope="session")
+def quick_report(tmp_path_factory):
+    """One ``emdm report --quick`` for every test that reads a report (test_report, test_paper)."""
+    from emdm.cli import main
+
+    out = tmp_path_factory.mktemp("report") / "report"
+    assert main(["report", "--quick", "--out", str(out)]) == 0
+    return out
+
+
 __all__ = [
     "assert_step_optimal",
     "fd_jacobian",

@@ -1,0 +1,742 @@
+"""Figures of the paper and of the pitch, designed for where they are printed.
+
+Two media: :data:`PAPER` draws for an IEEE column (3.5 in, text at 7-8 pt when included at its
+natural width, ``width=\\columnwidth``) or the full page width (``figure*``, 7.16 in);
+:data:`SLIDE` draws for a 16:9 Beamer slide (16 cm x 9 cm, text at 10-11 pt, like the slide's own
+text). Every figure is saved as PDF (vector, for LaTeX) and PNG (for the HTML page).
+
+Figures (each a function of measured records only):
+
+- :func:`pair_figure`: a controller pair in one composite: m(t), E(t), q(t) and qd(t) per joint,
+  with the joint limits, the damper zones and the task-scaled interval both share;
+- :func:`workspace_figure`: a two-link pair in the workspace, with the disc the arm cannot reach
+  with its elbow outside the stop zone, the straight line a direction-preserving controller must
+  follow, the goal's two inverse-kinematics solutions and where each run stalls or flips;
+- :func:`pareto_figure`: the four per-step fronts of UC- and C-EMDM and the whole-run trade-off,
+  degenerate and saturated fronts and failed weight settings marked;
+- :func:`solver_figure`: time per program against the gap to the exact optimum, per solver family;
+- :func:`conditioning_figure`: cond(J), the slack weight and the solvers' iterations along a run;
+- :func:`manipulability_figure`, :func:`stills_figure`: the pitch's headline and animation stills.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch
+
+from ..sim.loop import Run
+from .style import CONTROLLER_STYLE, FAMILY_COLOR, OKABE_ITO, RC
+
+
+@dataclass(frozen=True)
+class Medium:
+    """Where a figure is printed: its widths (in) and font sizes (pt)."""
+
+    name: str
+    column: float
+    wide: float
+    font: float
+    small: float
+    line: float
+    tiny: float = 7.0
+
+
+PAPER = Medium("paper", column=3.5, wide=7.16, font=8.0, small=7.0, line=1.1, tiny=7.0)
+"""Text at 7-8 pt at print size (never smaller)."""
+SLIDE = Medium("slide", column=5.9, wide=5.9, font=11.0, small=10.0, line=1.8, tiny=9.0)
+
+FORMATS: tuple[str, ...] = (".pdf", ".png")
+"""Formats every figure is saved in: PDF (LaTeX) and PNG (HTML); :func:`png_only` for drafts."""
+
+
+@contextmanager
+def png_only(enabled: bool = True) -> Iterator[None]:
+    """Inside the block (when ``enabled``) save PNG only: LaTeX then includes the PNGs."""
+    global FORMATS
+    saved = FORMATS
+    if enabled:
+        FORMATS = (".png",)
+    try:
+        yield
+    finally:
+        FORMATS = saved
+
+
+@contextmanager
+def _figure(stem: Path, medium: Medium, width: float, height: float) -> Iterator[Figure]:
+    rc = {
+        **RC,
+        "font.size": medium.font,
+        "axes.titlesize": medium.font,
+        "axes.labelsize": medium.font,
+        "legend.fontsize": medium.small,
+        "xtick.labelsize": medium.small,
+        "ytick.labelsize": medium.small,
+        "lines.linewidth": medium.line,
+        "axes.titlepad": 3.0,
+        "axes.labelpad": 2.0,
+        "xtick.major.pad": 2.0,
+        "ytick.major.pad": 2.0,
+        "legend.handlelength": 1.8,
+        "legend.borderaxespad": 0.3,
+        "figure.constrained_layout.h_pad": 0.02,
+        "figure.constrained_layout.w_pad": 0.02,
+        "savefig.dpi": 170,
+        "pdf.fonttype": 42,
+        "mathtext.fontset": "stix",
+        "font.family": "STIXGeneral",
+    }
+    with matplotlib.rc_context(rc):
+        fig = Figure(figsize=(width, height), layout="constrained")
+        FigureCanvasAgg(fig)
+        yield fig
+        stem.parent.mkdir(parents=True, exist_ok=True)
+        fig.canvas.draw()  # lay out once (constrained), then keep the positions for every format
+        fig.set_layout_engine("none")
+        for suffix in FORMATS:
+            fig.savefig(stem.with_suffix(suffix))
+
+
+def _style(run: Run, medium: Medium) -> dict[str, Any]:
+    base = CONTROLLER_STYLE.get(run.controller.name, {"color": OKABE_ITO[0], "linestyle": "-"})
+    # in a pair both runs are drawn solid; the EMDM run dashed over the IVKC run reads better
+    dashed = run.controller.name.endswith("EMDM")
+    return {
+        "color": base["color"],
+        "linestyle": (0, (4, 1.5)) if dashed else "-",
+        "linewidth": medium.line,
+        "label": run.controller.name,
+    }
+
+
+def _label(ax: Any, text: str, medium: Medium) -> None:
+    ax.text(
+        0.015,
+        0.96,
+        text,
+        transform=ax.transAxes,
+        va="top",
+        ha="left",
+        fontsize=medium.small,
+        fontweight="bold",
+        bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.6, "alpha": 0.8},
+    )
+
+
+def _common_scaled(runs: Sequence[Run]) -> list[tuple[float, float]]:
+    """Time intervals on which every run of the pair is task-scaled (alpha < 1), if not all of it."""
+    n = min(r.steps for r in runs)
+    if n == 0:
+        return []
+    mask = np.all([r.alpha[:n] < 1.0 for r in runs], axis=0)
+    if not mask.any() or mask.mean() > 0.6:
+        return []
+    dt = runs[0].scenario.motion.dt
+    out = []
+    padded = np.concatenate(([False], mask, [False])).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        out.append((a * dt, b * dt))
+    return out
+
+
+def _shade(ax: Any, spans: list[tuple[float, float]]) -> None:
+    for a, b in spans:
+        ax.axvspan(a, b, color="#999999", alpha=0.18, linewidth=0, zorder=0)
+
+
+def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
+    """``n`` axes stacked without gaps in one grid cell, sharing the time axis."""
+    grid = cell.subgridspec(n, 1, hspace=0.0)
+    first = fig.add_subplot(grid[0, 0])
+    return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
+
+
+def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
+    """A pair in one 2x2 composite: (a) m(t), (b) E(t), (c) q(t), (d) qd(t), one row per joint."""
+    sc = runs[0].scenario
+    n = sc.n
+    spans = _common_scaled(runs)
+    height = (2.65 if n == 3 else 2.35) if medium is PAPER else 3.4
+    with _figure(stem, medium, medium.column, height) as fig:
+        outer = fig.add_gridspec(2, 2, height_ratios=[1.0, 1.45 if n == 3 else 1.2])
+        ax_m = fig.add_subplot(outer[0, 0])
+        ax_e = fig.add_subplot(outer[0, 1])
+        q_axes = _column(fig, outer[1, 0], n)
+        qd_axes = _column(fig, outer[1, 1], n)
+        for run in runs:
+            st = _style(run, medium)
+            ax_m.plot(run.t, run.m, **st)
+            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
+            for j in range(n):
+                q_axes[j].plot(run.t, run.q[:, j], **st)
+                qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
+        for ax in (ax_m, ax_e, *q_axes, *qd_axes):
+            _shade(ax, spans)
+        ax_m.set_ylabel(r"$m$ (m$^2$)")
+        ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)")
+        ax_m.set_xlabel(r"$t$ (s)")
+        ax_e.set_xlabel(r"$t$ (s)")
+        lo, hi = sc.arm.q_min, sc.arm.q_max
+        for j in range(n):
+            ax = q_axes[j]
+            infl, stop = sc.damper.influence[j], sc.damper.stop[j]
+            for a, b, shade in (
+                (hi[j] - infl, hi[j], 0.10),
+                (lo[j], lo[j] + infl, 0.10),
+                (hi[j] - stop, hi[j], 0.35),
+                (lo[j], lo[j] + stop, 0.35),
+            ):
+                ax.axhspan(a, b, color="#D55E00", alpha=shade * 0.6, linewidth=0, zorder=0)
+            for bound in (lo[j], hi[j]):
+                ax.axhline(bound, color="black", linewidth=0.6)
+            ax.set_ylabel(rf"$q_{j + 1}$", labelpad=1)
+            qd_axes[j].set_ylabel(rf"$\dot q_{j + 1}$", labelpad=1)
+            for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
+                qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
+            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
+            limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
+            span = max(top, limit) * 1.15
+            qd_axes[j].set_ylim(-span, span)
+            qspan = [
+                min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs)) - 0.2,
+                max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs)) + 0.2,
+            ]
+            ax.set_ylim(*qspan)
+            for a in (ax, qd_axes[j]):
+                a.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3, symmetric=True))
+                if j < n - 1:
+                    a.tick_params(labelbottom=False)
+        q_axes[-1].set_xlabel(r"$t$ (s)")
+        qd_axes[-1].set_xlabel(r"$t$ (s)")
+        q_axes[0].set_title(r"$q$ (rad), limits, damper zones", fontsize=medium.small)
+        qd_axes[0].set_title(r"$\dot q$ (rad/s), limits dotted", fontsize=medium.small)
+        _label(ax_m, "(a)", medium)
+        _label(ax_e, "(b)", medium)
+        _label(q_axes[0], "(c)", medium)
+        _label(qd_axes[0], "(d)", medium)
+        handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
+        if spans:
+            handles.append(
+                Patch(color="#999999", alpha=0.35, label=r"both task-scaled ($\alpha<1$)")
+            )
+        fig.legend(
+            handles=handles,
+            loc="outside upper center",
+            ncols=len(handles),
+            frameon=False,
+            columnspacing=1.0,
+        )
+    return stem
+
+
+def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:
+    return np.asarray(run.scenario.planar_arm.joint_positions(q))
+
+
+def workspace_figure(
+    runs: Sequence[Run], geometry: dict[str, Any], stem: Path, medium: Medium = PAPER
+) -> Path:
+    """A two-link pair in the workspace: the blocked disc, the straight line, the goal's two
+    inverse-kinematics solutions, each run's path, its stall point and its elbow flip."""
+    sc = runs[0].scenario
+    reach = geometry["reach"]
+    inner = geometry["inner_reach"]
+    width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
+    height = 2.45 if medium is PAPER else 2.7
+    with _figure(stem, medium, width, height) as fig:
+        ax = fig.add_subplot()
+        ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
+        ax.add_patch(
+            Circle(
+                (0, 0),
+                inner,
+                facecolor="none",
+                edgecolor="#D55E00",
+                hatch="////",
+                linewidth=0.6,
+                alpha=0.6,
+            )
+        )
+        p0 = runs[0].p[0]
+        goal = np.asarray(sc.motion.goal)
+        ax.plot([p0[0], goal[0]], [p0[1], goal[1]], color="grey", linestyle=":", linewidth=0.9)
+        for sol in geometry["solutions"]:
+            pts = _arm_points(runs[0], np.array([sol["q1"], sol["q2"]]))
+            ax.plot(
+                pts[:, 0],
+                pts[:, 1],
+                color="black" if sol["within_limits"] else "#888888",
+                linestyle="-" if sol["within_limits"] else "--",
+                linewidth=medium.line,
+                marker="o",
+                markersize=2.5,
+            )
+        start = _arm_points(runs[0], runs[0].q[0])
+        ax.plot(
+            start[:, 0],
+            start[:, 1],
+            color="black",
+            linewidth=medium.line * 1.4,
+            marker="o",
+            markersize=3,
+        )
+        for run in runs:
+            st = _style(run, medium)
+            ax.plot(run.p[:, 0], run.p[:, 1], **st)
+            if not run.reached:
+                ax.plot(
+                    *run.p[-1],
+                    marker="X",
+                    color=st["color"],
+                    markersize=7 if medium is PAPER else 10,
+                    linestyle="none",
+                    markeredgecolor="black",
+                    markeredgewidth=0.5,
+                )
+            s = np.sign(np.sin(run.q[:, 1]))
+            flips = np.flatnonzero(s[1:] * s[:-1] < 0) + 1
+            for f in flips:
+                ax.plot(
+                    *run.p[f],
+                    marker="o",
+                    markersize=6 if medium is PAPER else 9,
+                    markerfacecolor="white",
+                    markeredgecolor=st["color"],
+                    markeredgewidth=1.2,
+                    linestyle="none",
+                )
+        ax.plot(
+            *goal,
+            marker="*",
+            color="black",
+            markersize=9 if medium is PAPER else 13,
+            linestyle="none",
+        )
+        ax.set_aspect("equal")
+        ax.set_xlim(-reach * 1.04, reach * 1.04)
+        ax.set_ylim(-reach * 1.04, reach * 1.04)
+        ax.set_xlabel(r"$x$ (m)")
+        ax.set_ylabel(r"$y$ (m)")
+        handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
+        handles += [
+            Line2D([], [], color="grey", linestyle=":", label="straight line"),
+            Patch(
+                facecolor="none",
+                edgecolor="#D55E00",
+                hatch="////",
+                label=rf"$\|p\|<{inner:.2f}$ m",
+            ),
+            Line2D([], [], color="black", marker="o", markersize=2.5, label="start, goal"),
+            Line2D(
+                [],
+                [],
+                color="#888888",
+                linestyle="--",
+                marker="o",
+                markersize=2.5,
+                label="goal beyond\nlimit of $q_1$",
+            ),
+            Line2D([], [], color="black", marker="X", linestyle="none", label="stall"),
+            Line2D(
+                [],
+                [],
+                marker="o",
+                markerfacecolor="white",
+                markeredgecolor="black",
+                linestyle="none",
+                label=r"elbow flip",
+            ),
+        ]
+        fig.legend(
+            handles=handles,
+            loc="outside right center",
+            frameon=False,
+            fontsize=medium.tiny,
+            handlelength=1.6,
+            labelspacing=0.6,
+        )
+    return stem
+
+
+def _ratio_tex(ratio: float) -> str:
+    """A weight ratio as math: ``10^{3}`` for powers of ten, else three digits."""
+    if ratio > 0 and abs(math.log10(ratio) - round(math.log10(ratio))) < 1e-9:
+        return rf"10^{{{round(math.log10(ratio))}}}"
+    return f"{ratio:.3g}"
+
+
+def _log_axis(axis: Any) -> None:
+    """Major decades only, no minor labels (they crowd small panels)."""
+    axis.set_major_locator(matplotlib.ticker.LogLocator(numticks=4))
+    axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+
+
+def _front_axes(
+    ax: Any,
+    step: dict[str, Any],
+    info: dict[str, Any],
+    nominal: float,
+    medium: Medium,
+    norm: Any,
+) -> Any:
+    pts = step["points"]
+    ratio = np.array([p["w_manip"] / p["w_effort"] for p in pts])
+    E = np.array([p["E"] for p in pts])
+    M = np.array([p["M"] for p in pts])
+    ax.plot(M, E, color="grey", linewidth=0.5, zorder=1)
+    sc = ax.scatter(
+        M,
+        E,
+        c=np.log10(np.maximum(ratio, 1e-4)),
+        cmap="viridis",
+        norm=norm,
+        s=9 if medium is PAPER else 22,
+        zorder=2,
+        linewidths=0,
+    )
+    near = int(np.argmin(np.abs(np.log10(np.maximum(ratio, 1e-12)) - math.log10(nominal))))
+    ax.scatter(
+        [M[near]],
+        [E[near]],
+        s=45 if medium is PAPER else 110,
+        facecolors="none",
+        edgecolors="#D55E00",
+        linewidths=1.1,
+        zorder=3,
+    )
+    ax.set_yscale("log")
+    note = ""
+    if info["degenerate"]:
+        note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
+    elif info["saturated_from_ratio"] is not None:
+        note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
+    if note:
+        ax.text(
+            0.97,
+            0.05,
+            note,
+            transform=ax.transAxes,
+            ha="right",
+            va="bottom",
+            fontsize=medium.tiny,
+            bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
+        )
+    if info["degenerate"]:
+        x, y = M[0], E[0]
+        ax.set_xlim(x - 0.5 * abs(x) - 1e-3, x + 0.5 * abs(x) + 1e-3)
+        ax.set_ylim(y / 3, y * 3)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
+    ax.ticklabel_format(axis="x", style="sci", scilimits=(-2, 3), useMathText=True)
+    ax.xaxis.get_offset_text().set_fontsize(medium.tiny)
+    return sc
+
+
+def pareto_figure(
+    fronts: dict[str, dict[str, Any]],
+    infos: dict[str, list[dict[str, Any]]],
+    grids: dict[str, list[dict[str, Any]]],
+    stem: Path,
+    medium: Medium = PAPER,
+    steps: Sequence[int] = (0, 1, 2, 3),
+) -> Path:
+    """Rows: controllers (``fronts`` keys); columns: the fronts of the chosen ``steps`` (indices
+    into the four of the brief) and the whole-run trade-off (mean m against total effort per
+    weight setting; the settings that fail to reach are named)."""
+    names = list(fronts)
+    norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
+    height = (1.25 * len(names) + 0.3) if medium is PAPER else 2.7
+    whole = len(steps)
+    with _figure(stem, medium, medium.wide, height) as fig:
+        axes = fig.subplots(len(names), whole + 1, squeeze=False)
+        sc = None
+        for row, name in enumerate(names):
+            data = fronts[name]
+            for col, index in enumerate(steps):
+                step, info = data["steps"][index], infos[name][index]
+                ax = axes[row, col]
+                sc = _front_axes(ax, step, info, data["nominal_ratio"], medium, norm)
+                ax.set_title(rf"$k={step['k']}$, $t={step['t']:.2f}$ s", fontsize=medium.small)
+                if col == 0:
+                    ax.set_ylabel(f"{name}\n" + r"$E$ (rad$^2$/s$^2$)")
+                if row == len(names) - 1:
+                    ax.set_xlabel(r"$M$ (m$^2$/s)")
+            ax = axes[row, whole]
+            rows = grids[name]
+            ok = [r for r in rows if "error" not in r and r.get("reached")]
+            bad = [r for r in rows if "error" in r or not r.get("reached")]
+            ratio = np.array([r["w_manip"] / r["w_effort"] for r in ok])
+            ax.plot(
+                [r["mean_manipulability"] for r in ok],
+                [r["total_effort"] for r in ok],
+                color="grey",
+                linewidth=0.5,
+                zorder=1,
+            )
+            ax.scatter(
+                [r["mean_manipulability"] for r in ok],
+                [r["total_effort"] for r in ok],
+                c=np.log10(np.maximum(ratio, 1e-4)),
+                cmap="viridis",
+                norm=norm,
+                s=12 if medium is PAPER else 26,
+                zorder=2,
+                linewidths=0,
+            )
+            nominal = fronts[name]["nominal_ratio"]
+            nom = [r for r in ok if np.isclose(r["w_manip"] / r["w_effort"], nominal)]
+            if nom:
+                ax.scatter(
+                    [nom[0]["mean_manipulability"]],
+                    [nom[0]["total_effort"]],
+                    s=45 if medium is PAPER else 110,
+                    facecolors="none",
+                    edgecolors="#D55E00",
+                    linewidths=1.1,
+                    zorder=3,
+                )
+            ax.set_yscale("log")
+            _log_axis(ax.yaxis)
+            if bad:
+                text = ", ".join(_ratio_tex(r["w_manip"] / r["w_effort"]) for r in bad)
+                ax.text(
+                    0.03,
+                    0.97,
+                    rf"$w_M/w_E={text}$" + "\nnot reached",
+                    transform=ax.transAxes,
+                    ha="left",
+                    va="top",
+                    fontsize=medium.tiny,
+                    color="#D55E00",
+                )
+            ax.set_title("whole runs", fontsize=medium.small)
+            ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
+            if row == len(names) - 1:
+                ax.set_xlabel(r"mean $m$ (m$^2$)")
+            ax.set_ylabel(r"$\sum E\,\Delta t$ (rad$^2$/s)", labelpad=1)
+        assert sc is not None
+        bar = fig.colorbar(sc, ax=axes, shrink=0.8, pad=0.01, aspect=30)
+        bar.set_label(r"$\log_{10} w_M/w_E$ (circle: nominal)")
+    return stem
+
+
+def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = PAPER) -> Path:
+    """Per solver (rows, grouped by family): median time per program (left, with the control
+    period) and the largest gap to the exact optimum (right; bound violations marked)."""
+    rows = lab["solvers"]
+    order = [
+        k
+        for f in ("exact", "gradient", "gradient-free")
+        for k, r in rows.items()
+        if r["family"] == f
+    ]
+    floor = 1e-12
+    height = (0.5 + 0.15 * len(order)) if medium is PAPER else 2.7
+    markers = {"exact": "s", "gradient": "o", "gradient-free": "^"}
+    width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
+    with _figure(stem, medium, width, height) as fig:
+        left, right = fig.subplots(1, 2, sharey=True)
+        y = np.arange(len(order))[::-1]
+        for yi, name in zip(y, order, strict=True):
+            r = rows[name]
+            style = {
+                "marker": markers.get(r["family"], "o"),
+                "color": FAMILY_COLOR.get(r["family"], "grey"),
+                "markersize": 4.5 if medium is PAPER else 7,
+                "linestyle": "none",
+            }
+            left.plot([r["median_time"] * 1e3], [yi], **style)
+            gap = r["max_abs_gap"]
+            right.plot([max(gap, floor) if math.isfinite(gap) else floor], [yi], **style)
+            if math.isfinite(r["max_violation"]) and r["max_violation"] > 1e-6:
+                right.plot(
+                    [max(r["max_violation"], floor)],
+                    [yi],
+                    marker="x",
+                    color="#D55E00",
+                    markersize=5 if medium is PAPER else 8,
+                    linestyle="none",
+                )
+        left.set_yticks(y, order)
+        left.set_xscale("log")
+        right.set_xscale("log")
+        _log_axis(right.xaxis)
+        left.axvline(dt * 1e3, color="black", linestyle="--", linewidth=0.8)
+        left.text(dt * 1e3, y[0] + 0.4, r" $\Delta t$", fontsize=medium.small, va="bottom")
+        left.set_xlabel("median time (ms)")
+        right.set_xlabel(r"largest gap $f-f^\star$")
+        right.axvspan(floor / 4, floor * 4, color="#0072B2", alpha=0.10, linewidth=0)
+        right.set_xlim(floor / 10, None)
+        left.set_ylim(-0.6, len(order) - 0.1)
+        handles = [
+            Line2D([], [], color="#D55E00", marker="x", linestyle="none", label="bound violation")
+        ]
+        right.legend(
+            handles=handles,
+            loc="lower right",
+            frameon=True,
+            framealpha=0.9,
+            fontsize=medium.tiny,
+            handletextpad=0.2,
+            borderpad=0.3,
+        )
+        right.text(
+            floor,
+            y[0] + 0.4,
+            r"$\leq10^{-12}$",
+            fontsize=medium.tiny,
+            color="#0072B2",
+            va="bottom",
+            ha="center",
+        )
+    return stem
+
+
+def conditioning_figure(
+    run: Run, lab_rows: dict[str, list[dict[str, Any]]], stem: Path, medium: Medium = PAPER
+) -> Path:
+    """Along a run: cond(J) and w_S = c_S/||e|| (top); iterations of the solvers (bottom)."""
+    arm = run.scenario.planar_arm
+    cond = []
+    for q in run.q:
+        s = np.linalg.svd(arm.jacobian(q), compute_uv=False)
+        cond.append(s[0] / s[-1] if s[-1] > 1e-14 else np.nan)
+    w_s = run.scenario.weights.slack / np.maximum(run.error_norm, 1e-9)
+    height = 2.15 if medium is PAPER else 3.2
+    with _figure(stem, medium, medium.column, height) as fig:
+        top, bottom = fig.subplots(2, 1, sharex=True)
+        top.semilogy(run.t, cond, color=OKABE_ITO[0], label=r"cond $J$")
+        top.semilogy(run.t, w_s, color=OKABE_ITO[3], linestyle="--", label=r"$w_S=c_S/\|e\|$")
+        top.legend(loc="upper left", ncols=2, frameon=False)
+        top.set_ylabel("cond $J$, $w_S$")
+        bottom.step(
+            run.t[:-1],
+            np.maximum(run.iterations, 0.8),
+            where="post",
+            color="black",
+            linewidth=medium.line * 0.8,
+            label=f"{run.solver[0]} (closed loop)",
+        )
+        for i, (name, rows) in enumerate(lab_rows.items()):
+            t = [run.t[int(r["step"])] for r in rows]
+            its = [max(float(r["iterations"]), 0.8) for r in rows]
+            bottom.plot(
+                t,
+                its,
+                marker="o",
+                markersize=2.5 if medium is PAPER else 5,
+                linestyle="none",
+                color=OKABE_ITO[(i + 1) % 8],
+                label=name,
+            )
+        bottom.set_yscale("log")
+        bottom.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        bottom.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        _log_axis(top.yaxis)
+        bottom.set_ylabel("iterations")
+        bottom.set_xlabel(r"$t$ (s)")
+        bottom.legend(loc="upper right", ncols=2, frameon=False, fontsize=medium.tiny)
+        for ax in (top, bottom):
+            for f in np.flatnonzero(np.isnan(cond)):
+                ax.axvline(run.t[f], color="#D55E00", linewidth=0.8)
+            k = int(np.nanargmax(cond)) if np.isfinite(cond).any() else 0
+            ax.axvline(run.t[k], color="#D55E00", linewidth=0.6, linestyle=":")
+    return stem
+
+
+def manipulability_figure(
+    pairs: dict[str, Sequence[Run]], stem: Path, medium: Medium = SLIDE
+) -> Path:
+    """m(t) of each pair side by side (the pitch's headline for a task)."""
+    height = 2.6 if medium is SLIDE else 1.8
+    with _figure(stem, medium, medium.wide, height) as fig:
+        axes = fig.subplots(1, len(pairs), squeeze=False, sharey=True)[0]
+        for ax, (title, runs) in zip(axes, pairs.items(), strict=True):
+            _shade(ax, _common_scaled(runs))
+            for run in runs:
+                ax.plot(run.t, run.m, **_style(run, medium))
+            ax.set_title(title)
+            ax.set_xlabel(r"$t$ (s)")
+            ax.legend(loc="lower right", frameon=True, framealpha=0.9)
+        axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
+    return stem
+
+
+def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Medium = SLIDE) -> Path:
+    """Animation stills: each run's arm at ``times`` instants (darker = later), path, goal and
+    the manipulability ellipse at the last state, the runs side by side."""
+    sc = runs[0].scenario
+    arm = sc.planar_arm
+    reach = arm.reach
+    width = medium.wide if medium is SLIDE else medium.column
+    height = 2.75 if medium is SLIDE else 1.9
+    biggest = max(
+        float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(q) @ arm.jacobian(q).T)[-1]))
+        for run in runs
+        for q in run.q[:: max(1, run.steps // 50)]
+    )
+    scale = 0.3 * reach / biggest if biggest > 0 else 1.0
+    circle = np.stack(
+        (np.cos(np.linspace(0, 2 * np.pi, 73)), np.sin(np.linspace(0, 2 * np.pi, 73)))
+    )
+    t_end = max(float(r.t[-1]) for r in runs)
+    instants = np.linspace(0.0, t_end, times)
+    with _figure(stem, medium, width, height) as fig:
+        axes = fig.subplots(1, len(runs), squeeze=False)[0]
+        for ax, run in zip(axes, runs, strict=True):
+            st = _style(run, medium)
+            ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
+            ax.plot(run.p[:, 0], run.p[:, 1], color=st["color"], linewidth=medium.line * 0.8)
+            for i, t in enumerate(instants):
+                k = min(round(t / sc.motion.dt), run.steps)
+                pts = arm.joint_positions(run.q[k])
+                shade = 0.25 + 0.75 * i / max(times - 1, 1)
+                ax.plot(
+                    pts[:, 0],
+                    pts[:, 1],
+                    color="black",
+                    alpha=shade,
+                    linewidth=medium.line * 1.1,
+                    marker="o",
+                    markersize=2.5,
+                    markerfacecolor="white",
+                )
+            k = run.steps
+            J = arm.jacobian(run.q[k])
+            lam, U = np.linalg.eigh(J @ J.T)
+            ell = run.p[k][:, None] + scale * (U * np.sqrt(np.maximum(lam, 0.0))) @ circle
+            ax.fill(ell[0], ell[1], color=st["color"], alpha=0.3, linewidth=0)
+            ax.plot(*sc.motion.goal, marker="*", color="black", markersize=10, linestyle="none")
+            outcome = (
+                f"goal at {run.time_to_goal:.2f} s"
+                if run.reached
+                else f"not reached in {run.t[-1]:.0f} s"
+            )
+            ax.set_title(f"{run.controller.name}: {outcome}", fontsize=medium.small)
+            ax.set_aspect("equal")
+            ax.set_xlim(-reach * 1.05, reach * 1.05)
+            ax.set_ylim(-reach * 1.05, reach * 1.05)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.text(
+                0.02,
+                0.02,
+                r"arm at $t$ = " + ", ".join(f"{t:.1f}" for t in instants) + " s",
+                transform=ax.transAxes,
+                fontsize=medium.tiny,
+                color="#444444",
+            )
+    return stem

@@ -1,0 +1,90 @@
+"""What the report runs: the full and the quick study, the controller pairs, the evidence runs."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ...studies.lab import DEFAULT_LAB_SOLVERS
+
+
+@dataclass(frozen=True)
+class ReportConfig:
+    """How much of each experiment the report runs."""
+
+    quick: bool
+    lab_solvers: tuple[str, ...]
+    lab_sample: int
+    lab_budget: int
+    lab_repeats: int
+    fallback_solvers: tuple[str, ...]
+    pareto_per_decade: int
+    grid: int
+    animation_seconds: float
+    mp4: bool
+    compile: bool = True
+
+
+FULL = ReportConfig(
+    quick=False,
+    lab_solvers=DEFAULT_LAB_SOLVERS,
+    lab_sample=40,
+    lab_budget=600,
+    lab_repeats=3,
+    fallback_solvers=("active-set", "interior-point", "admm", "daqp", "quadprog", "slsqp"),
+    pareto_per_decade=4,
+    grid=13,
+    animation_seconds=10.0,
+    mp4=True,
+)
+QUICK = ReportConfig(
+    quick=True,
+    lab_solvers=("active-set", "interior-point", "daqp", "slsqp", "nelder-mead", "powell"),
+    lab_sample=8,
+    lab_budget=150,
+    lab_repeats=1,
+    fallback_solvers=("active-set", "daqp", "quadprog"),
+    pareto_per_decade=1,
+    grid=4,
+    animation_seconds=4.0,
+    mp4=False,
+)
+
+TASKS = ("task1", "task2")
+PAIRS = {"UC": ("UC-IVKC", "UC-EMDM"), "C": ("C-IVKC", "C-EMDM")}
+"""Each pair as (IVKC, EMDM): the brief compares them pair by pair."""
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """A run that isolates the cause of something the report claims.
+
+    ``controllers`` run on ``task`` with ``overrides``; with ``reference`` the first of them is
+    compared command by command with that controller's nominal run; with two controllers the pair
+    is compared (the steps on which they coincide).
+    """
+
+    key: str
+    task: str
+    controllers: tuple[str, ...]
+    overrides: dict[str, Any] = field(default_factory=dict)
+    reference: str | None = None
+
+
+EVIDENCE = (
+    Evidence("t1-uc-no-manip", "task1", ("UC-EMDM",), {"weights.manipulability": 0.0}, "UC-IVKC"),
+    Evidence(
+        "t1-c-slack-policy", "task1", ("C-IVKC", "C-EMDM"), {"controller.on_infeasible": "slack"}
+    ),
+    Evidence("t2-c-ivkc-slack-policy", "task2", ("C-IVKC",), {"controller.on_infeasible": "slack"}),
+    Evidence("t2-c-ivkc-wide-limits", "task2", ("C-IVKC",), {"arm.q_min": -3.0, "arm.q_max": 3.0}),
+    Evidence("t2-c-emdm-no-manip", "task2", ("C-EMDM",), {"weights.manipulability": 0.0}),
+    Evidence(
+        "t2-c-emdm-tight-slack",
+        "task2",
+        ("C-EMDM",),
+        {"slack.min": [-0.1, -0.1], "slack.max": [0.1, 0.1]},
+    ),
+    Evidence("t2-uc-emdm-stiff-slack", "task2", ("UC-EMDM",), {"weights.slack": 1e4}, "UC-IVKC"),
+)
+"""The evidence runs (each isolates one cause; the report says what each shows)."""

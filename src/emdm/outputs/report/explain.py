@@ -1,0 +1,416 @@
+"""What shaped each run, detected from its record (never canned): the report's explanations.
+
+:func:`run_events` reduces one :class:`~emdm.sim.loop.Run` to the events that explain it: task
+scaling (``alpha < 1``) and for how long, joints pinned at a velocity limit, a damper or a stop,
+a stall and the joint that causes it, near-singular passages (and elbow flips of a two-link arm),
+where the effort was spent, the conditioning along the whole trajectory (``cond J`` and the slack
+weight ``w_S = c_S/||e||`` at every state, not at a sample), and the solver's work.
+:func:`pair_events` compares two runs of a pair (the steps on which they must coincide, the
+largest distance between their end-effector paths). :func:`geometry` gives, for a two-link arm,
+the two inverse-kinematics solutions of the goal, whether each lies within the joint limits, and
+the innermost point the arm reaches with its joints outside the stop zones.
+:func:`front_events` classifies the Pareto fronts (degenerate, saturated). All of it is written to
+JSON beside the records (``events.json``) and read back by the report like any other number.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ...core.scenario import Scenario
+from ...sim.loop import Run
+from ...sim.metrics import metrics
+
+SAME = 1e-9
+"""Two commands coincide when they differ by at most this (rad/s)."""
+STALL_BAND = 1e-3
+"""A run has stalled from the time after which its error stays within this band (m) of its end."""
+BOUND_TOL = 1e-9
+"""A joint is at a bound when its command is within this of it (rad/s)."""
+
+
+def _episodes(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal runs ``[start, end]`` (inclusive) of True in a boolean vector."""
+    if not mask.any():
+        return []
+    padded = np.concatenate(([False], mask, [False])).astype(np.int8)
+    edges = np.flatnonzero(np.diff(padded))
+    return [(int(a), int(b) - 1) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def _cond(J: np.ndarray) -> float:
+    s = np.linalg.svd(J, compute_uv=False)
+    return float(s[0] / s[-1]) if s[-1] > 1e-12 * max(s[0], 1e-300) else math.inf
+
+
+def scaling(run: Run) -> dict[str, Any] | None:
+    """Steps whose task was scaled (``alpha < 1``): when, how long, how deep, where it hit 0."""
+    a = run.alpha
+    mask = a < 1.0
+    if not mask.any():
+        return None
+    dt = run.scenario.motion.dt
+    eps = _episodes(mask)
+    first, last = eps[0][0], eps[-1][1]
+    zero = np.flatnonzero(a <= 1e-12)
+    k_min = int(np.argmin(a))
+    return {
+        "steps": int(mask.sum()),
+        "episodes": len(eps),
+        "first_t": float(run.t[first]),
+        "last_t": float(run.t[last]),
+        "duration": float(mask.sum() * dt),
+        "first_duration": float((eps[0][1] - eps[0][0] + 1) * dt),
+        "end_t": float(run.t[eps[0][1] + 1]),
+        "min_alpha": float(a[k_min]),
+        "t_min_alpha": float(run.t[k_min]),
+        "initial_alpha": float(a[0]),
+        "zero_steps": int(zero.size),
+        "zero_from_t": float(run.t[zero[0]]) if zero.size else None,
+        "whole_run": bool(mask.all()),
+    }
+
+
+def pinned(run: Run) -> list[dict[str, Any]]:
+    """Episodes of joints commanded at a bound, longest first.
+
+    ``kind`` is ``velocity`` when the bound is the joint-velocity limit and ``damper`` when the
+    position damper set it (tighter than the velocity limit); ``side`` is ``upper`` or ``lower``.
+    """
+    sc = run.scenario
+    if run.steps == 0 or not np.isfinite(run.hi).any():
+        return []
+    dt = sc.motion.dt
+    out: list[dict[str, Any]] = []
+    for j in range(sc.n):
+        for side, bound, limit in (
+            ("upper", run.hi[:, j], sc.arm.qd_max[j]),
+            ("lower", run.lo[:, j], sc.arm.qd_min[j]),
+        ):
+            at = np.isfinite(bound) & (np.abs(run.qd[:, j] - bound) <= BOUND_TOL)
+            for kind, mask in (
+                ("velocity", at & np.isclose(bound, limit, rtol=0, atol=1e-12)),
+                ("damper", at & ~np.isclose(bound, limit, rtol=0, atol=1e-12)),
+            ):
+                for a, b in _episodes(mask):
+                    out.append(
+                        {
+                            "joint": j + 1,
+                            "side": side,
+                            "kind": kind,
+                            "t0": float(run.t[a]),
+                            "t1": float(run.t[b + 1]),
+                            "steps": b - a + 1,
+                            "duration": float((b - a + 1) * dt),
+                        }
+                    )
+    out.sort(key=lambda e: (-e["steps"], e["t0"]))
+    return out
+
+
+def stall(run: Run) -> dict[str, Any] | None:
+    """A run that stops making progress: from when, at which error, and which joint blocks it."""
+    if run.reached or run.steps == 0:
+        return None
+    sc = run.scenario
+    err = run.error_norm
+    outside = np.flatnonzero(np.abs(err - err[-1]) > STALL_BAND)
+    k = int(outside[-1] + 1) if outside.size else 0
+    if run.t[-1] - run.t[k] < 1.0:
+        return None
+    q = run.q[-1]
+    upper = sc.arm.q_max - sc.damper.stop - q
+    lower = q - (sc.arm.q_min + sc.damper.stop)
+    j = int(np.argmin(np.minimum(upper, lower)))
+    side = "upper" if upper[j] <= lower[j] else "lower"
+    return {
+        "t": float(run.t[k]),
+        "error": float(err[-1]),
+        "progress": float(err[0] - err[-1]),
+        "joint": j + 1,
+        "side": side,
+        "q": float(q[j]),
+        "stop_edge": float(sc.arm.q_max[j] - sc.damper.stop[j])
+        if side == "upper"
+        else float(sc.arm.q_min[j] + sc.damper.stop[j]),
+        "distance_to_stop": float(min(upper[j], lower[j])),
+        "final_alpha": float(run.alpha[-1]),
+        "final_hi": float(run.hi[-1, j]),
+        "final_lo": float(run.lo[-1, j]),
+    }
+
+
+def singular(run: Run) -> dict[str, Any]:
+    """The smallest manipulability, when, and (two-link arm) the elbow flips through ``q2 = 0``."""
+    k = int(np.argmin(run.m))
+    out: dict[str, Any] = {
+        "m_min": float(run.m[k]),
+        "t": float(run.t[k]),
+        "m0": float(run.m[0]),
+        "m_max": float(run.m.max()),
+        "near": bool(run.m[k] < 0.05 * run.m.max()),
+    }
+    if run.scenario.n == 2:
+        s = np.sign(np.sin(run.q[:, 1]))
+        flips = np.flatnonzero(s[1:] * s[:-1] < 0) + 1
+        out["elbow_flips"] = [float(run.t[f]) for f in flips]
+        out["elbow_final"] = "up" if run.q[-1, 1] > 0 else "down"
+    return out
+
+
+def conditioning(run: Run) -> dict[str, Any]:
+    """``cond J`` and ``w_S = c_S/||e||`` at every state of the run (the worst, and when)."""
+    arm = run.scenario.planar_arm
+    cond = np.array([_cond(arm.jacobian(q)) for q in run.q])
+    finite = np.where(np.isfinite(cond), cond, np.inf)
+    k = int(np.argmax(finite))
+    w_s = run.scenario.weights.slack / np.maximum(run.error_norm, 1e-9)
+    return {
+        "cond_J_max": float(cond[k]) if math.isfinite(cond[k]) else None,
+        "t_cond_J_max": float(run.t[k]),
+        "cond_J_start": float(cond[0]),
+        "cond_J_median": float(np.median(cond[np.isfinite(cond)]))
+        if np.isfinite(cond).any()
+        else None,
+        "singular_states": int((~np.isfinite(cond)).sum()),
+        "w_slack_start": float(w_s[0]),
+        "w_slack_end": float(w_s[-1]),
+    }
+
+
+def effort(run: Run) -> dict[str, Any]:
+    """Where the effort ``sum E dt`` was spent: half of it by when, the share of the first second."""
+    dt = run.scenario.motion.dt
+    if run.steps == 0:
+        return {"total": 0.0}
+    cum = np.cumsum(run.effort) * dt
+    total = float(cum[-1])
+    k_half = int(np.searchsorted(cum, 0.5 * total))
+    first = min(run.steps, round(1.0 / dt))
+    k_peak = int(np.argmax(run.effort))
+    return {
+        "total": total,
+        "t_half": float(run.t[k_half + 1]),
+        "share_first_second": float(cum[first - 1] / total) if total > 0 else 0.0,
+        "peak": float(run.effort[k_peak]),
+        "t_peak": float(run.t[k_peak]),
+    }
+
+
+def limits(run: Run) -> dict[str, Any]:
+    """The deepest excursion past a joint limit (UC controllers ignore them) and the fastest joint."""
+    sc = run.scenario
+    over = np.maximum(run.q - sc.arm.q_max, sc.arm.q_min - run.q)
+    k, j = np.unravel_index(int(np.argmax(over)), over.shape)
+    out: dict[str, Any] = {
+        "max_excess": float(max(over[k, j], 0.0)),
+        "excess_joint": int(j) + 1,
+        "t_excess": float(run.t[k]),
+        "time_outside": float((over.max(axis=1) > 0).sum() * sc.motion.dt),
+    }
+    if run.steps:
+        kq, jq = np.unravel_index(int(np.argmax(np.abs(run.qd))), run.qd.shape)
+        out.update(
+            max_abs_qd=float(abs(run.qd[kq, jq])), qd_joint=int(jq) + 1, t_qd=float(run.t[kq])
+        )
+    return out
+
+
+def solver_work(run: Run) -> dict[str, Any]:
+    """Iterations, fallbacks and the certificate of the run's solver."""
+    if run.steps == 0:
+        return {}
+    its = np.asarray(run.iterations)
+    return {
+        "median_iterations": float(np.median(its)),
+        "max_iterations": int(its.max()),
+        "t_max_iterations": float(run.t[int(np.argmax(its))]),
+        "fallback_steps": int(np.count_nonzero(run.fallback)),
+        "max_kkt": float(np.max(run.kkt)),
+        "median_solve_time": float(np.median(run.solve_time)),
+    }
+
+
+def run_events(run: Run) -> dict[str, Any]:
+    """Every detected event of one run (see the module docstring)."""
+    mt = metrics(run)
+    straight = float(np.linalg.norm(run.scenario.motion.goal - run.p[0]))
+    slack = np.linalg.norm(run.delta, axis=1) if run.steps else np.zeros(0)
+    return {
+        "reached": bool(run.reached),
+        "time_to_goal": run.time_to_goal,
+        "final_time": float(run.t[-1]),
+        "final_error": float(run.error_norm[-1]),
+        "initial_error": float(run.error_norm[0]),
+        "mean_manipulability": mt["mean_manipulability"],
+        "total_effort": mt["total_effort"],
+        "path_length": mt["path_length"],
+        "straight_length": straight,
+        "detour": mt["path_length"] / straight - 1.0 if straight > 0 else 0.0,
+        "scaling": scaling(run),
+        "pinned": pinned(run)[:6],
+        "stall": stall(run),
+        "singular": singular(run),
+        "conditioning": conditioning(run),
+        "effort": effort(run),
+        "limits": limits(run),
+        "solver": solver_work(run),
+        "slack": {
+            "max": float(slack.max()) if slack.size else 0.0,
+            "t_max": float(run.t[int(np.argmax(slack))]) if slack.size else 0.0,
+            "saturated_steps": int(
+                np.count_nonzero(
+                    np.any(
+                        np.isclose(run.delta, run.scenario.slack.max, rtol=0, atol=1e-9)
+                        | np.isclose(run.delta, run.scenario.slack.min, rtol=0, atol=1e-9),
+                        axis=1,
+                    )
+                    & np.any(run.delta != 0, axis=1)
+                )
+            )
+            if slack.size
+            else 0,
+        },
+    }
+
+
+def pair_events(a: Run, b: Run) -> dict[str, Any]:
+    """How two runs of a pair relate: the leading steps on which their commands coincide (and
+    whether those are all task-scaled steps, where the admissible set is a single point), and the
+    largest distance between their end-effector paths over the common states."""
+    n = min(a.steps, b.steps)
+    diff = np.abs(a.qd[:n] - b.qd[:n]).max(axis=1) if n else np.zeros(0)
+    apart = np.flatnonzero(diff > SAME)
+    same = int(apart[0]) if apart.size else n
+    scaled = bool(same > 0 and np.all(a.alpha[:same] < 1.0) and np.all(b.alpha[:same] < 1.0))
+    scaled_steps = int(np.count_nonzero((a.alpha[:same] < 1.0) & (b.alpha[:same] < 1.0)))
+    states = min(a.q.shape[0], b.q.shape[0])
+    gap = np.linalg.norm(a.p[:states] - b.p[:states], axis=1)
+    determined = 0
+    if same and np.isfinite(a.hi[:same]).any():
+        lo, hi = a.lo[:same], a.hi[:same]
+        at = (np.abs(a.qd[:same] - hi) <= BOUND_TOL) | (np.abs(a.qd[:same] - lo) <= BOUND_TOL)
+        free = a.scenario.n - at.sum(axis=1)
+        determined = int(np.count_nonzero(free <= 2))  # two task equations fix two free joints
+    return {
+        "coincide_steps": same,
+        "coincide_until_t": float(a.t[same]) if same < a.t.size else float(a.t[-1]),
+        "coincide_scaled_steps": scaled_steps,
+        "coincide_all_scaled": scaled,
+        "coincide_determined_steps": determined,
+        "max_path_gap": float(gap.max()) if gap.size else 0.0,
+        "t_max_path_gap": float(a.t[int(np.argmax(gap))]) if gap.size else 0.0,
+    }
+
+
+def geometry(scenario: Scenario, start: np.ndarray) -> dict[str, Any] | None:
+    """Two-link arm: the goal's two inverse-kinematics solutions and what the joint stops allow."""
+    if scenario.n != 2:
+        return None
+    l1, l2 = (float(x) for x in scenario.arm.lengths)
+    goal = np.asarray(scenario.motion.goal, dtype=float)
+    r2 = float(goal @ goal)
+    c2 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
+    solutions = []
+    if abs(c2) <= 1.0:
+        for elbow, sign in (("up", 1.0), ("down", -1.0)):
+            q2 = sign * math.acos(c2)
+            q1 = math.atan2(goal[1], goal[0]) - math.atan2(
+                l2 * math.sin(q2), l1 + l2 * math.cos(q2)
+            )
+            q1 = (q1 + math.pi) % (2 * math.pi) - math.pi
+            q = np.array([q1, q2])
+            lo, hi = scenario.arm.q_min, scenario.arm.q_max
+            inside = bool(np.all(q >= lo) and np.all(q <= hi))
+            worst = int(np.argmax(np.maximum(q - hi, lo - q)))
+            solutions.append(
+                {
+                    "elbow": elbow,
+                    "q1": q1,
+                    "q2": q2,
+                    "within_limits": inside,
+                    "outside_joint": None if inside else worst + 1,
+                    "outside_by": float(max(q[worst] - hi[worst], lo[worst] - q[worst], 0.0)),
+                }
+            )
+    # innermost reach with |q2| outside the stop zone (folding is limited by joint 2's stop)
+    fold = min(
+        abs(float(scenario.arm.q_max[1] - scenario.damper.stop[1])),
+        abs(float(scenario.arm.q_min[1] + scenario.damper.stop[1])),
+    )
+    inner = math.sqrt(max(l1 * l1 + l2 * l2 + 2 * l1 * l2 * math.cos(min(fold, math.pi)), 0.0))
+    p0 = np.asarray(start, dtype=float)
+    d = goal - p0
+    s = float(np.clip(-(p0 @ d) / (d @ d), 0.0, 1.0))
+    closest = p0 + s * d
+    line_min = float(np.linalg.norm(closest))
+    # where the straight line first enters the disc the folded arm cannot reach
+    enter = None
+    if line_min < inner:
+        a, b, c = float(d @ d), float(2 * p0 @ d), float(p0 @ p0) - inner * inner
+        disc = b * b - 4 * a * c
+        if disc >= 0:
+            enter = float((-b - math.sqrt(disc)) / (2 * a) * math.sqrt(a))
+    return {
+        "start_elbow": "up" if scenario.motion.q0[1] > 0 else "down",
+        "solutions": solutions,
+        "max_fold": fold,
+        "inner_reach": inner,
+        "line_min_distance": line_min,
+        "line_blocked": bool(line_min < inner),
+        "line_enters_at": enter,
+        "reach": l1 + l2,
+    }
+
+
+def front_events(data: dict[str, Any]) -> list[dict[str, Any]]:
+    """Each Pareto front of ``pareto.json``: how many distinct optima it has, whether it is one
+    point (degenerate: a task-scaled step, whose admissible set is a single point) and the weight
+    ratio from which every larger ratio gives the same optimum (saturated: bounds active)."""
+    out = []
+    for step in data["steps"]:
+        pts = step["points"]
+        E = np.array([p["E"] for p in pts])
+        M = np.array([p["M"] for p in pts])
+        ratio = [p["w_manip"] / p["w_effort"] for p in pts]
+        scale = max(float(np.abs(E).max()), float(np.abs(M).max()), 1e-300)
+
+        def same(
+            i: int, k: int, E: np.ndarray = E, M: np.ndarray = M, scale: float = scale
+        ) -> bool:
+            return bool(abs(E[i] - E[k]) <= 1e-9 * scale and abs(M[i] - M[k]) <= 1e-9 * scale)
+
+        distinct: list[int] = []
+        for i in range(len(pts)):
+            if not any(same(i, k) for k in distinct):
+                distinct.append(i)
+        last = len(pts) - 1
+        sat = last
+        while sat > 0 and same(sat - 1, last):
+            sat -= 1
+        nondominated = [
+            i
+            for i in distinct
+            if not any(E[k] <= E[i] and M[k] >= M[i] and not same(i, k) for k in range(len(pts)))
+        ]
+        out.append(
+            {
+                "k": step["k"],
+                "t": step["t"],
+                "points": len(pts),
+                "distinct": len(distinct),
+                "nondominated": len(nondominated),
+                "degenerate": len(distinct) == 1,
+                "alpha": float(min(p["alpha"] for p in pts)),
+                "saturated_from_ratio": ratio[sat] if 0 < sat < last else None,
+                "saturated_points": last - sat + 1 if 0 < sat < last else 0,
+                "E_min": float(E.min()),
+                "E_max": float(E.max()),
+                "M_min": float(M.min()),
+                "M_max": float(M.max()),
+            }
+        )
+    return out

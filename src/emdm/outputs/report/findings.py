@@ -1,0 +1,1525 @@
+"""The study's story: direct answers and explanations, every number read from the records.
+
+Each section opens with a one-sentence direct answer to its brief item, then explains what
+shaped the runs from the detected events (``events.json``), backed by evidence runs
+(``evidence.json``) that isolate each cause. Sentences are chosen by the data (a stall is only
+described when one was detected, a comparison says "more" or "less" by the sign), never canned.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .config import PAIRS
+from .document import Document, Figure, Section, Table
+from .trace import Cite, Data, Math, Num, Ref, Sentence, Text, format_value, sentence
+
+# ---------------------------------------------------------------------------- inline math
+ALPHA = Math(r"\alpha", "α")
+ALPHA_LT1 = Math(r"\alpha<1", "α&nbsp;&lt;&nbsp;1")
+W_M = Math("w_M", "<i>w</i><sub>M</sub>")
+W_E = Math("w_E", "<i>w</i><sub>E</sub>")
+W_S = Math(r"w_S=c_S/\|e\|", "<i>w</i><sub>S</sub>&nbsp;=&nbsp;<i>c</i><sub>S</sub>/‖<i>e</i>‖")
+W_S_SYM = Math("w_S", "<i>w</i><sub>S</sub>")
+C_S = Math("c_S", "<i>c</i><sub>S</sub>")
+RATIO = Math("w_M/w_E", "<i>w</i><sub>M</sub>/<i>w</i><sub>E</sub>")
+M_SYM = Math("m", "<i>m</i>")
+E_SYM = Math("E", "<i>E</i>")
+MRATE = Math("M", "<i>M</i>")
+ERR = Math(r"\|e\|", "‖<i>e</i>‖")
+DELTA = Math(r"\|\delta\|", "‖δ‖")
+DT = Math(r"\Delta t", "Δ<i>t</i>")
+COND_J = Math(r"\operatorname{cond}J", "cond&nbsp;<i>J</i>")
+VD = Math(r"v_d", "<i>v</i><sub>d</sub>")
+T_EQ = Math("t={}", "<i>t</i>&nbsp;=&nbsp;")
+T_EQ0 = Math("t=0", "<i>t</i>&nbsp;=&nbsp;0")
+
+
+def q(j: int) -> Math:
+    return Math(f"q_{j}", f"<i>q</i><sub>{j}</sub>")
+
+
+def qd(j: int) -> Math:
+    return Math(rf"\dot q_{j}", f"<i>q̇</i><sub>{j}</sub>")
+
+
+def eq(symbol: Math, value: Num) -> list[Any]:
+    """``symbol = value`` as one piece of a sentence."""
+    return [symbol, Text(" = "), value]
+
+
+def bare(num: Num) -> Num:
+    """The number without its unit (a table states the unit in its header)."""
+    return Num(num.text, num.src, num.fmt, num.op)
+
+
+def _words(count: int) -> str:
+    return {1: "one", 2: "two", 3: "three", 4: "four"}.get(count, str(count))
+
+
+def _flat(*parts: Any) -> Sentence:
+    out: list[Any] = []
+    for p in parts:
+        if isinstance(p, list):
+            out.extend(p)
+        else:
+            out.append(p)
+    return sentence(*out)
+
+
+class Story:
+    """Builds the :class:`Document` from the report's data files."""
+
+    def __init__(self, data: Data) -> None:
+        self.d = data
+        self.figures: dict[str, Figure] = {}
+        self.tables: dict[str, Table] = {}
+        self.answers: list[tuple[str, Sentence]] = []
+
+    # ------------------------------------------------------------------ data accessors
+    def mt(self, task: str, ctrl: str, key: str, fmt: str, unit: str = "") -> Num:
+        return self.d.num(f"data/{task}/metrics.json", "controllers", ctrl, key, fmt=fmt, unit=unit)
+
+    def mv(self, task: str, ctrl: str, key: str) -> Any:
+        return self.d.value(f"data/{task}/metrics.json", "controllers", ctrl, key)
+
+    def ev(self, task: str, ctrl: str, *path: str | int, fmt: str, unit: str = "") -> Num:
+        return self.d.num(
+            f"data/{task}/events.json", "controllers", ctrl, *path, fmt=fmt, unit=unit
+        )
+
+    def evv(self, task: str, ctrl: str, *path: str | int) -> Any:
+        return self.d.value(f"data/{task}/events.json", "controllers", ctrl, *path)
+
+    def pair(self, task: str, group: str, key: str) -> Any:
+        return self.d.value(f"data/{task}/events.json", "pairs", group, key)
+
+    def pairn(self, task: str, group: str, key: str, fmt: str, unit: str = "") -> Num:
+        return self.d.num(f"data/{task}/events.json", "pairs", group, key, fmt=fmt, unit=unit)
+
+    def evid(self, key: str, *path: str | int) -> Any:
+        return self.d.value("data/evidence.json", "runs", key, *path)
+
+    def evidn(self, key: str, *path: str | int, fmt: str, unit: str = "") -> Num:
+        return self.d.num("data/evidence.json", "runs", key, *path, fmt=fmt, unit=unit)
+
+    def pct(self, task: str, a: str, b: str, key: str) -> Num:
+        f = f"data/{task}/metrics.json"
+        return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
+
+    def ttg(self, task: str, ctrl: str) -> Num:
+        return self.mt(task, ctrl, "time_to_goal", ".2f", "s")
+
+    def anim(self, task: str, group: str) -> dict[str, Any] | None:
+        if not self.d.exists("data/animations.json"):
+            return None
+        found: dict[str, Any] | None = self.d.value("data/animations.json", "animations").get(
+            f"{task}-{group}"
+        )
+        return found
+
+    # ------------------------------------------------------------------ comparisons
+    def more_less(self, task: str, a: str, b: str, key: str) -> str:
+        return "more" if self.mv(task, a, key) > self.mv(task, b, key) else "less"
+
+    def higher_lower(self, task: str, a: str, b: str, key: str) -> str:
+        return "higher" if self.mv(task, a, key) > self.mv(task, b, key) else "lower"
+
+    def outcome(self, task: str, ctrl: str) -> Sentence:
+        """``reaches the goal in X s`` or ``stalls at Y m from the goal``."""
+        if self.mv(task, ctrl, "reached"):
+            return sentence("reaches the goal in ", self.ttg(task, ctrl))
+        stall = self.evv(task, ctrl, "stall")
+        if stall:
+            return sentence(
+                "never reaches the goal: it stalls after ",
+                self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
+                " at ",
+                self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
+                " from it",
+            )
+        return sentence(
+            "does not reach the goal within ",
+            self.mt(task, ctrl, "final_time", ".0f", "s"),
+            " (final error ",
+            self.mt(task, ctrl, "final_error", ".3f", "m"),
+            ")",
+        )
+
+    # ------------------------------------------------------------------ figures, tables
+    def figure(
+        self, key: str, stem: str, caption: Sentence, wide: bool = False, paper: bool = True
+    ) -> str:
+        if self.d.exists(f"paper/{stem}.png"):
+            self.figures[key] = Figure(key, stem, caption, wide, paper=paper)
+        return key
+
+    def has_figure(self, key: str) -> bool:
+        return key in self.figures
+
+    # ================================================================== the document
+    def build(self) -> Document:
+        sections = [
+            self.introduction(),
+            Section("formulation", "Formulation", partial="formulation"),
+            Section("task1", "Task 1: the redundant three-link arm"),
+            self.task1_uc(),
+            self.pareto(),
+            self.task1_c(),
+            self.task1_solver(),
+            Section("task2", "Task 2: the non-redundant two-link arm"),
+            self.task2_c(),
+            self.task2_solvers(),
+            self.task2_uc(),
+            self.task2_challenges(),
+            self.conclusion(),
+        ]
+        self.outcome_table(sections)
+        self.evidence_table(sections)
+        for sec in sections:
+            sec.figures = [k for k in sec.figures if k in self.figures]
+        doc = Document(
+            title="Effort-Minimising, Dexterity-Maximising Velocity Control of Planar Arms",
+            abstract=self.abstract(),
+            sections=[s for s in sections if s is not None],
+            figures=self.figures,
+            tables=self.tables,
+            answers=self.answers,
+        )
+        doc.number()
+        return doc
+
+    # ------------------------------------------------------------------ abstract, intro
+    def abstract(self) -> Sentence:
+        t1, t2 = "task1", "task2"
+        out = sentence(
+            "We pose velocity control of planar arms as one quadratic program per step that tracks "
+            "a proportional controller's end-effector velocity, minimises joint-velocity effort "
+            "and maximises the manipulability rate (EMDM), and compare it with inverse velocity "
+            "kinematics (IVKC). On a redundant three-link arm EMDM tracks as IVKC does and raises "
+            "the mean manipulability by ",
+            self.pct(t1, "UC-EMDM", "UC-IVKC", "mean_manipulability"),
+            " without and ",
+            self.pct(t1, "C-EMDM", "C-IVKC", "mean_manipulability"),
+            " with joint limits, for ",
+            self.pct(t1, "UC-EMDM", "UC-IVKC", "total_effort"),
+            " and ",
+            self.pct(t1, "C-EMDM", "C-IVKC", "total_effort"),
+            " effort. ",
+        )
+        if not self.mv(t2, "C-IVKC", "reached") and self.mv(t2, "C-EMDM", "reached"):
+            out += sentence(
+                "On a two-link arm with limits, C-IVKC stalls ",
+                self.ev(t2, "C-IVKC", "stall", "error", fmt=".2f", unit="m"),
+                " from the goal, while C-EMDM's task slack lets it leave the blocked straight "
+                "line and arrive in ",
+                self.ttg(t2, "C-EMDM"),
+            )
+            e6 = self.evid("t2-c-emdm-no-manip", "runs", "C-EMDM")
+            if e6.get("reached") and e6["time_to_goal"] < self.mv(t2, "C-EMDM", "time_to_goal"):
+                out += sentence(
+                    "; without the dexterity term it arrives sooner (",
+                    self.evidn(
+                        "t2-c-emdm-no-manip", "runs", "C-EMDM", "time_to_goal", fmt=".2f", unit="s"
+                    ),
+                    ")",
+                )
+            out += sentence(". ")
+        f = "data/task2-lab-C-EMDM/solvers.json"
+        if self.d.exists(f):
+            rows = self.d.value(f, "solvers")
+            grad = self.best(rows, "gradient")
+            if grad:
+                out += sentence(
+                    "Gradient-based ",
+                    grad,
+                    " solves each program exactly in ",
+                    self.d.ms(f, "solvers", grad, "median_time"),
+                    "; the gradient-free methods are inexact or slower than the control period.",
+                )
+        return out
+
+    def introduction(self) -> Section:
+        sec = Section("intro", "Introduction")
+        sec.paragraphs.append(
+            sentence(
+                "A planar arm must bring its end effector to a goal while spending little "
+                "joint-velocity effort and staying dexterous, i.e. keeping a large manipulability ",
+                M_SYM,
+                ". A redundant arm (three joints for a planar task) can do both; a non-redundant "
+                "arm (two joints) can only trade tracking for dexterity through a task slack. As "
+                "in",
+                Cite("haviland"),
+                ", we write each control step as a strictly convex quadratic program (QP), solve it "
+                "with a certified custom active-set method, and compare this EMDM controller with "
+                "IVKC, each unconstrained (UC-) or constrained by joint limits (C-). Every number "
+                "is read from the study's records, and every explanation is backed by an evidence "
+                "run that changes one thing (",
+                Ref("tab", "evidence"),
+                ").",
+            )
+        )
+        return sec
+
+    # ------------------------------------------------------------------ Task 1
+    def pair_caption(self, task: str, group: str) -> Sentence:
+        ivkc, emdm = PAIRS[group]
+        out = sentence(
+            f"{ivkc} (solid) against {emdm} (dashed): (a) manipulability ",
+            M_SYM,
+            ", (b) effort ",
+            E_SYM,
+            ", (c) joint positions with their limits and damper influence and stop zones, "
+            "(d) joint velocities with their limits.",
+        )
+        if (
+            self.pair(task, group, "coincide_scaled_steps")
+            and self.pair(task, group, "coincide_all_scaled") is not None
+        ):
+            scaled = self.evv(task, emdm, "scaling")
+            if scaled and not scaled["whole_run"]:
+                out += sentence(" Grey: both task-scaled (", ALPHA_LT1, ").")
+        return out
+
+    def task1_uc(self) -> Section:
+        t = "task1"
+        ivkc, emdm = PAIRS["UC"]
+        sec = Section("t1-uc", "Task 1.1: UC-EMDM against UC-IVKC", level=2, brief="1.1")
+        same_time = self.mv(t, ivkc, "time_to_goal") == self.mv(t, emdm, "time_to_goal")
+        gap = self.pairn(
+            t,
+            "UC",
+            "max_path_gap",
+            ".1e" if self.pair(t, "UC", "max_path_gap") < 1e-3 else ".4f",
+            "m",
+        )
+        answer = sentence(f"{emdm} tracks the goal as {ivkc} does (")
+        if same_time and self.mv(t, emdm, "reached"):
+            answer += sentence("both reach it in ", self.ttg(t, emdm))
+        else:
+            answer += sentence(
+                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
+            )
+        answer += sentence(
+            "; their end-effector paths differ by at most ",
+            gap,
+            ") and raises the mean manipulability by ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            " (",
+            self.mt(t, emdm, "mean_manipulability", ".3f"),
+            " against ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
+            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            ").",
+        )
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 1.1: implement and compare UC-EMDM and UC-IVKC; discuss tracking "
+                "and manipulability",
+                answer,
+            )
+        )
+        sec.figures.append(self.figure("t1-uc", "figures/task1-UC", self.pair_caption(t, "UC")))
+        # why the tracking is the same
+        p = sentence(
+            "Both programs impose ",
+            Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+            " exactly, so the end effector follows the same path; only the second-order term of "
+            "the Euler step separates the two. The controllers differ in their null-space motion "
+            "alone: with ",
+            W_M,
+            " = 0 (E1) ",
+        )
+        ref = self.evid("t1-uc-no-manip", "reference")
+        if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
+            p += sentence(f"{emdm} reproduces {ivkc} command for command. ")
+        else:
+            p += sentence(
+                f"{emdm} differs from {ivkc} by at most ",
+                self.evidn(
+                    "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
+                ),
+                ". ",
+            )
+        p += sentence(
+            "That motion raises ",
+            M_SYM,
+            " to ",
+            self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
+            f" ({ivkc}: ",
+            self.mt(t, ivkc, "final_manipulability", ".3f", "m²"),
+            ") and is paid for early: ",
+            self.ev(t, ivkc, "effort", "share_first_second", fmt=".0%"),
+            " and ",
+            self.ev(t, emdm, "effort", "share_first_second", fmt=".0%"),
+            " of the total effort fall in the first second, where ",
+            ERR,
+            " is largest. Neither controller sees the joint limits: ",
+        )
+        for name in (ivkc, emdm):
+            if self.evv(t, name, "limits", "max_excess") > 0:
+                p += sentence(
+                    f"{name} leaves joint ",
+                    self.ev(t, name, "limits", "excess_joint", fmt="d"),
+                    "'s range by ",
+                    self.ev(t, name, "limits", "max_excess", fmt=".3f", unit="rad"),
+                    ", ",
+                )
+        p += sentence(
+            "and the two command up to ",
+            self.ev(t, ivkc, "limits", "max_abs_qd", fmt=".2f"),
+            " and ",
+            self.ev(t, emdm, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
+            " (limit ",
+            self.d.num(
+                f"data/{t}/metrics.json", "scenario", "arm", "qd_max", 0, fmt=".1f", unit="rad/s"
+            ),
+            ").",
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    def task1_c(self) -> Section:
+        t = "task1"
+        ivkc, emdm = PAIRS["C"]
+        sec = Section("t1-c", "Task 1.2: C-EMDM against C-IVKC", level=2, brief="1.2")
+        answer = sentence(
+            f"Both constrained controllers keep every joint outside its stop zone and within its "
+            f"speed limit; {emdm} ",
+            *self.outcome(t, emdm),
+            f" and {ivkc} ",
+            *self.outcome(t, ivkc),
+        )
+        scaled = self.evv(t, emdm, "scaling")
+        if scaled:
+            answer += sentence(
+                ", later than the UC pair because the task is scaled for the first ",
+                self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
+            )
+        answer += sentence(
+            f", and {emdm} again raises the mean manipulability (",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            ").",
+        )
+        sec.answer = answer
+        self.answers.append(
+            ("Task 1.2: implement and compare C-EMDM and C-IVKC, same analysis", answer)
+        )
+        sec.figures.append(self.figure("t1-c", "figures/task1-C", self.pair_caption(t, "C")))
+        same = self.pair(t, "C", "coincide_steps")
+        if same:
+            p = sentence(
+                "The commands are identical for the first ",
+                self.pairn(t, "C", "coincide_steps", "d"),
+                " steps (until ",
+                T_EQ,
+                self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
+                ") because the bounds leave no choice. At the start the velocity limits deliver "
+                "only ",
+                *eq(ALPHA, self.ev(t, emdm, "scaling", "initial_alpha", fmt=".2f")),
+                " of ",
+                VD,
+                "; at the largest feasible ",
+                ALPHA,
+                " the admissible set is a single point (two joints at their bounds leave one "
+                "unknown for two task equations), so the objective has nothing to choose. ",
+            )
+            scaled_steps = self.pair(t, "C", "coincide_scaled_steps")
+            determined = self.pair(t, "C", "coincide_determined_steps")
+            p += sentence(
+                self.pairn(t, "C", "coincide_scaled_steps", "d"),
+                " of these steps are scaled",
+            )
+            if determined == same and scaled_steps < same:
+                p += sentence(
+                    "; on the other ",
+                    _words(same - scaled_steps),
+                    " both optima keep a joint at its bound, again leaving two free joints for "
+                    "two equations",
+                )
+            coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
+            p += sentence(
+                ". With the slack policy instead of scaling (E2) the commands ",
+                "differ from the first step on." if coincide == 0 else "coincide for only ",
+            )
+            if coincide:
+                p += sentence(
+                    self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"), " steps."
+                )
+            sec.paragraphs.append(p)
+        pinned = self.evv(t, emdm, "pinned")
+        p = sentence()
+        if pinned:
+            p += sentence("Afterwards ")
+            shown = min(len(pinned), 2)
+            for i, e in enumerate(pinned[:shown]):
+                p += sentence(
+                    "joint ",
+                    self.ev(t, emdm, "pinned", i, "joint", fmt="d"),
+                    f" of {emdm} runs along its {e['side']} {e['kind']} bound from ",
+                    self.ev(t, emdm, "pinned", i, "t0", fmt=".2f"),
+                    " to ",
+                    self.ev(t, emdm, "pinned", i, "t1", fmt=".2f", unit="s"),
+                    " and " if i < shown - 1 else ". ",
+                )
+        p += sentence(
+            "Capped speeds cut the effort to ",
+            self.mt(t, ivkc, "total_effort", ".2f"),
+            " and ",
+            self.mt(t, emdm, "total_effort", ".2f", "rad²/s"),
+            " (UC pair: ",
+            self.mt(t, "UC-IVKC", "total_effort", ".2f"),
+            " and ",
+            self.mt(t, "UC-EMDM", "total_effort", ".2f"),
+            ")",
+        )
+        qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, "UC-EMDM", "final_q")
+        if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
+            p += sentence(
+                f", and {emdm} ends in the configuration UC-EMDM reaches (",
+                M_SYM,
+                " = ",
+                self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
+                ")",
+            )
+        p += sentence(".")
+        sec.paragraphs.append(p)
+        return sec
+
+    def pareto(self) -> Section:
+        sec = Section("t1-pareto", "Task 1: Pareto fronts and weights", level=2, brief="1.1-1.2")
+        uc, c = "data/task1-pareto-UC-EMDM/fronts.json", "data/task1-pareto-C-EMDM/fronts.json"
+        if not self.d.exists(uc):
+            return sec
+        cap = sentence(
+            "Pareto fronts between effort ",
+            E_SYM,
+            " and manipulability rate ",
+            MRATE,
+            " at ",
+            Math(
+                r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
+                "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
+            ),
+            " (columns 1-4), each point the step's optimum for one ",
+            RATIO,
+            " (colour; circle: the nominal 50); right: whole runs per weight setting.",
+        )
+        sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
+        answer = sentence(
+            "The fronts show what the weights buy: at k = 0, raising ",
+            RATIO,
+            " from 0 to its largest value moves UC-EMDM's optimum from ",
+            *eq(MRATE, self.d.num(uc, "steps", 0, "M_min", fmt=".3g")),
+            " to ",
+            self.d.num(uc, "steps", 0, "M_max", fmt=".3g", unit="m²/s"),
+            " at an effort growing from ",
+            self.d.num(uc, "steps", 0, "E_min", fmt=".3g"),
+            " to ",
+            self.d.num(uc, "steps", 0, "E_max", fmt=".3g", unit="rad²/s²"),
+            "; the nominal ratio sits at the low-effort end of every front, costing ",
+        )
+        e0 = self.d.value(uc, "steps", 0, "zero_E")
+        en = self.d.value(uc, "steps", 0, "nominal_E")
+        answer += sentence(
+            self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
+            if e0 > 0
+            else Text("little"),
+            " effort at k = 0" if en >= e0 else " effort",
+            ".",
+        )
+        sec.answer = answer
+        self.answers.append(("Task 1: Pareto front between E and M at t = 0, T/3, 2T/3, T", answer))
+        # degenerate and saturated fronts of C-EMDM
+        p: Sentence = []
+        if self.d.exists(c):
+            csteps = self.d.value(c, "steps")
+            for i, info in enumerate(csteps):
+                if info["degenerate"]:
+                    p += sentence(
+                        "C-EMDM's front at k = ",
+                        self.d.num(c, "steps", i, "k", fmt="d"),
+                        " is a single point: the step is task-scaled (",
+                        *eq(ALPHA, self.d.num(c, "steps", i, "alpha", fmt=".2f")),
+                        "), its admissible set is one point, and no weight can move it. ",
+                    )
+            sat = [(i, s) for i, s in enumerate(csteps) if s["saturated_from_ratio"] is not None]
+            if sat:
+                i, _ = sat[0]
+                p += sentence(
+                    "At k = ",
+                    self.d.num(c, "steps", i, "k", fmt="d"),
+                    " the front saturates: every ",
+                    RATIO,
+                    " from ",
+                    self.d.num(c, "steps", i, "saturated_from_ratio", fmt=".3g"),
+                    " on gives the same optimum, a vertex of the joint bounds, so more weight on ",
+                    MRATE,
+                    " buys nothing. ",
+                )
+        # the weight grid: failures
+        grid_file = "data/task1-pareto-UC-EMDM/weight_grid.json"
+        rows = self.d.value(grid_file, "runs")
+        nominal = [
+            i
+            for i, r in enumerate(rows)
+            if r.get("reached") and math.isclose(r["w_manip"] / r["w_effort"], 50.0)
+        ]
+        ok = [i for i, r in enumerate(rows) if r.get("reached")]
+        if ok and nominal:
+            p += sentence(
+                "Over whole runs, UC-EMDM's mean ",
+                M_SYM,
+                " rises from ",
+                self.d.num(grid_file, "runs", ok[0], "mean_manipulability", fmt=".3f"),
+                " (",
+                W_M,
+                " = 0) to ",
+                self.d.num(
+                    grid_file, "runs", nominal[0], "mean_manipulability", fmt=".3f", unit="m²"
+                ),
+                " at the nominal weights for ",
+                self.d.pct(
+                    (grid_file, "runs", nominal[0], "total_effort"),
+                    (grid_file, "runs", ok[0], "total_effort"),
+                ),
+                " effort. ",
+            )
+        for i, r in enumerate(rows):
+            if r.get("reached") or "finer_dt" not in r:
+                continue
+            p += sentence(
+                "At ",
+                *eq(RATIO, self.d.num(grid_file, "runs", i, "w_manip", fmt=".4g")),
+                Text("/"),
+                self.d.num(grid_file, "runs", i, "w_effort", fmt=".2g"),
+                " UC-EMDM fails to reach the goal (final error ",
+                self.d.num(grid_file, "runs", i, "final_error", fmt=".3f", unit="m"),
+                "): its null-space speed reaches ",
+                self.d.num(grid_file, "runs", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
+                ", and a step of ",
+                self.d.num(
+                    "data/task1/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
+                ),
+                " at that speed leaves the linearisation ",
+                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                " far behind. ",
+            )
+            finer = r["finer_dt"]
+            if finer.get("reached"):
+                p += sentence(
+                    "The same weights with ",
+                    *eq(
+                        DT, self.d.num(grid_file, "runs", i, "finer_dt", "dt", fmt=".2f", unit="s")
+                    ),
+                    " reach the goal in ",
+                    self.d.num(
+                        grid_file, "runs", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"
+                    ),
+                    " (evidence E3): the failure is the discretisation, not the program. ",
+                )
+            break
+        if p:
+            sec.paragraphs.append(p)
+        return sec
+
+    def task1_solver(self) -> Section:
+        t = "task1"
+        sec = Section(
+            "t1-solver", "Task 1: custom solver, fallback, convergence", level=2, brief="1.1"
+        )
+        fallbacks = self.mv(t, "UC-EMDM", "fallback_steps") + self.mv(t, "C-EMDM", "fallback_steps")
+        answer = sentence(
+            "The custom active-set solver returned a certified optimum (relative KKT residual at "
+            "most ",
+            Math("10^{-9}", "10<sup>−9</sup>"),
+            ") at every step of UC-EMDM (",
+            self.mt(t, "UC-EMDM", "steps", "d"),
+            ") and C-EMDM (",
+            self.mt(t, "C-EMDM", "steps", "d"),
+            "), so the off-the-shelf fallback (daqp, then quadprog) ",
+        )
+        if fallbacks == 0:
+            answer += sentence("was never needed.")
+        else:
+            answer += sentence(
+                "answered ",
+                self.mt(t, "UC-EMDM", "fallback_steps", "d"),
+                " and ",
+                self.mt(t, "C-EMDM", "fallback_steps", "d"),
+                " of them.",
+            )
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 1.1: custom solver, off-the-shelf fallback, convergence "
+                "behaviour, numerical challenges",
+                answer,
+            )
+        )
+        p = sentence(
+            "Started from an exact feasible point, it takes a median of ",
+            self.ev(t, "C-EMDM", "solver", "median_iterations", fmt=".0f"),
+            " iterations (at most ",
+            self.ev(t, "C-EMDM", "solver", "max_iterations", fmt="d"),
+            ") and terminates finitely, each iteration being an exact equality-constrained solve",
+        )
+        lab = "data/task1-lab-C-EMDM/solvers.json"
+        ch: dict[str, Any] = {}
+        if self.d.exists(lab):
+            ch = self.d.value(lab, "challenges", "solvers")
+        if "median_iterations_scaled" in ch.get("active-set", {}):
+            p += sentence(
+                "; on scaled steps it takes ",
+                self.d.num(
+                    lab,
+                    "challenges",
+                    "solvers",
+                    "active-set",
+                    "median_iterations_scaled",
+                    fmt=".0f",
+                ),
+                ", the feasible point being the optimum",
+            )
+        p += sentence(
+            ". Those scaled steps are Task 1's numerical challenge: their admissible set is a "
+            "single, degenerate vertex",
+        )
+        if "median_iterations_scaled" in ch.get("admm", {}):
+            p += sentence(
+                ". First-order ADMM needs ",
+                self.d.num(
+                    lab, "challenges", "solvers", "admm", "median_iterations_scaled", fmt=".0f"
+                ),
+                " iterations there against ",
+                self.d.num(
+                    lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".0f"
+                ),
+                " elsewhere",
+            )
+        rows = self.d.value(lab, "solvers") if self.d.exists(lab) else {}
+        notes = (
+            self.d.value(lab, "notes") if self.d.exists(lab) and "notes" in self.d.load(lab) else {}
+        )
+        qp = rows.get("quadprog", {})
+        if qp.get("failures"):
+            p += sentence(
+                ", and quadprog declines "
+                if "median_iterations_scaled" in ch.get("admm", {})
+                else ". The quadprog solver declines ",
+                self.d.num(lab, "solvers", "quadprog", "failures", fmt="d"),
+                " of the ",
+                self.d.num(lab, "solvers", "quadprog", "resolved_steps", fmt="d"),
+                " re-solved C-EMDM programs",
+            )
+            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp["failures"]:
+                p += sentence(", all scaled ones")
+        p += sentence(
+            ". Otherwise Task 1 is benign: ",
+            COND_J,
+            " stays below ",
+            self.ev(t, "C-EMDM", "conditioning", "cond_J_max", fmt=".1f"),
+            " along the whole runs and the programs have no slack.",
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    # ------------------------------------------------------------------ Task 2
+    def task2_c(self) -> Section:
+        t = "task2"
+        ivkc, emdm = PAIRS["C"]
+        sec = Section("t2-c", "Task 2.1: C-EMDM against C-IVKC", level=2, brief="2.1")
+        reached_e, reached_i = self.mv(t, emdm, "reached"), self.mv(t, ivkc, "reached")
+        answer = sentence(f"{emdm} ", *self.outcome(t, emdm), f"; {ivkc} ", *self.outcome(t, ivkc))
+        if reached_e and not reached_i:
+            answer += sentence(
+                ", so the comparison is between a controller that can leave the straight line to "
+                "the goal and one that cannot, not between two speeds."
+            )
+        else:
+            answer += sentence(".")
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 2.1: compare C-EMDM and C-IVKC in tracking, manipulability and time to goal",
+                answer,
+            )
+        )
+        geo = self.d.value(f"data/{t}/events.json", "geometry")
+        g = f"data/{t}/events.json"
+        if geo:
+            sec.figures.append(
+                self.figure(
+                    "workspace",
+                    "figures/workspace",
+                    sentence(
+                        "Task 2 in the workspace: the straight line to the goal enters the disc "
+                        "the arm cannot reach with ",
+                        Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
+                        " outside its stop zone (hatched); C-IVKC stalls on its edge, C-EMDM "
+                        "goes around and flips its elbow into the only goal configuration within "
+                        "the limits.",
+                    ),
+                )
+            )
+            sols = geo["solutions"]
+            inside = [i for i, s in enumerate(sols) if s["within_limits"]]
+            outside = [i for i, s in enumerate(sols) if not s["within_limits"]]
+            p: Sentence = []
+            if inside and outside:
+                i, o = inside[0], outside[0]
+                p += sentence(
+                    "Within the joint limits the goal has one configuration, elbow ",
+                    sols[i]["elbow"],
+                    ", ",
+                    Math("q", "<i>q</i>"),
+                    " = (",
+                    self.d.num(g, "geometry", "solutions", i, "q1", fmt=".2f"),
+                    ", ",
+                    self.d.num(g, "geometry", "solutions", i, "q2", fmt=".2f"),
+                    ") rad; the elbow-",
+                    sols[o]["elbow"],
+                    " one",
+                    " (the side the arm starts on)"
+                    if geo.get("start_elbow") == sols[o]["elbow"]
+                    else "",
+                    " needs ",
+                    q(sols[o]["outside_joint"]),
+                    " = ",
+                    self.d.num(
+                        g,
+                        "geometry",
+                        "solutions",
+                        o,
+                        f"q{sols[o]['outside_joint']}",
+                        fmt=".2f",
+                        unit="rad",
+                    ),
+                    ", ",
+                    self.d.num(g, "geometry", "solutions", o, "outside_by", fmt=".2f", unit="rad"),
+                    " beyond its limit. ",
+                )
+            if geo["line_blocked"]:
+                p += sentence(
+                    "With ",
+                    Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
+                    " outside its stop zone (at most ",
+                    self.d.num(g, "geometry", "max_fold", fmt=".3f", unit="rad"),
+                    ") the end effector cannot come closer than ",
+                    self.d.num(g, "geometry", "inner_reach", fmt=".3f", unit="m"),
+                    " to the base, yet the straight line to the goal passes ",
+                    self.d.num(g, "geometry", "line_min_distance", fmt=".3f", unit="m"),
+                    " from it and enters that disc ",
+                    self.d.num(g, "geometry", "line_enters_at", fmt=".3f", unit="m"),
+                    " after the start (",
+                    Ref("fig", "workspace"),
+                    ").",
+                )
+            if p:
+                sec.paragraphs.append(p)
+        stall = self.evv(t, ivkc, "stall")
+        if stall:
+            p = sentence(
+                "A non-redundant arm without slack has one command per task velocity, and scaling "
+                f"keeps its direction: {ivkc} can only slow down along the line. ",
+            )
+            sc = self.evv(t, ivkc, "scaling")
+            if sc:
+                p += sentence(
+                    "Scaled from the first step (",
+                    *eq(ALPHA, self.ev(t, ivkc, "scaling", "initial_alpha", fmt=".2f")),
+                    ")",
+                )
+            pins = self.evv(t, ivkc, "pinned")
+            if pins:
+                p += sentence(
+                    ", joint ",
+                    self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
+                    f" runs on its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                    self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
+                    " to the end",
+                )
+            p += sentence(
+                ", it freezes ",
+                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
+                " from the goal after ",
+                self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
+                " of progress (",
+                T_EQ,
+                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+                "), joint ",
+                self.ev(t, ivkc, "stall", "joint", fmt="d"),
+                " at the edge of its stop zone",
+            )
+            if sc and sc["zero_from_t"] is not None:
+                p += sentence(
+                    "; from ",
+                    T_EQ,
+                    self.ev(t, ivkc, "scaling", "zero_from_t", fmt=".2f", unit="s"),
+                    " on, its damper bound is 0 and so is ",
+                    ALPHA,
+                    ".",
+                )
+            else:
+                p += sentence(".")
+            sec.paragraphs.append(p)
+        if reached_e:
+            p = sentence(
+                "The slack (up to ",
+                *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
+                ") lets ",
+                emdm,
+                " leave the line: its path is ",
+                self.ev(t, emdm, "path_length", fmt=".2f", unit="m"),
+                " long, ",
+                self.ev(t, emdm, "detour", fmt=".0%"),
+                " longer than the line. ",
+            )
+            pins = self.evv(t, emdm, "pinned")
+            if pins:
+                p += sentence(
+                    "Joint ",
+                    self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
+                    f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound for ",
+                    self.ev(t, emdm, "pinned", 0, "duration", fmt=".2f", unit="s"),
+                    " (",
+                    self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
+                    "-",
+                    self.ev(t, emdm, "pinned", 0, "t1", fmt=".2f", unit="s"),
+                    ") while the arm stretches; ",
+                )
+            flips = self.evv(t, emdm, "singular", "elbow_flips")
+            if flips:
+                p += sentence(
+                    "at ",
+                    T_EQ,
+                    self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
+                    " it passes the singular stretched configuration (",
+                    *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
+                    ", ",
+                    *eq(COND_J, self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g")),
+                    ") and flips its elbow into the admissible goal configuration.",
+                )
+            sec.paragraphs.append(p)
+        # evidence (their numbers are in the evidence table)
+        p = sentence("The evidence runs (", Ref("tab", "evidence"), ") isolate the causes. ")
+        e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+        e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
+        if not reached_i and (e4.get("reached") or e5.get("reached")):
+            p += sentence(f"{ivkc} reaches the goal ")
+            if e4.get("reached"):
+                p += sentence("with the slack policy instead of scaling (E4, flipping its elbow)")
+            if e4.get("reached") and e5.get("reached"):
+                p += sentence(" and ")
+            if e5.get("reached"):
+                p += sentence("with the joint limits widened to ±3 rad (E5)")
+            p += sentence(
+                ": the stall comes from keeping the task direction under the limits, not from "
+                "IVKC. "
+            )
+        e6 = self.evid("t2-c-emdm-no-manip", "runs", emdm)
+        if e6.get("reached") and reached_e:
+            if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
+                p += sentence(
+                    f"Without the dexterity term {emdm} still arrives, and sooner (E6): the slack "
+                    "carries it to the goal and the dexterity term slows it down, contrary to "
+                    "what the brief expects",
+                )
+            else:
+                p += sentence(
+                    f"Without the dexterity term {emdm} still arrives (E6): the slack carries it"
+                )
+            e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
+            if not e7.get("reached", True):
+                p += sentence("; with its slack bounded by 0.1 m/s it stalls (E7)")
+            p += sentence(".")
+        sec.paragraphs.append(p)
+        p = sentence(
+            emdm,
+            "'s mean ",
+            M_SYM,
+            " is ",
+            self.mt(t, emdm, "mean_manipulability", ".3f"),
+            " against ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
+            " (",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            ")",
+        )
+        if reached_e and not reached_i and self.evv(t, emdm, "singular", "near"):
+            p += sentence(
+                " because its route crosses ",
+                M_SYM,
+                " = 0 while ",
+                ivkc,
+                " keeps ",
+                M_SYM,
+                " by not moving",
+            )
+        p += sentence(
+            "; its effort is ",
+            self.mt(t, emdm, "total_effort", ".2f"),
+            " against ",
+            self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
+            ".",
+        )
+        sec.paragraphs.append(p)
+        sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
+        return sec
+
+    @staticmethod
+    def best(rows: dict[str, Any], family: str) -> str | None:
+        """The fastest solver of ``family`` whose answers are exact (gap and violation tiny)."""
+        exact = [
+            k
+            for k, r in rows.items()
+            if r["family"] == family
+            and r["failures"] == 0
+            and abs(r["max_abs_gap"]) <= 1e-9
+            and r["max_violation"] <= 1e-9
+        ]
+        return min(exact, key=lambda k: rows[k]["median_time"]) if exact else None
+
+    @staticmethod
+    def free_verdict(rows: dict[str, Any], period: float = 0.05) -> bool:
+        """True when no gradient-free method is both exact and faster than the control period."""
+        return not any(
+            r["family"] == "gradient-free"
+            and abs(r["max_abs_gap"]) <= 1e-9
+            and r["max_violation"] <= 1e-9
+            and r["median_time"] < period
+            for r in rows.values()
+        )
+
+    def task2_solvers(self) -> Section:
+        f = "data/task2-lab-C-EMDM/solvers.json"
+        sec = Section(
+            "t2-solvers", "Task 2.1: gradient-based against gradient-free", level=2, brief="2.1"
+        )
+        if not self.d.exists(f):
+            return sec
+        rows = self.d.value(f, "solvers")
+        dt = self.d.value("data/task2/metrics.json", "scenario", "motion", "dt")
+        grad = self.best(rows, "gradient")
+        free = [k for k, r in rows.items() if r["family"] == "gradient-free"]
+        exact_free = [
+            k
+            for k in free
+            if abs(rows[k]["max_abs_gap"]) <= 1e-9 and rows[k]["max_violation"] <= 1e-9
+        ]
+        inexact_free = [k for k in free if k not in exact_free]
+        answer: Sentence = []
+        if grad:
+            answer += sentence(
+                "Gradient-based optimisation wins on both counts: ",
+                grad,
+                " reaches the exact optimum (largest gap ",
+                self.d.num(f, "solvers", grad, "max_abs_gap", fmt=".0e"),
+                ") in a median ",
+                self.d.ms(f, "solvers", grad, "median_time"),
+                " after ",
+                self.d.num(f, "solvers", grad, "median_iterations", fmt=".0f"),
+                " iterations and ",
+                self.d.num(f, "solvers", grad, "median_evaluations", fmt=".0f"),
+                " evaluations, while ",
+            )
+        if exact_free:
+            answer += sentence("the exact gradient-free methods (")
+            for i, k in enumerate(exact_free):
+                answer += sentence(
+                    k,
+                    " ",
+                    self.d.ms(f, "solvers", k, "median_time"),
+                    ", " if i < len(exact_free) - 1 else "",
+                )
+            answer += sentence(
+                ") are slower than the ",
+                self.d.num(
+                    "data/task2/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
+                ),
+                " control period"
+                if all(rows[k]["median_time"] > dt for k in exact_free)
+                else " control period in part",
+            )
+            if inexact_free:
+                answer += sentence(" and the others are inexact.")
+            else:
+                answer += sentence(".")
+        elif inexact_free:
+            answer += sentence("every gradient-free method is inexact (")
+            for i, k in enumerate(inexact_free):
+                answer += sentence(
+                    k,
+                    ": gap ",
+                    self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g"),
+                    ", " if i < len(inexact_free) - 1 else "",
+                )
+            answer += sentence(").")
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 2.1: gradient-based and gradient-free solver, convergence speed "
+                "and solution quality",
+                answer,
+            )
+        )
+        sec.tables.append("solvers")
+        self.solver_table(f, rows)
+        sec.figures.append(
+            self.figure(
+                "solvers",
+                "figures/solvers",
+                sentence(
+                    "Task 2 C-EMDM, each solver on the same re-solved programs: median time per "
+                    "program against the largest gap to the exact optimum (",
+                    DT,
+                    ": the control period).",
+                ),
+                paper=False,
+            )
+        )
+        p = sentence("Quality: ")
+        for k in inexact_free:
+            p += sentence(
+                k,
+                " leaves gaps up to ",
+                self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g"),
+            )
+            if rows[k]["max_violation"] > 1e-6:
+                p += sentence(
+                    " and violates the bounds by up to ",
+                    self.d.num(f, "solvers", k, "max_violation", fmt=".2g"),
+                )
+            p += sentence("; ")
+        p += sentence(
+            "in closed loop, where each solver's answers are used as they are, ",
+        )
+        ref_t = rows.get("active-set", {}).get("time_to_goal")
+        slower = [
+            k
+            for k in free
+            if rows[k].get("reached")
+            and ref_t is not None
+            and rows[k]["time_to_goal"] > ref_t + 1e-9
+        ]
+        if slower:
+            for i, k in enumerate(slower):
+                p += sentence(
+                    k,
+                    " reaches the goal in ",
+                    self.d.num(f, "solvers", k, "time_to_goal", fmt=".2f", unit="s"),
+                    ", " if i < len(slower) - 1 else "",
+                )
+            p += sentence(
+                " instead of ",
+                self.d.num(f, "solvers", "active-set", "time_to_goal", fmt=".2f", unit="s"),
+                ". ",
+            )
+        else:
+            p += sentence("every solver reaches the goal at the same time. ")
+        p += (
+            sentence(
+                "Recommendation: solve these programs with an exact active-set QP method (the custom "
+                "one takes ",
+                self.d.ms(f, "solvers", "active-set", "median_time"),
+                "), or, with a general solver, a gradient-based one; gradient-free methods suit "
+                "objectives without gradients, and these convex quadratics have exact ones.",
+            )
+            if "active-set" in rows
+            else []
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    def task2_uc(self) -> Section:
+        t = "task2"
+        ivkc, emdm = PAIRS["UC"]
+        sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
+        answer = (
+            sentence(
+                f"Both unconstrained controllers reach the goal ({ivkc} in ",
+                self.ttg(t, ivkc),
+                f", {emdm} in ",
+                self.ttg(t, emdm),
+                "), but only by leaving the joint limits",
+            )
+            if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
+            else sentence(
+                f"{ivkc} ",
+                *self.outcome(t, ivkc),
+                f"; {emdm} ",
+                *self.outcome(t, emdm),
+            )
+        )
+        if self.evv(t, ivkc, "limits", "max_excess") > 0:
+            answer += sentence(
+                " (joint ",
+                self.ev(t, ivkc, "limits", "excess_joint", fmt="d"),
+                " by up to ",
+                self.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
+                ") into the elbow-up configuration the constrained pair cannot use",
+            )
+        answer += sentence(
+            f"; {emdm} spends ",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            " effort and keeps a mean ",
+            M_SYM,
+            " ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            " by letting the slack absorb up to ",
+            *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
+            " of the desired velocity.",
+        )
+        sec.answer = answer
+        self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))
+        p = sentence(
+            "The largest command is at ",
+            T_EQ0,
+            ", where ",
+            M_SYM,
+            " = ",
+            self.ev(t, ivkc, "singular", "m0", fmt=".2f", unit="m²"),
+            f" and {ivkc} needs ",
+            self.ev(t, ivkc, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
+            " at joint ",
+            self.ev(t, ivkc, "limits", "qd_joint", fmt="d"),
+            f" ({emdm}: ",
+            self.ev(t, emdm, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
+            "). ",
+        )
+        e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
+        if e8.get("reached"):
+            p += sentence(
+                "E8: with ",
+                *eq(
+                    C_S,
+                    self.d.num(
+                        "data/evidence.json",
+                        "runs",
+                        "t2-uc-emdm-stiff-slack",
+                        "overrides",
+                        "weights.slack",
+                        fmt=".0e",
+                    ),
+                ),
+                " the slack vanishes and ",
+                emdm,
+                " behaves like ",
+                ivkc,
+                " (goal in ",
+                self.evidn(
+                    "t2-uc-emdm-stiff-slack", "runs", emdm, "time_to_goal", fmt=".2f", unit="s"
+                ),
+                ", effort ",
+                self.evidn(
+                    "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
+                ),
+                "): the slack is what saves effort, by giving up ",
+                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                " while ",
+                ERR,
+                " is large.",
+            )
+        sec.paragraphs.append(p)
+        if self.d.exists("paper/figures/task2-UC.png"):
+            sec.figures.append(
+                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
+            )
+        return sec
+
+    def task2_challenges(self) -> Section:
+        t = "task2"
+        emdm = "C-EMDM"
+        f = "data/task2-lab-C-EMDM/solvers.json"
+        sec = Section(
+            "t2-challenges", "Task 2: convergence and numerical challenges", level=2, brief="2.1"
+        )
+        answer = sentence(
+            "Two things make Task 2's programs harder than Task 1's: the slack weight ",
+            W_S,
+            " grows from ",
+            self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
+            " to ",
+            self.ev(t, emdm, "conditioning", "w_slack_end", fmt=".3g"),
+            " as the error shrinks, and the singular passage drives ",
+            COND_J,
+            " to ",
+            self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
+            " at ",
+            T_EQ,
+            self.ev(t, emdm, "conditioning", "t_cond_J_max", fmt=".2f", unit="s"),
+            ".",
+        )
+        sec.answer = answer
+        self.answers.append(("Task 2.1: convergence behaviour and numerical challenges", answer))
+        sec.figures.append(
+            self.figure(
+                "conditioning",
+                "figures/conditioning",
+                sentence(
+                    "Task 2 C-EMDM along its run: ",
+                    COND_J,
+                    " and ",
+                    W_S,
+                    " at every state (top); iterations of the closed-loop solver at every step "
+                    "and of three others on the re-solved steps (bottom).",
+                ),
+                paper=False,
+            )
+        )
+        p = sentence(
+            "The slack block of the Hessian grows with ",
+            W_S_SYM,
+        )
+        if self.d.exists(f):
+            p += sentence(
+                ", and the condition number of the reduced Hessian reaches ",
+                self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
+                " on the re-solved steps. At ",
+                M_SYM,
+                " = 0 the manipulability is not differentiable; ",
+                Math("J_m", "<i>J</i><sub>m</sub>"),
+                " is then taken as the steepest one-sided ascent direction, so the program stays "
+                "defined. The exact solvers do not notice: the active-set method needs a median "
+                "of ",
+                self.ev(t, emdm, "solver", "median_iterations", fmt=".0f"),
+                " and at most ",
+                self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
+                " iterations",
+                ", with no fallback. " if self.mv(t, emdm, "fallback_steps") == 0 else ". ",
+            )
+            ch = self.d.value(f, "challenges", "solvers")
+            if "admm" in ch and ch["admm"].get("iterations_vs_cond_spearman") is not None:
+                p += sentence(
+                    "First-order ADMM does: its iteration count follows the conditioning (rank "
+                    "correlation ",
+                    self.d.num(
+                        f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
+                    ),
+                    ").",
+                )
+        sec.paragraphs.append(p)
+        return sec
+
+    def conclusion(self) -> Section:
+        sec = Section("conclusion", "Conclusion")
+        t1 = "task1"
+        p = sentence(
+            "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: the same "
+            "tracking, ",
+            self.pct(t1, "UC-EMDM", "UC-IVKC", "mean_manipulability"),
+            " and ",
+            self.pct(t1, "C-EMDM", "C-IVKC", "mean_manipulability"),
+            " mean manipulability for ",
+            self.pct(t1, "UC-EMDM", "UC-IVKC", "total_effort"),
+            " and ",
+            self.pct(t1, "C-EMDM", "C-IVKC", "total_effort"),
+            " effort. On the non-redundant arm the slack, not the dexterity term, decides: it lets "
+            "C-EMDM leave a straight line that the joint limits block, where task scaling, our "
+            "departure from the brief, stalls C-IVKC. Exact active-set QP solvers, certified at "
+            "every step, are the right tool; gradient-free methods are not.",
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    # ------------------------------------------------------------------ tables
+    def outcome_table(self, sections: list[Section]) -> None:
+        header = [
+            sentence("controller"),
+            sentence("goal"),
+            sentence("mean ", M_SYM),
+            sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
+            sentence("max ", Math(r"|\dot q|", "|<i>q̇</i>|")),
+            sentence("scaled"),
+        ]
+        table = Table(
+            "outcomes",
+            sentence(
+                "Closed-loop outcomes: time to goal (s; ",
+                ERR,
+                " < 1 mm) or final error (m), mean manipulability (m²), total effort "
+                "(rad²/s), largest joint speed (rad/s), task-scaled steps.",
+            ),
+            header,
+            align="lrrrrr",
+        )
+        for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
+            table.rows.append([sentence(title)])
+            for name in ("UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM"):
+                goal = (
+                    sentence(bare(self.ttg(task, name)))
+                    if self.mv(task, name, "reached")
+                    else sentence("(", self.mt(task, name, "final_error", ".3f"), " m)")
+                )
+                table.rows.append(
+                    [
+                        sentence(name),
+                        goal,
+                        sentence(self.mt(task, name, "mean_manipulability", ".3f")),
+                        sentence(self.mt(task, name, "total_effort", ".2f")),
+                        sentence(self.mt(task, name, "max_abs_qd", ".2f")),
+                        sentence(self.mt(task, name, "scaled_steps", "d")),
+                    ]
+                )
+        self.tables["outcomes"] = table
+        for s in sections:
+            if s.key == "task1":
+                s.tables.append("outcomes")
+
+    def solver_table(self, f: str, rows: dict[str, Any]) -> None:
+        table = Table(
+            "solvers",
+            sentence(
+                "Task 2 C-EMDM solvers on the same re-solved programs: median time, median "
+                "iterations/evaluations, largest gap to the exact optimum and bound violation; "
+                "time to goal when each solver alone runs the loop."
+            ),
+            [
+                sentence("solver"),
+                sentence("ms"),
+                sentence("it./ev."),
+                sentence("gap"),
+                sentence("viol."),
+                sentence("goal (s)"),
+            ],
+            align="lrrrrr",
+        )
+        for family, title in (
+            ("exact", "exact QP"),
+            ("gradient", "gradient-based"),
+            ("gradient-free", "gradient-free"),
+        ):
+            names = [k for k, r in rows.items() if r["family"] == family]
+            if not names:
+                continue
+            table.rows.append([sentence(title)])
+            for k in names:
+                r = rows[k]
+                goal = (
+                    sentence(self.d.num(f, "solvers", k, "time_to_goal", fmt=".2f"))
+                    if r.get("reached")
+                    else sentence("--")
+                )
+                table.rows.append(
+                    [
+                        sentence(k),
+                        sentence(bare(self.d.ms(f, "solvers", k, "median_time"))),
+                        sentence(
+                            self.d.num(f, "solvers", k, "median_iterations", fmt=".0f"),
+                            "/",
+                            self.d.num(f, "solvers", k, "median_evaluations", fmt=".0f"),
+                        ),
+                        sentence(
+                            self.d.num(f, "solvers", k, "max_abs_gap", fmt=".0e")
+                            if abs(r["max_abs_gap"]) >= 1e-12
+                            else Text("0")
+                        ),
+                        sentence(
+                            self.d.num(f, "solvers", k, "max_violation", fmt=".0e")
+                            if r["max_violation"] >= 1e-12
+                            else Text("0")
+                        ),
+                        goal,
+                    ]
+                )
+        self.tables["solvers"] = table
+
+    def evidence_table(self, sections: list[Section]) -> None:
+        items = [
+            ("E1", "t1-uc-no-manip", "UC-EMDM", sentence(W_M, " = 0"), "reference"),
+            ("E2", "t1-c-slack-policy", "C-EMDM", sentence("slack policy"), "pair"),
+            ("E4", "t2-c-ivkc-slack-policy", "C-IVKC", sentence("slack policy"), None),
+            (
+                "E5",
+                "t2-c-ivkc-wide-limits",
+                "C-IVKC",
+                sentence(Math(r"|q|\leq3", "|<i>q</i>| ≤ 3"), " rad"),
+                None,
+            ),
+            ("E6", "t2-c-emdm-no-manip", "C-EMDM", sentence(W_M, " = 0"), None),
+            (
+                "E7",
+                "t2-c-emdm-tight-slack",
+                "C-EMDM",
+                sentence(Math(r"|\delta|\leq0.1", "|δ| ≤ 0.1"), " m/s"),
+                None,
+            ),
+            (
+                "E8",
+                "t2-uc-emdm-stiff-slack",
+                "UC-EMDM",
+                sentence(Math(r"c_S=10^4", "<i>c</i><sub>S</sub> = 10<sup>4</sup>")),
+                None,
+            ),
+        ]
+        table = Table(
+            "evidence",
+            sentence(
+                "Evidence runs: one change to a nominal run, and its outcome (E3 is the "
+                "weight-grid re-run of ",
+                Ref("sec", "t1-pareto"),
+                ").",
+            ),
+            [
+                sentence("run"),
+                sentence("task, controller"),
+                sentence("change"),
+                sentence("outcome"),
+            ],
+            align="llll",
+        )
+        for label, key, ctrl, change, kind in items:
+            entry = self.evid(key)
+            task = entry["task"]
+            run = entry["runs"].get(ctrl, {})
+            if "error" in run:
+                out = sentence("no solution")
+            elif kind == "reference":
+                out = sentence(
+                    "max ",
+                    Math(r"|\Delta\dot q|", "|Δ<i>q̇</i>|"),
+                    " vs ",
+                    entry["reference"]["controller"],
+                    ": ",
+                    self.evidn(
+                        key,
+                        "reference",
+                        "max_abs_qd_difference",
+                        fmt=".0e" if entry["reference"]["max_abs_qd_difference"] else ".0f",
+                    ),
+                )
+            elif kind == "pair":
+                out = sentence(
+                    "identical steps: ", self.evidn(key, "pair", "coincide_steps", fmt="d")
+                )
+            elif run.get("reached"):
+                out = sentence(
+                    "goal in ", self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
+                )
+            else:
+                out = sentence(
+                    "stalls, ",
+                    ERR,
+                    " = ",
+                    self.evidn(key, "runs", ctrl, "final_error", fmt=".3f", unit="m"),
+                )
+            table.rows.append(
+                [
+                    sentence(label),
+                    sentence("1" if task == "task1" else "2", ", ", ctrl),
+                    change,
+                    out,
+                ]
+            )
+        self.tables["evidence"] = table
+        for s in sections:
+            if s.key == "t2-c":
+                s.tables.append("evidence")
+
+
+__all__ = ["Story", "format_value"]

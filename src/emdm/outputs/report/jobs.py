@@ -1,0 +1,481 @@
+"""The report's work: closed-loop runs, evidence runs, solver labs, Pareto sweeps, figures,
+animations, then the documents and their compilation.
+
+The closed-loop and evidence runs are fast (compiled) and run first, in this process; their
+records and detected events are written to ``data/``. The rest is a flat list of jobs spread over
+the machine's cores, longest first, in two waves (the figures that need the labs' and sweeps'
+records come second). Every document is rendered from the files on disk, never from memory.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as dt
+import multiprocessing
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ... import __version__
+from ...core.controllers import CONTROLLERS
+from ...core.scenario import Scenario, load_scenario
+from ...errors import EmdmError, NoSolution
+from ...sim.loop import Run, simulate
+from ...sim.metrics import metrics
+from ...solvers import available_solvers
+from ...studies.lab import LabResult, lab_header, lab_json, lab_rows, merge_labs, run_lab
+from ...studies.pareto import default_grid, pareto_study, ratios, weight_grid
+from .. import paper_figures as pf
+from ..animate import animate
+from ..records import atomic_output, cell, write_csv, write_json, write_run_folder
+from . import explain
+from .config import EVIDENCE, FULL, PAIRS, QUICK, TASKS, Evidence, ReportConfig
+
+PAPER_FIGURES = "paper/figures"
+SLIDE_FIGURES = "paper/slides"
+
+
+# ------------------------------------------------------------------------ in-process runs
+def _evidence_run(ev: Evidence, nominal: dict[str, Run]) -> dict[str, Any]:
+    scenario = load_scenario(ev.task, ev.overrides)
+    entry: dict[str, Any] = {
+        "task": ev.task,
+        "controllers": list(ev.controllers),
+        "overrides": ev.overrides,
+        "runs": {},
+    }
+    runs: dict[str, Run] = {}
+    for name in ev.controllers:
+        try:
+            run = simulate(scenario, name)
+        except NoSolution as exc:
+            entry["runs"][name] = {"error": str(exc)}
+            continue
+        runs[name] = run
+        mt = metrics(run)
+        ev_run = explain.run_events(run)
+        entry["runs"][name] = {
+            **{
+                k: mt[k]
+                for k in (
+                    "reached",
+                    "time_to_goal",
+                    "final_time",
+                    "final_error",
+                    "mean_manipulability",
+                    "total_effort",
+                    "max_abs_qd",
+                    "path_length",
+                    "scaled_steps",
+                    "max_abs_slack",
+                )
+            },
+            "events": {k: ev_run[k] for k in ("stall", "singular", "scaling")},
+        }
+    if ev.reference and ev.controllers[0] in runs:
+        ours, ref = runs[ev.controllers[0]], nominal[ev.reference]
+        n = min(ours.steps, ref.steps)
+        entry["reference"] = {
+            "controller": ev.reference,
+            "same_steps": ours.steps == ref.steps,
+            "max_abs_qd_difference": float(np.abs(ours.qd[:n] - ref.qd[:n]).max()) if n else 0.0,
+        }
+    if len(ev.controllers) == 2 and all(c in runs for c in ev.controllers):
+        entry["pair"] = explain.pair_events(runs[ev.controllers[0]], runs[ev.controllers[1]])
+    return entry
+
+
+def _events(stage: Path, scenarios: dict[str, Scenario], runs: dict[str, dict[str, Run]]) -> None:
+    for task, task_runs in runs.items():
+        first = next(iter(task_runs.values()))
+        write_json(
+            stage / "data" / task / "events.json",
+            {
+                "scenario": task,
+                "controllers": {name: explain.run_events(run) for name, run in task_runs.items()},
+                "pairs": {
+                    group: explain.pair_events(task_runs[a], task_runs[b])
+                    for group, (a, b) in PAIRS.items()
+                },
+                "geometry": explain.geometry(scenarios[task], first.p[0]),
+            },
+        )
+    write_json(
+        stage / "data" / "evidence.json",
+        {"runs": {ev.key: _evidence_run(ev, runs[ev.task]) for ev in EVIDENCE}},
+    )
+
+
+# ------------------------------------------------------------------------------- pool jobs
+def _job_lab(task: str, controller: str, solvers: Sequence[str], cfg: ReportConfig) -> LabResult:
+    return run_lab(
+        load_scenario(task),
+        controller,
+        solvers,
+        sample=cfg.lab_sample,
+        repeats=cfg.lab_repeats,
+        budget=cfg.lab_budget,
+        workers=1,
+    )
+
+
+def _write_lab(folder: Path, lab: LabResult, fig_dir: Path | None) -> None:
+    record = lab_json(lab)
+    # where each solver failed: on task-scaled steps (a single admissible point) or not
+    record["notes"] = {
+        name: {
+            "failures_on_scaled_steps": sum(
+                1 for st in study.solves if st.x is None and lab.reference.alpha[st.step] < 1.0
+            )
+        }
+        for name, study in lab.studies.items()
+    }
+    write_json(folder / "solvers.json", record)
+    for name in lab.studies:
+        write_csv(
+            folder / "solvers" / f"{name}.csv",
+            lab_header(lab),
+            ([cell(v) for v in row] for row in lab_rows(lab, name)),
+        )
+    if fig_dir is not None:
+        from ..lab_plots import convergence_figure
+        from ..style import formats
+
+        with formats((".png",)):
+            convergence_figure(lab, fig_dir)
+
+
+def _job_lab_written(
+    task: str,
+    controller: str,
+    solvers: Sequence[str],
+    cfg: ReportConfig,
+    data_dir: Path,
+    fig_dir: Path | None,
+) -> str:
+    """A whole lab, its data (and convergence figure) written by the worker."""
+    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir)
+    return controller
+
+
+def _job_pareto(task: str, controller: str, cfg: ReportConfig, data_dir: Path) -> str:
+    """The per-step fronts and the whole-run weight grid; a setting that fails to reach is re-run
+    with a five times smaller time step (does the discretisation cause it?)."""
+    scenario = load_scenario(task)
+    nominal = scenario.weights.manipulability / scenario.weights.effort
+    sweep = np.unique(np.append(ratios(per_decade=cfg.pareto_per_decade), nominal))
+    data, _ = pareto_study(scenario, controller, sweep=sweep)
+    grid = weight_grid(scenario, controller, default_grid(scenario, cfg.grid))
+    for row in grid:
+        if row.get("reached", False):
+            continue
+        over = {"weights.effort": row["w_effort"], "weights.manipulability": row["w_manip"]}
+        try:
+            failing = simulate(load_scenario(task, over), controller)
+            row["max_abs_qd"] = metrics(failing)["max_abs_qd"]
+            row["final_error"] = float(failing.error_norm[-1])
+            finer = simulate(
+                load_scenario(task, {**over, "motion.dt": scenario.motion.dt / 5}), controller
+            )
+            row["finer_dt"] = {
+                "dt": scenario.motion.dt / 5,
+                "reached": finer.reached,
+                "time_to_goal": finer.time_to_goal,
+                "max_abs_qd": metrics(finer)["max_abs_qd"],
+            }
+        except (NoSolution, EmdmError) as exc:
+            row["finer_dt"] = {"error": str(exc)}
+    fronts = explain.front_events(data)
+    for step, info in zip(data["steps"], fronts, strict=True):
+        pts = step["points"]
+        ratio = [p["w_manip"] / p["w_effort"] for p in pts]
+        i = int(np.argmin([abs(np.log10(max(r, 1e-12)) - np.log10(nominal)) for r in ratio]))
+        info["nominal_index"] = i
+        info["nominal_E"] = pts[i]["E"]
+        info["nominal_M"] = pts[i]["M"]
+        info["zero_E"] = pts[0]["E"]
+        info["zero_M"] = pts[0]["M"]
+        span = info["M_max"] - info["M_min"]
+        info["nominal_M_share"] = (pts[i]["M"] - info["M_min"]) / span if span > 0 else None
+    write_json(data_dir / "pareto.json", data)
+    write_json(
+        data_dir / "weight_grid.json",
+        {"scenario": scenario.name, "controller": controller, "runs": grid},
+    )
+    write_json(data_dir / "fronts.json", {"controller": controller, "steps": fronts})
+    return controller
+
+
+def _load_runs(task: str) -> dict[str, Run]:
+    scenario = load_scenario(task)
+    return {c: simulate(scenario, c) for c in CONTROLLERS}
+
+
+def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> list[str]:
+    """A pair's composite for the paper (and, in the full study, for the pitch's backup)."""
+    runs = _load_runs(task)
+    ivkc, emdm = PAIRS[group]
+    pair = [runs[ivkc], runs[emdm]]
+    with pf.png_only(cfg.quick):
+        out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}"))]
+        if not cfg.quick:
+            out.append(
+                str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))
+            )
+    return out
+
+
+def _job_story_figures(stage: Path, cfg: ReportConfig) -> list[str]:
+    """The workspace figure of Task 2, the pitch's headline and its animation stills."""
+    with pf.png_only(cfg.quick):
+        return _story_figures(stage)
+
+
+def _story_figures(stage: Path) -> list[str]:
+    t1, t2 = _load_runs("task1"), _load_runs("task2")
+    geometry = explain.geometry(t2["C-IVKC"].scenario, t2["C-IVKC"].p[0])
+    out = []
+    if geometry is not None:
+        pair = [t2["C-IVKC"], t2["C-EMDM"]]
+        out.append(str(pf.workspace_figure(pair, geometry, stage / PAPER_FIGURES / "workspace")))
+        out.append(
+            str(pf.workspace_figure(pair, geometry, stage / SLIDE_FIGURES / "workspace", pf.SLIDE))
+        )
+    out.append(
+        str(
+            pf.manipulability_figure(
+                {
+                    "Task 1.1, unconstrained": [t1["UC-IVKC"], t1["UC-EMDM"]],
+                    "Task 1.2, constrained": [t1["C-IVKC"], t1["C-EMDM"]],
+                },
+                stage / SLIDE_FIGURES / "task1-m",
+            )
+        )
+    )
+    for task, runs in (("task1", t1), ("task2", t2)):
+        out.append(
+            str(
+                pf.stills_figure(
+                    [runs["C-IVKC"], runs["C-EMDM"]], stage / SLIDE_FIGURES / f"{task}-stills"
+                )
+            )
+        )
+    return out
+
+
+def _read_rows(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8", newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def _job_data_figures(stage: Path, dt_task2: float, cfg: ReportConfig) -> list[str]:
+    """Figures drawn from the labs' and sweeps' records (second wave)."""
+    with pf.png_only(cfg.quick):
+        return _data_figures(stage, dt_task2)
+
+
+def _data_figures(stage: Path, dt_task2: float) -> list[str]:
+    import json
+
+    def load(rel: str) -> Any:
+        return json.loads((stage / rel).read_text(encoding="utf-8"))
+
+    out = []
+    names = ("UC-EMDM", "C-EMDM")
+    fronts = {c: load(f"data/task1-pareto-{c}/pareto.json") for c in names}
+    infos = {c: load(f"data/task1-pareto-{c}/fronts.json")["steps"] for c in names}
+    grids = {c: load(f"data/task1-pareto-{c}/weight_grid.json")["runs"] for c in names}
+    out.append(str(pf.pareto_figure(fronts, infos, grids, stage / PAPER_FIGURES / "pareto")))
+    out.append(
+        str(
+            pf.pareto_figure(
+                {"UC-EMDM": fronts["UC-EMDM"]},
+                {"UC-EMDM": infos["UC-EMDM"]},
+                {"UC-EMDM": grids["UC-EMDM"]},
+                stage / SLIDE_FIGURES / "pareto",
+                pf.SLIDE,
+                steps=(0, 1),
+            )
+        )
+    )
+    lab = load("data/task2-lab-C-EMDM/solvers.json")
+    out.append(str(pf.solver_figure(lab, dt_task2, stage / PAPER_FIGURES / "solvers")))
+    out.append(str(pf.solver_figure(lab, dt_task2, stage / SLIDE_FIGURES / "solvers", pf.SLIDE)))
+    run = simulate(load_scenario("task2"), "C-EMDM")
+    rows = {
+        name: _read_rows(stage / "data" / "task2-lab-C-EMDM" / "solvers" / f"{name}.csv")
+        for name in ("interior-point", "admm", "slsqp")
+        if (stage / "data" / "task2-lab-C-EMDM" / "solvers" / f"{name}.csv").exists()
+    }
+    out.append(str(pf.conditioning_figure(run, rows, stage / PAPER_FIGURES / "conditioning")))
+    return out
+
+
+def _job_animation(task: str, group: str, stem: Path, cfg: ReportConfig) -> dict[str, Any]:
+    runs = _load_runs(task)
+    ivkc, emdm = PAIRS[group]
+    pair = [runs[ivkc], runs[emdm]]
+    duration = max(float(r.t[-1]) for r in pair)
+    speedup = 1.0
+    while duration / speedup > cfg.animation_seconds:
+        speedup *= 2.0
+    files = animate(pair, stem, speedup=speedup, mp4=cfg.mp4)
+    return {
+        "task": task,
+        "pair": group,
+        "controllers": [ivkc, emdm],
+        "files": [p.name for p in files],
+        "speedup": speedup,
+        "simulated_s": duration,
+        "playing_s": duration / speedup,
+    }
+
+
+# ---------------------------------------------------------------------------------- driver
+def provenance(config: ReportConfig, wall: float) -> dict[str, Any]:
+    """Versions, parameters, date, machine and wall time of a report."""
+    packages = {}
+    for name in (
+        "numpy",
+        "scipy",
+        "qpsolvers",
+        "daqp",
+        "quadprog",
+        "matplotlib",
+        "jinja2",
+        "pillow",
+        "numba",
+        "cma",
+        "imageio-ffmpeg",
+        "clarabel",
+        "osqp",
+        "piqp",
+        "proxsuite",
+        "highspy",
+    ):
+        try:
+            packages[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return {
+        "emdm_version": __version__,
+        "mode": "quick" if config.quick else "full",
+        "date_utc": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S"),
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "packages": packages,
+        "solvers_installed": available_solvers(),
+        "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in config.__dict__.items()},
+        "wall_time_s": wall,
+    }
+
+
+def build_report(
+    out: Path,
+    *,
+    quick: bool = False,
+    workers: int | None = None,
+    progress: Callable[[str], None] | None = None,
+    compile_pdf: bool = True,
+) -> dict[str, Any]:
+    """Run the whole study and write the report into ``out`` (atomically). Returns provenance.
+
+    ``out`` receives ``index.html``, ``paper/`` (``paper.tex`` and ``pitch.tex``, and their PDFs
+    when a TeX engine is installed and ``compile_pdf``), ``animations/``, ``data/`` and
+    ``provenance.json``.
+    """
+    from .render import compile_documents, write_html, write_latex
+
+    cfg = QUICK if quick else FULL
+    say = progress or (lambda _msg: None)
+    start = time.perf_counter()
+    workers = workers or min(2, os.cpu_count() or 1)
+    with atomic_output(Path(out), command="emdm report") as stage:
+        scenarios = {task: load_scenario(task) for task in TASKS}
+        runs = {task: {c: simulate(sc, c) for c in CONTROLLERS} for task, sc in scenarios.items()}
+        for task, task_runs in runs.items():
+            write_run_folder(stage / "data" / task, scenarios[task], task_runs, solver="active-set")
+        _events(stage, scenarios, runs)
+        say(f"closed-loop and evidence runs done ({time.perf_counter() - start:.1f} s)")
+
+        solvers2 = [s for s in cfg.lab_solvers if s in available_solvers()]
+        solvers1 = [s for s in cfg.fallback_solvers if s in available_solvers()]
+        lab_figs = not cfg.quick
+        context = multiprocessing.get_context("fork")
+        futures: dict[str, Future[Any]] = {}
+        results: dict[str, Any] = {}
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            # longest jobs first: the gradient-free closed loops
+            for name in reversed(solvers2):
+                futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", "C-EMDM", [name], cfg)
+            for ctrl in ("UC-EMDM", "C-EMDM"):
+                futures[f"pareto:{ctrl}"] = pool.submit(
+                    _job_pareto, "task1", ctrl, cfg, stage / "data" / f"task1-pareto-{ctrl}"
+                )
+                futures[f"lab1:{ctrl}"] = pool.submit(
+                    _job_lab_written,
+                    "task1",
+                    ctrl,
+                    solvers1,
+                    cfg,
+                    stage / "data" / f"task1-lab-{ctrl}",
+                    stage / "figures" / f"task1-lab-{ctrl}" if lab_figs else None,
+                )
+            for task in TASKS:
+                for group in PAIRS:
+                    futures[f"figures:{task}:{group}"] = pool.submit(
+                        _job_pair_figures, task, group, stage, cfg
+                    )
+            futures["figures:story"] = pool.submit(_job_story_figures, stage, cfg)
+            for task in TASKS:
+                for group, (ivkc, emdm) in PAIRS.items():
+                    stem = stage / "animations" / task / f"{ivkc}_vs_{emdm}"
+                    futures[f"anim:{task}:{group}"] = pool.submit(
+                        _job_animation, task, group, stem, cfg
+                    )
+            first = [k for k in futures if k.startswith(("lab2:", "pareto:"))]
+            for key in first:
+                results[key] = futures[key].result()
+                say(f"{key} done ({time.perf_counter() - start:.1f} s)")
+            lab2 = merge_labs([results[f"lab2:{name}"] for name in solvers2])
+            _write_lab(
+                stage / "data" / "task2-lab-C-EMDM",
+                lab2,
+                stage / "figures" / "task2-lab-C-EMDM" if lab_figs else None,
+            )
+            data_figs = pool.submit(_job_data_figures, stage, scenarios["task2"].motion.dt, cfg)
+            for key, future in futures.items():
+                if key not in results:
+                    results[key] = future.result()
+                    say(f"{key} done ({time.perf_counter() - start:.1f} s)")
+            results["figures:data"] = data_figs.result()
+            say(f"figures done ({time.perf_counter() - start:.1f} s)")
+        write_json(
+            stage / "data" / "animations.json",
+            {
+                "animations": {
+                    f"{v['task']}-{v['pair']}": v
+                    for k, v in results.items()
+                    if k.startswith("anim:")
+                }
+            },
+        )
+        write_latex(stage)
+        say(f"paper and pitch written ({time.perf_counter() - start:.1f} s)")
+        compiled = compile_documents(stage / "paper", say) if compile_pdf and cfg.compile else {}
+        prov = provenance(cfg, time.perf_counter() - start)
+        prov["compiled"] = compiled
+        write_json(stage / "provenance.json", prov)
+        write_html(stage)
+        say(f"report written ({time.perf_counter() - start:.1f} s)")
+    return prov

@@ -1,0 +1,62 @@
+"""The quick study's paper and pitch compile cleanly: no LaTeX error, no undefined reference, no
+overfull box wider than 5 pt, at most four A4 pages for the paper, 16:9 slides for the pitch."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+
+import pytest
+
+from emdm.outputs.report.render import log_problems, tex_engine
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        tex_engine() is None,
+        reason="no TeX engine (pdflatex); .ci/run installs texlive to compile the paper",
+    ),
+]
+
+
+def _page_size(pdf):
+    """Width and height (pt) of the first page, from the PDF's MediaBox."""
+    if shutil.which("pdfinfo"):
+        info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
+        w, h = re.search(r"Page size:\s+([0-9.]+) x ([0-9.]+) pts", info).groups()
+        return float(w), float(h)
+    box = re.search(rb"/MediaBox\s*\[\s*0 0 ([0-9.]+) ([0-9.]+)\s*\]", pdf.read_bytes())
+    return float(box.group(1)), float(box.group(2))
+
+
+@pytest.mark.parametrize("name", ["paper", "pitch"])
+def test_compiles_cleanly(quick_report, name):
+    folder = quick_report / "paper"
+    assert (folder / f"{name}.pdf").is_file(), f"{name}.pdf was not built"
+    problems = log_problems((folder / f"{name}.log").read_text(encoding="utf-8", errors="replace"))
+    assert not problems["errors"], problems["errors"]
+    assert not problems["undefined_references"]
+    assert all(width <= 5.0 for width in problems["overfull_pt"]), problems["overfull_pt"]
+
+
+def test_the_paper_is_at_most_four_a4_pages(quick_report):
+    folder = quick_report / "paper"
+    log = (folder / "paper.log").read_text(encoding="utf-8", errors="replace")
+    assert 1 <= log_problems(log)["pages"] <= 4
+    w, h = _page_size(folder / "paper.pdf")
+    assert abs(w - 595.3) < 1.5 and abs(h - 841.9) < 1.5  # A4
+    tex = (folder / "paper.tex").read_text(encoding="utf-8")
+    assert r"\documentclass[conference,a4paper]{IEEEtran}" in tex
+    for section in ("Introduction", "Formulation", "Conclusion"):
+        assert f"\\section{{{section}}}" in tex
+
+
+def test_the_pitch_is_16_9_with_8_to_12_slides_and_backups(quick_report):
+    folder = quick_report / "paper"
+    w, h = _page_size(folder / "pitch.pdf")
+    assert abs(w / h - 16 / 9) < 0.01
+    tex = (folder / "pitch.tex").read_text(encoding="utf-8")
+    main, _, backup = tex.partition("\\appendix")
+    assert 8 <= main.count("\\begin{frame}") <= 12
+    assert backup.count("\\begin{frame}") <= 6
