@@ -1,4 +1,4 @@
-"""The four controllers' programs against the exact facts of DESIGN.md section 1, and the policies."""
+"""The four controllers' programs against the exact facts of docs/mathematics.md, and the policies."""
 
 from __future__ import annotations
 

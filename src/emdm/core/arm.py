@@ -1,6 +1,6 @@
 """Planar n-link arm with revolute joints: kinematics, manipulability and its Jacobian.
 
-Conventions (DESIGN.md section 1): link lengths ``l`` (m), joint angles ``q`` (rad), absolute angles
+Conventions (docs/mathematics.md): link lengths ``l`` (m), joint angles ``q`` (rad), absolute angles
 ``th_i = q_1 + ... + q_i``, base at the origin.
 
 Everything is built on the *tip vectors* ``r_j = sum_{i >= j} l_i (cos th_i, sin th_i)``, the vector

@@ -13,7 +13,7 @@ range of their columns, ``A x = b`` is solvable iff ``Q^T A_B x_B = Q^T b`` is, 
 Two questions are answered exactly, in O(n) work:
 
 - :func:`task_scale`: the largest ``alpha`` in [0, 1] with ``A x = alpha b`` feasible (the SNS task
-  scaling of DESIGN.md section 1), or ``None`` when no ``alpha`` in [0, 1] is;
+  scaling of docs/mathematics.md), or ``None`` when no ``alpha`` in [0, 1] is;
 - :func:`feasible_point`: some ``x`` with ``A x = b`` and ``lb <= x <= ub``, or ``None``. It walks
   from the box centre towards ``b``, leaves ``Z`` through an edge, reads the box vertex (or edge) that
   maps there, and takes the convex combination that lands on ``b``.

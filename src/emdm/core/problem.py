@@ -1,6 +1,6 @@
 """The per-step program: a small strictly convex QP, built separately from solving it.
 
-Every program of DESIGN.md section 1 has the form::
+Every program of docs/mathematics.md has the form::
 
     minimise   1/2 x^T P x + c^T x
     subject to A x = b,   lb <= x <= ub

@@ -1,4 +1,4 @@
-"""Scenarios: frozen, validated descriptions of one control task (DESIGN.md section 3).
+"""Scenarios: frozen, validated descriptions of one control task (schema: README, "Scenario files").
 
 A scenario comes from a TOML file, a built-in preset (``task1``, ``task2``: Tables 1 and 2 of the
 brief), ``--set section.key=value`` overrides or the Python API; all of them go through the same
@@ -142,7 +142,7 @@ class Damper:
 
 @dataclass(frozen=True)
 class ControllerSettings:
-    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (DESIGN.md section 1)."""
+    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (docs/mathematics.md)."""
 
     on_infeasible: Policy
 

@@ -40,7 +40,7 @@ def cell(value: Any) -> str:
 
 
 def trajectory_header(n: int) -> list[str]:
-    """Columns of ``trajectories/<controller>.csv`` (DESIGN.md section 3)."""
+    """Columns of ``trajectories/<controller>.csv`` (the README lists them)."""
     return [
         "t",
         *[f"q{i}" for i in range(1, n + 1)],

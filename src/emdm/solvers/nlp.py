@@ -6,7 +6,7 @@ Gradient-based (scipy): ``slsqp`` and ``trust-constr`` on the full program, with
 Gradient-free methods search the *reduced* program, where the task equality is eliminated:
 
 - with task slack (the non-redundant programs): ``t = qd`` and ``delta = b - A_qd qd``, so the slack
-  bounds become linear inequalities on ``qd`` (DESIGN.md section 1);
+  bounds become linear inequalities on ``qd`` (docs/mathematics.md);
 - without slack: ``x = x_p + Z t`` with ``x_p = A^+ b`` and ``Z`` an orthonormal basis of ``null(A)``.
 
 Either way only the linear inequalities ``G t <= h`` (from the bounds) remain. ``cobyqa``, ``cobyla``

@@ -1,6 +1,6 @@
 """The solver lab: every solver on the real per-step programs, measured against the exact optimum.
 
-Two experiments per solver (brief Task 1 and 2; DESIGN.md section 3, ``emdm solvers``):
+Two experiments per solver (brief Task 1 and 2; ``emdm solvers``):
 
 1. *Closed loop*: the controller runs with that solver alone (its answers used as they are,
    certified or not, with the exact ``active-set`` only where it returns nothing). Does it still
@@ -332,7 +332,7 @@ def _study(
 
 
 def lab_json(lab: LabResult) -> dict[str, Any]:
-    """``solvers.json`` (DESIGN.md section 3)."""
+    """``solvers.json`` (its format is in the README)."""
     return {
         "scenario": lab.scenario.name,
         "controller": lab.controller.name,
@@ -397,7 +397,7 @@ def _x_width(lab: LabResult) -> int:
 
 
 def lab_header(lab: LabResult) -> list[str]:
-    """Columns of ``solvers/<NAME>.csv``: DESIGN.md's, then the step features."""
+    """Columns of ``solvers/<NAME>.csv``: the documented ones, then the step features."""
     n = lab.scenario.n
     return [
         "step",

@@ -5,7 +5,7 @@ state), the step's program is solved for a sweep of weights: ``w_E`` fixed at th
 and ``w_M = r w_E`` for ratios ``r`` log-spaced over ``decades`` decades, plus ``w_M = 0``. Each
 optimum gives a point ``(E(qd*), M(qd*))``; a point is *dominated* when another has no more effort
 and no less manipulability rate, one of them strictly. For UC-EMDM on a redundant arm the points lie
-on the parabola ``E = E0 + (M - M0)^2 / (2 ||N Jm||^2)`` (DESIGN.md section 1).
+on the parabola ``E = E0 + (M - M0)^2 / (2 ||N Jm||^2)`` (docs/mathematics.md).
 
 *Per trajectory*: the whole controller is re-run for a grid of ``(w_E, w_M)``, giving total effort,
 mean manipulability and time to goal for each: the trade-off a user actually feels.
@@ -77,7 +77,7 @@ def _mark_dominated(points: list[dict[str, Any]]) -> None:
 def pareto_study(
     scenario: Scenario, controller: str | Controller, *, sweep: np.ndarray | None = None
 ) -> tuple[dict[str, Any], Run]:
-    """``pareto.json`` (DESIGN.md section 3) for ``controller`` on ``scenario``, and its run."""
+    """``pareto.json`` (its format is in the README) for ``controller`` on ``scenario``, and its run."""
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     run = simulate(scenario, ctrl)
     sweep = ratios() if sweep is None else sweep
