@@ -234,8 +234,13 @@ def session(bases):
 
 
 def _settle(s) -> None:
-    """Run what the server loop would run on its next ticks."""
+    """Run what the server loop would run on its next ticks, and the throttled refreshes that
+    would follow when their interval has passed."""
     for _ in range(3):
+        if s._live_due:
+            s._safe(s._throttled_run)
+        if s._front_due:
+            s._safe(s._throttled_front)
         if s._scheduled:
             s._safe(s._flush)
 
@@ -523,3 +528,37 @@ def test_the_page_in_a_real_browser(tmp_path):
     finally:
         driver.quit()
         stop_server(proc, signal.SIGINT)
+
+
+def test_a_moving_slider_and_a_playing_motion_are_throttled(session):
+    """While a slider moves, runs are recomputed at most every LIVE_INTERVAL and its release at
+    once; while the motion plays, the front follows at most every FRONT_INTERVAL."""
+    s = session()
+    runs = []
+
+    def recompute(**kw):  # count, do not compute
+        runs.append(kw)
+        s._ran_at, s._dirty = time.monotonic(), False
+
+    s._recompute = recompute
+    s._ran_at = -math.inf  # long ago: the first move is computed at once
+    for value in (1.0, 1.2, 1.4):  # three moves within one interval
+        s.sliders["w_M"].value = value
+        if s._scheduled:
+            s._flush()
+    assert len(runs) == 1 and s._live_due and s._dirty
+    s.sliders["w_M"].trigger("value_throttled", 1.0, 1.4)  # the release (as the browser sends it)
+    s._flush()
+    assert len(runs) == 2
+    s._dirty = False
+    s._throttled_run()  # the scheduled live tick finds nothing new to compute
+    assert len(runs) == 2 and not s._live_due
+    fronts = []
+    s._refresh_front = lambda: fronts.append(s.t)
+    s._front_at = float("inf")  # a refresh has just happened
+    s.scrub.value = 1.0
+    s.scrub.value = 1.5
+    assert s._front_due and not fronts
+    s._throttled_front()
+    s._flush()
+    assert fronts == [1.5]

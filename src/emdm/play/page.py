@@ -104,6 +104,11 @@ class Session:
         self._syncing = False
         self._pending: set[str] = set()
         self._scheduled = False
+        self._front_at = -math.inf  # time.monotonic() of the last front and status refresh
+        self._front_due = False  # a throttled refresh is scheduled
+        self._ran_at = -math.inf  # time.monotonic() of the last recompute
+        self._live_due = False  # a throttled recompute for a moving slider is scheduled
+        self._dirty = False  # a slider moved since the last recompute
         layout = self._build()
         self._recompute(replay=False, notes=notes)
         self._refresh_front()
@@ -440,6 +445,7 @@ class Session:
                 format=_log_format(control) if control.log else "0[.]000",
             )
             slider.on_change("value", self._guard(partial(self._on_slider, control)))
+            slider.on_change("value_throttled", self._guard(self._on_release))
             self.sliders[control.name] = slider
         reset = Button(label="Reset to the scenario", width=260)
         reset.on_click(lambda: self._safe(self._on_choose, "value", None, self.settings.scenario))
@@ -548,7 +554,25 @@ class Session:
             self._show([logic.message(exc)], [])
             return
         self.settings.overrides.update(control.overrides(value))
-        self._request("run")
+        self._dirty = True
+        wait = LIVE_INTERVAL - (time.monotonic() - self._ran_at)
+        if wait <= 0:
+            self._request("run")
+        elif not self._live_due:  # moving: at most one recompute per LIVE_INTERVAL
+            self._live_due = True
+            self.doc.add_timeout_callback(
+                lambda: self._safe(self._throttled_run), max(1, round(wait * 1e3))
+            )
+
+    def _throttled_run(self) -> None:
+        self._live_due = False
+        if self._dirty:
+            self._request("run")
+
+    def _on_release(self, attr: str, old: Any, new: Any) -> None:
+        """The slider was let go: its last value is shown now, not at the next live tick."""
+        if self._dirty:
+            self._request("run")
 
     def _on_goal(self, attr: str, old: Any, new: Any) -> None:
         x, y = list(new.get("x", [])), list(new.get("y", []))
@@ -587,6 +611,17 @@ class Session:
 
     def _on_scrub(self, attr: str, old: Any, new: Any) -> None:
         self.t = float(new) if math.isfinite(float(new)) else 0.0
+        wait = FRONT_INTERVAL - (time.monotonic() - self._front_at)
+        if wait <= 0:
+            self._request("front")
+        elif not self._front_due:  # playing: at most one refresh per FRONT_INTERVAL
+            self._front_due = True
+            self.doc.add_timeout_callback(
+                lambda: self._safe(self._throttled_front), max(1, round(wait * 1e3))
+            )
+
+    def _throttled_front(self) -> None:
+        self._front_due = False
         self._request("front")
 
     # ------------------------------------------------------------------------- updating
@@ -597,6 +632,7 @@ class Session:
 
     def _recompute(self, *, replay: bool, notes: Sequence[str] = ()) -> None:
         start = time.perf_counter()
+        self._ran_at, self._dirty = time.monotonic(), False
         try:
             scenario = logic.build_scenario(self.bases, self.settings)
         except EmdmError as exc:
@@ -767,6 +803,7 @@ class Session:
         if scenario is None or not self.outcomes:
             return
         start = time.perf_counter()
+        self._front_at = time.monotonic()
         result = logic.front(scenario, self.outcomes[0], self.t)
         self.timing["front"] = time.perf_counter() - start
         self.doc.hold("combine")
@@ -787,6 +824,14 @@ class Session:
             self._refresh_status()
         finally:
             self.doc.unhold()
+
+
+LIVE_INTERVAL = 0.1
+"""While a slider moves, both runs are recomputed at most this often (s); its release is shown at
+once. Recomputing at every move queued work that the release then waited for."""
+FRONT_INTERVAL = 0.15
+"""While the motion plays, the Pareto front and the status follow the scrub bar at most this
+often (s): refreshing them at every frame kept the server and the page busy when a drag came."""
 
 
 def build(doc: Document, bases: dict[str, Scenario]) -> None:
