@@ -216,8 +216,12 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
                 max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs)) + 0.2,
             ]
             ax.set_ylim(*qspan)
-            for a in (ax, qd_axes[j]):
-                a.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3, symmetric=True))
+            # two ticks per strip (three collide at this height): the position limits, and the
+            # velocity limits unless the commands go far beyond them (UC)
+            q_tick = float(max(abs(lo[j]), abs(hi[j])))
+            qd_tick = limit if top <= 1.5 * limit else float(f"{0.8 * top:.1g}")
+            for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
+                a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
         q_axes[-1].set_xlabel(r"$t$ (s)")
@@ -256,7 +260,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 2.45 if medium is PAPER else 2.7
+    height = 2.2 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))

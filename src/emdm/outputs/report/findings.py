@@ -1388,6 +1388,7 @@ class Story:
                 sentence("goal (s)"),
             ],
             align="lrrrrr",
+            font="scriptsize" if len(rows) > 8 else "footnotesize",  # 7 pt fits a column
         )
         for family, title in (
             ("exact", "exact QP"),
