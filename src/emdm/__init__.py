@@ -23,6 +23,7 @@ from .core.controllers import (
 from .core.feasibility import feasible_point, task_scale
 from .core.problem import QP, Objective
 from .core.scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
+from .core.serial import SerialArm
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
 from .sim.batch import BatchResult, simulate_batch
 from .sim.loop import Run, simulate
@@ -44,6 +45,7 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "ScenarioWarning",
+    "SerialArm",
     "SolverNotFound",
     "__version__",
     "admissible",

@@ -1,0 +1,130 @@
+"""SerialArm: pose, geometric Jacobian, Hessian, manipulability and its Jacobian of random 3-D
+revolute chains in both DH conventions, against finite differences and robotics-toolbox-python."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import emdm
+from emdm import ScenarioError, SerialArm
+
+
+def random_arm(rng: np.random.Generator, n: int, convention: str) -> SerialArm:
+    dh = np.column_stack(
+        (
+            rng.uniform(-0.5, 0.5, n),
+            rng.uniform(-np.pi, np.pi, n),
+            rng.uniform(-0.5, 0.5, n),
+            rng.uniform(-1.0, 1.0, n),
+        )
+    )
+    tool = np.eye(4)
+    c, s = np.cos(0.4), np.sin(0.4)
+    tool[:3, :3] = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+    tool[:3, 3] = rng.uniform(-0.1, 0.1, 3)
+    return SerialArm(dh, convention, tool=tool)
+
+
+CASES = [
+    (n, conv, seed) for n in (1, 2, 3, 6, 7) for conv in ("standard", "modified") for seed in (0, 1)
+]
+
+
+def _vee(S: np.ndarray) -> np.ndarray:
+    return np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]]) / 2
+
+
+@pytest.mark.parametrize(("n", "convention", "seed"), CASES)
+def test_derivatives_match_central_differences(n, convention, seed):
+    rng = np.random.default_rng(seed)
+    arm = random_arm(rng, n, convention)
+    q = rng.uniform(-2.5, 2.5, n)
+    h = 1e-6
+    J, H = arm.jacobian(q), arm.hessian(q)
+    R = arm.forward(q)[:3, :3]
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = h
+        plus, minus = arm.forward(q + e), arm.forward(q - e)
+        np.testing.assert_allclose(J[:3, i], (plus[:3, 3] - minus[:3, 3]) / (2 * h), atol=1e-8)
+        omega = _vee((plus[:3, :3] - minus[:3, :3]) / (2 * h) @ R.T)  # dR/dq R^T = [z]x
+        np.testing.assert_allclose(J[3:, i], omega, atol=1e-8)
+        dJ = (arm.jacobian(q + e) - arm.jacobian(q - e)) / (2 * h)
+        np.testing.assert_allclose(H[i], dJ, atol=1e-8)
+    for axes in ("all", "trans", "rot"):
+        m, Jm = arm.manipulability_and_jacobian(q, axes)
+        rows = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}[axes]
+        Ja = J[rows]
+        expected = np.sqrt(max(np.linalg.det(Ja @ Ja.T), 0.0)) if Ja.shape[0] <= n else 0.0
+        assert m == pytest.approx(expected, rel=1e-9, abs=1e-12)
+        fd = [
+            (
+                arm.manipulability(q + h * np.eye(n)[i], axes)
+                - arm.manipulability(q - h * np.eye(n)[i], axes)
+            )
+            / (2 * h)
+            for i in range(n)
+        ]
+        np.testing.assert_allclose(Jm, fd, atol=1e-7)
+
+
+@pytest.mark.parametrize("convention", ["standard", "modified"])
+def test_equal_to_robotics_toolbox(convention):
+    rtb = pytest.importorskip("roboticstoolbox")
+    rng = np.random.default_rng(7)
+    for n in (3, 6, 7):
+        arm = random_arm(rng, n, convention)
+        link = rtb.RevoluteDH if convention == "standard" else rtb.RevoluteMDH
+        robot = rtb.DHRobot(
+            [link(a=a, alpha=al, d=d, offset=o) for a, al, d, o in arm.dh], tool=arm.tool
+        )
+        for _ in range(5):
+            q = rng.uniform(-np.pi, np.pi, n)
+            np.testing.assert_allclose(arm.forward(q), robot.fkine(q).A, atol=1e-13)
+            np.testing.assert_allclose(arm.jacobian(q), robot.jacob0(q), atol=1e-13)
+            np.testing.assert_allclose(arm.hessian(q), robot.hessian0(q), atol=1e-13)
+            for axes in ("all", "trans", "rot") if n >= 6 else ("trans", "rot"):
+                assert arm.manipulability(q, axes) == pytest.approx(
+                    robot.manipulability(q, axes=axes), rel=1e-12, abs=1e-14
+                )
+                np.testing.assert_allclose(
+                    arm.manipulability_jacobian(q, axes),
+                    robot.jacobm(q, axes=axes).ravel(),
+                    atol=1e-12,
+                )
+
+
+def test_a_planar_chain_equals_planar_arm():
+    """Three links in the plane (alpha = d = 0): the linear rows and m of the translational xy
+    task are PlanarArm's."""
+    lengths = [0.2, 0.6, 0.3]
+    arm = SerialArm([[a, 0.0, 0.0, 0.0] for a in lengths])
+    planar = emdm.PlanarArm(lengths)
+    q = np.array([0.3, -0.7, 1.1])
+    np.testing.assert_allclose(arm.forward(q)[:2, 3], planar.forward(q), atol=1e-15)
+    np.testing.assert_allclose(arm.jacobian(q)[:2], planar.jacobian(q), atol=1e-15)
+    np.testing.assert_allclose(arm.hessian(q)[:, :2], planar.hessian(q), atol=1e-15)
+
+
+def test_singular_configurations_give_finite_values():
+    arm = SerialArm([[0.5, 0.0, 0.0, 0.0], [0.4, 0.0, 0.0, 0.0], [0.3, np.pi / 2, 0.0, 0.0]])
+    q = np.zeros(3)  # stretched: the translational Jacobian loses rank
+    m, Jm = arm.manipulability_and_jacobian(q, "trans")
+    assert m == pytest.approx(0.0, abs=1e-15) and np.all(np.isfinite(Jm))
+
+
+def test_bad_input_is_one_clear_error():
+    with pytest.raises(ScenarioError, match="dh"):
+        SerialArm([[0.1, 0.0, 0.0]])
+    with pytest.raises(ScenarioError, match="finite"):
+        SerialArm([[np.nan, 0.0, 0.0, 0.0]])
+    with pytest.raises(ScenarioError, match="convention"):
+        SerialArm([[0.1, 0.0, 0.0, 0.0]], "craig")  # type: ignore[arg-type]
+    with pytest.raises(ScenarioError, match="rigid"):
+        SerialArm([[0.1, 0.0, 0.0, 0.0]], tool=np.diag([2.0, 1.0, 1.0, 1.0]))
+    arm = SerialArm([[0.1, 0.0, 0.0, 0.0]] * 2)
+    with pytest.raises(ScenarioError, match="2 joint angles"):
+        arm.forward([0.0])
+    with pytest.raises(ScenarioError, match="axes"):
+        arm.manipulability([0.0, 0.0], "xyz")  # type: ignore[arg-type]
