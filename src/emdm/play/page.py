@@ -699,7 +699,7 @@ class Session:
             }
         start = arm.joint_positions(scenario.motion.q0)
         _set(self.time_range, start=0.0, end=end)
-        self.start.data = {"x": start[:, 0].tolist(), "y": start[:, 1].tolist()}
+        _set(self.start, data={"x": start[:, 0].tolist(), "y": start[:, 1].tolist()})
         _set(self.scale_note, text=f"ellipse: {scale:.2g} m per m/s of tip speed")
         self._limits(scenario)
         name = f"{scenario.name}-play"
@@ -713,8 +713,8 @@ class Session:
         the motion from the start. Called with the callbacks muted."""
         start = scenario.planar_arm.joint_positions(scenario.motion.q0)
         goal = scenario.motion.goal
-        self.goal.data = {"x": [float(goal[0])], "y": [float(goal[1])]}
-        self.handles.data = {"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()}
+        _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
+        _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
         self.goal.selected.indices = []
         self.handles.selected.indices = []
         self.scrub.update(end=end, step=scenario.motion.dt, value=self.t)
