@@ -522,8 +522,21 @@ class Story:
             self.d.num(uc, "steps", 0, "E_min", fmt=".3g"),
             " to ",
             self.d.num(uc, "steps", 0, "E_max", fmt=".3g", unit="rad²/s²"),
-            "; the nominal ratio sits at the low-effort end of every front, costing ",
+            "; ",
         )
+        shares = [
+            (info["nominal_E_log_pct"], i)
+            for i, info in enumerate(self.d.value(uc, "steps"))
+            if info.get("nominal_E_log_pct") is not None
+        ]
+        if shares:
+            answer += sentence(
+                "on every UC-EMDM front the nominal ratio lies in the lowest ",
+                self.d.num(uc, "steps", max(shares)[1], "nominal_E_log_pct", fmt=".0f"),
+                "% of the effort range (log scale), costing ",
+            )
+        else:
+            answer += sentence("the nominal ratio costs ")
         e0 = self.d.value(uc, "steps", 0, "zero_E")
         en = self.d.value(uc, "steps", 0, "nominal_E")
         answer += sentence(

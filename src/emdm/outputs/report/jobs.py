@@ -205,6 +205,10 @@ def _job_pareto(task: str, controller: str, cfg: ReportConfig, data_dir: Path) -
         info["zero_M"] = pts[0]["M"]
         span = info["M_max"] - info["M_min"]
         info["nominal_M_share"] = (pts[i]["M"] - info["M_min"]) / span if span > 0 else None
+        lo, hi = info["E_min"], info["E_max"]
+        info["nominal_E_log_pct"] = (  # where the nominal effort sits on a log scale, 0-100 %
+            100.0 * np.log(pts[i]["E"] / lo) / np.log(hi / lo) if 0 < lo < hi else None
+        )
     write_json(data_dir / "pareto.json", data)
     write_json(
         data_dir / "weight_grid.json",
