@@ -579,7 +579,9 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         right.set_xscale("log")
         _log_axis(right.xaxis)
         left.axvline(dt * 1e3, color="black", linestyle="--", linewidth=0.8)
-        left.text(dt * 1e3, y[0] + 0.4, r" $\Delta t$", fontsize=medium.small, va="bottom")
+        left.text(
+            dt * 1e3, y[0] + 0.4, r"$\Delta t$ ", fontsize=medium.small, va="bottom", ha="right"
+        )
         left.set_xlabel("median time (ms)")
         right.set_xlabel(r"largest gap $f-f^\star$")
         right.axvspan(floor / 4, floor * 4, color="#0072B2", alpha=0.10, linewidth=0)
@@ -590,7 +592,7 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         ]
         right.legend(
             handles=handles,
-            loc="lower right",
+            loc="center right",  # the inexact solvers' markers sit in the lower right
             frameon=True,
             framealpha=0.9,
             fontsize=medium.tiny,

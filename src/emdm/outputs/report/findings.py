@@ -270,7 +270,9 @@ class Story:
             M_SYM,
             ", (b) effort ",
             E_SYM,
-            ", (c) joint positions with their limits and damper influence and stop zones, "
+            " (log axis, floored at ",
+            Math(r"10^{-9}", "10<sup>−9</sup>"),
+            "), (c) joint positions with their limits and damper influence and stop zones, "
             "(d) joint velocities with their limits.",
         )
         if (
@@ -1178,13 +1180,13 @@ class Story:
                 ") into the elbow-up configuration the constrained pair cannot use",
             )
         answer += sentence(
-            f"; {emdm} spends ",
+            f"; against {ivkc}, {emdm}'s total effort differs by ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            " effort and keeps a mean ",
+            " and its mean ",
             M_SYM,
-            " ",
+            " by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
-            " by letting the slack absorb up to ",
+            ", as the slack absorbs up to ",
             *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
             " of the desired velocity.",
         )
