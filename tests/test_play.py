@@ -237,10 +237,8 @@ def _settle(s) -> None:
     """Run what the server loop would run on its next ticks, and the throttled refreshes that
     would follow when their interval has passed."""
     for _ in range(3):
-        if s._live_due:
-            s._safe(s._throttled_run)
-        if s._front_due:
-            s._safe(s._throttled_front)
+        for what in sorted(s._due):
+            s._safe(s._due_now, what)
         if s._scheduled:
             s._safe(s._flush)
 
@@ -546,19 +544,19 @@ def test_a_moving_slider_and_a_playing_motion_are_throttled(session):
         s.sliders["w_M"].value = value
         if s._scheduled:
             s._flush()
-    assert len(runs) == 1 and s._live_due and s._dirty
+    assert len(runs) == 1 and s._due == {"run"} and s._dirty
     s.sliders["w_M"].trigger("value_throttled", 1.0, 1.4)  # the release (as the browser sends it)
     s._flush()
     assert len(runs) == 2
     s._dirty = False
-    s._throttled_run()  # the scheduled live tick finds nothing new to compute
-    assert len(runs) == 2 and not s._live_due
+    s._due_now("run")  # the scheduled live tick finds nothing new to compute
+    assert len(runs) == 2 and not s._due
     fronts = []
     s._refresh_front = lambda: fronts.append(s.t)
     s._front_at = float("inf")  # a refresh has just happened
     s.scrub.value = 1.0
     s.scrub.value = 1.5
-    assert s._front_due and not fronts
-    s._throttled_front()
+    assert s._due == {"front"} and not fronts
+    s._due_now("front")
     s._flush()
     assert fronts == [1.5]

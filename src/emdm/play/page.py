@@ -105,9 +105,8 @@ class Session:
         self._pending: set[str] = set()
         self._scheduled = False
         self._front_at = -math.inf  # time.monotonic() of the last front and status refresh
-        self._front_due = False  # a throttled refresh is scheduled
         self._ran_at = -math.inf  # time.monotonic() of the last recompute
-        self._live_due = False  # a throttled recompute for a moving slider is scheduled
+        self._due: set[str] = set()  # requests scheduled by _soon
         self._dirty = False  # a slider moved since the last recompute
         layout = self._build()
         self._recompute(replay=False, notes=notes)
@@ -555,19 +554,24 @@ class Session:
             return
         self.settings.overrides.update(control.overrides(value))
         self._dirty = True
-        wait = LIVE_INTERVAL - (time.monotonic() - self._ran_at)
+        self._soon("run", LIVE_INTERVAL, self._ran_at)  # moving: one recompute per interval
+
+    def _soon(self, what: str, interval: float, last: float) -> None:
+        """Request ``what`` now if ``interval`` (s) has passed since ``last`` (monotonic), else
+        once, when it has (later calls in between are served by that one)."""
+        wait = interval - (time.monotonic() - last)
         if wait <= 0:
-            self._request("run")
-        elif not self._live_due:  # moving: at most one recompute per LIVE_INTERVAL
-            self._live_due = True
+            self._request(what)
+        elif what not in self._due:
+            self._due.add(what)
             self.doc.add_timeout_callback(
-                lambda: self._safe(self._throttled_run), max(1, round(wait * 1e3))
+                lambda: self._safe(self._due_now, what), max(1, round(wait * 1e3))
             )
 
-    def _throttled_run(self) -> None:
-        self._live_due = False
-        if self._dirty:
-            self._request("run")
+    def _due_now(self, what: str) -> None:
+        self._due.discard(what)
+        if what != "run" or self._dirty:  # a release may have served the slider already
+            self._request(what)
 
     def _on_release(self, attr: str, old: Any, new: Any) -> None:
         """The slider was let go: its last value is shown now, not at the next live tick."""
@@ -611,18 +615,7 @@ class Session:
 
     def _on_scrub(self, attr: str, old: Any, new: Any) -> None:
         self.t = float(new) if math.isfinite(float(new)) else 0.0
-        wait = FRONT_INTERVAL - (time.monotonic() - self._front_at)
-        if wait <= 0:
-            self._request("front")
-        elif not self._front_due:  # playing: at most one refresh per FRONT_INTERVAL
-            self._front_due = True
-            self.doc.add_timeout_callback(
-                lambda: self._safe(self._throttled_front), max(1, round(wait * 1e3))
-            )
-
-    def _throttled_front(self) -> None:
-        self._front_due = False
-        self._request("front")
+        self._soon("front", FRONT_INTERVAL, self._front_at)  # playing: one refresh per interval
 
     # ------------------------------------------------------------------------- updating
     def _show(self, errors: Sequence[str], notes: Sequence[str]) -> None:
