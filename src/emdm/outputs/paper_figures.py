@@ -389,11 +389,23 @@ def _log_axis(axis: Any) -> None:
     axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
+def _ring(ax: Any, x: float, y: float, medium: Medium) -> None:
+    """The orange ring that marks the nominal weights."""
+    ax.scatter(
+        [x],
+        [y],
+        s=45 if medium is PAPER else 110,
+        facecolors="none",
+        edgecolors="#D55E00",
+        linewidths=1.1,
+        zorder=3,
+    )
+
+
 def _front_axes(
     ax: Any,
     step: dict[str, Any],
     info: dict[str, Any],
-    nominal: float,
     medium: Medium,
     norm: Any,
 ) -> Any:
@@ -412,16 +424,8 @@ def _front_axes(
         zorder=2,
         linewidths=0,
     )
-    near = int(np.argmin(np.abs(np.log10(np.maximum(ratio, 1e-12)) - math.log10(nominal))))
-    ax.scatter(
-        [M[near]],
-        [E[near]],
-        s=45 if medium is PAPER else 110,
-        facecolors="none",
-        edgecolors="#D55E00",
-        linewidths=1.1,
-        zorder=3,
-    )
+    near = int(info["nominal_index"])  # the point of the nominal ratio, found with the data
+    _ring(ax, M[near], E[near], medium)
     ax.set_yscale("log")
     note = ""
     if info["degenerate"]:
@@ -472,7 +476,7 @@ def pareto_figure(
             for col, index in enumerate(steps):
                 step, info = data["steps"][index], infos[name][index]
                 ax = axes[row, col]
-                sc = _front_axes(ax, step, info, data["nominal_ratio"], medium, norm)
+                sc = _front_axes(ax, step, info, medium, norm)
                 ax.set_title(rf"$k={step['k']}$, $t={step['t']:.2f}$ s", fontsize=medium.small)
                 if col == 0:
                     ax.set_ylabel(f"{name}\n" + r"$E$ (rad$^2$/s$^2$)")
@@ -503,15 +507,7 @@ def pareto_figure(
             nominal = fronts[name]["nominal_ratio"]
             nom = [r for r in ok if np.isclose(r["w_manip"] / r["w_effort"], nominal)]
             if nom:
-                ax.scatter(
-                    [nom[0]["mean_manipulability"]],
-                    [nom[0]["total_effort"]],
-                    s=45 if medium is PAPER else 110,
-                    facecolors="none",
-                    edgecolors="#D55E00",
-                    linewidths=1.1,
-                    zorder=3,
-                )
+                _ring(ax, nom[0]["mean_manipulability"], nom[0]["total_effort"], medium)
             ax.set_yscale("log")
             _log_axis(ax.yaxis)
             if bad:
