@@ -28,9 +28,39 @@ def quick_report(tmp_path_factory):
     return out
 
 
+def headless_chromium(width: int = 1500, height: int = 1000):
+    """A headless Debian chromium driven by selenium, with the page's console logged; skips the
+    test where chromium, chromedriver or selenium is missing (.ci/run installs them)."""
+    import shutil
+
+    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
+    if not chromium or not driver_path:
+        pytest.skip("no chromium/chromedriver installed (.ci/run installs them)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-dev-shm-usage",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        f"--window-size={width},{height}",
+    ):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    return webdriver.Chrome(service=Service(driver_path), options=options)
+
+
 __all__ = [
     "assert_step_optimal",
     "fd_jacobian",
+    "headless_chromium",
     "reference_bounds",
     "reference_program",
     "reference_solve",

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
+from conftest import headless_chromium
 
 from emdm.outputs.report import format_value
 from emdm.outputs.report.render import compile_documents, document, latex_environment
@@ -179,29 +179,8 @@ def test_without_a_tex_engine_the_study_says_how_to_compile(tmp_path, monkeypatc
 
 
 def test_the_page_loads_in_a_real_browser(report):
-    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
-    if not chromium or not driver_path:
-        pytest.skip("no chromium/chromedriver installed (.ci/run installs them)")
-    webdriver = pytest.importorskip("selenium.webdriver")
-    from selenium.webdriver.chrome.service import Service
-
+    driver = headless_chromium(1200, 900)
     root, page = report
-    options = webdriver.ChromeOptions()
-    options.binary_location = chromium
-    for flag in (
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-dev-shm-usage",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--no-first-run",
-        "--window-size=1200,900",
-    ):
-        options.add_argument(flag)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=Service(driver_path), options=options)
     try:
         driver.get((Path(root) / "index.html").as_uri())
         driver.execute_script("window.scrollTo(0, document.body.scrollHeight)")
