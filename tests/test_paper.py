@@ -60,3 +60,20 @@ def test_the_pitch_is_16_9_with_8_to_12_slides_and_backups(quick_report):
     main, _, backup = tex.partition("\\appendix")
     assert 8 <= main.count("\\begin{frame}") <= 12
     assert backup.count("\\begin{frame}") <= 6
+
+
+def test_the_compact_fallback_compiles(quick_report, tmp_path):
+    """When a first compile runs past four pages, the report redoes the paper with its figures
+    at 92 % width: that version compiles cleanly too, and is no longer."""
+    from emdm.outputs.report.render import compile_documents, write_latex
+
+    stage = tmp_path / "report"
+    shutil.copytree(quick_report, stage)
+    write_latex(stage, compact=True, names=("paper",))
+    tex = (stage / "paper" / "paper.tex").read_text(encoding="utf-8")
+    assert r"width=0.92\columnwidth" in tex and r"width=0.92\textwidth" in tex
+    said: list[str] = []
+    info = compile_documents(stage / "paper", said.append, names=("paper",))["paper"]
+    assert info["returncode"] == 0 and not info["errors"] and not said
+    normal = log_problems((quick_report / "paper" / "paper.log").read_text(errors="replace"))
+    assert 1 <= info["pages"] <= normal["pages"] <= 4

@@ -384,6 +384,10 @@ def provenance(config: ReportConfig, wall: float) -> dict[str, Any]:
     }
 
 
+PAGE_LIMIT = 4
+"""The brief's limit for the paper; a longer first compile is redone with compact figures."""
+
+
 def build_report(
     out: Path,
     *,
@@ -477,6 +481,11 @@ def build_report(
         write_latex(stage)
         say(f"paper and pitch written ({time.perf_counter() - start:.1f} s)")
         compiled = compile_documents(stage / "paper", say) if compile_pdf and cfg.compile else {}
+        if compiled.get("paper", {}).get("pages", 0) > PAGE_LIMIT:  # a few lines too many
+            write_latex(stage, compact=True, names=("paper",))
+            again = compile_documents(stage / "paper", say, names=("paper",))
+            compiled.update(paper=again["paper"], compact=True)
+            compiled["seconds"] += again["seconds"]
         prov = provenance(cfg, time.perf_counter() - start)
         prov["compiled"] = compiled
         write_json(stage / "provenance.json", prov)

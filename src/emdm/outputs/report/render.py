@@ -86,21 +86,28 @@ def document(stage: Path) -> Document:
     return Story(Data(stage)).build()
 
 
-def write_latex(stage: Path) -> None:
-    """``paper/paper.tex`` and ``paper/pitch.tex`` from the records in ``stage``."""
+def write_latex(
+    stage: Path, *, compact: bool = False, names: Sequence[str] = ("paper", "pitch")
+) -> None:
+    """``paper/paper.tex`` and ``paper/pitch.tex`` (or the ``names`` among them) from the
+    records in ``stage``; ``compact`` draws the paper's figures at 92 % of their width (the
+    fallback when the first compile runs over the page limit)."""
     data = Data(stage)
     doc = Story(data).build()
-    pitch = Pitch(data, doc).build()
     env = latex_environment()
     folder = stage / "paper"
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "paper.tex").write_text(
-        env.get_template("paper.tex.j2").render(doc=doc, data=data), encoding="utf-8"
-    )
-    (folder / "pitch.tex").write_text(
-        env.get_template("pitch.tex.j2").render(doc=doc, pitch=pitch, data=data),
-        encoding="utf-8",
-    )
+    if "paper" in names:
+        (folder / "paper.tex").write_text(
+            env.get_template("paper.tex.j2").render(doc=doc, data=data, compact=compact),
+            encoding="utf-8",
+        )
+    if "pitch" in names:
+        pitch = Pitch(data, doc).build()
+        (folder / "pitch.tex").write_text(
+            env.get_template("pitch.tex.j2").render(doc=doc, pitch=pitch, data=data),
+            encoding="utf-8",
+        )
 
 
 def write_html(stage: Path) -> None:
