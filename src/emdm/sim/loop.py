@@ -186,6 +186,8 @@ def run_kernel(
 ) -> tuple[int, int]:
     """Run from state ``k0`` (``rec.q[k0]`` set) until an :class:`Exit`; returns ``(exit, k)``."""
     n = arm.lengths.size
+    if k0 == 0:  # a new run: no working set to try first, so a run never depends on the last
+        w.qp.warm[0] = False
     cap = rec.qd.shape[0]
     for k in range(k0, cap + 1):
         m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)

@@ -75,6 +75,7 @@ class QPWork(NamedTuple):
     passive: NDArray[np.bool_]
     skip: NDArray[np.bool_]
     B: F64
+    warm: NDArray[np.bool_]
 
 
 @kernel
@@ -100,6 +101,7 @@ def qp_work(nx: int) -> QPWork:
         np.empty(cols, dtype=np.bool_),
         np.empty(cols, dtype=np.bool_),
         np.empty((nx, cols + 1)),
+        np.zeros(1, dtype=np.bool_),  # work holds the last optimum's working set
     )
 
 
@@ -365,7 +367,106 @@ def active_set(
     residuals of :func:`kkt_residuals` for them. ``NEEDS_REFERENCE`` leaves a case this kernel
     does not settle (dependent equality rows) to the numpy method; ``INFEASIBLE`` means no point
     satisfies the constraints.
+
+    In a control loop the optimum's working set rarely changes from one step to the next, so the
+    previous one is tried first (:func:`_warm_start`, one iteration); the method starts from an
+    exact feasible point only when that guess fails its exact optimality conditions.
     """
+    if w.warm[0] and _warm_start(P, c, A, b, lb, ub, x, w, out):
+        return OK, 1
+    code, iterations = _cold_start(P, c, A, b, lb, ub, x, w, out)
+    w.warm[0] = code == OK and iterations > 0
+    return code, iterations
+
+
+@kernel
+def _warm_start(
+    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+) -> bool:
+    """Solve the equality-constrained program with the bounds of ``w.work`` held, and accept its
+    answer only where it is the optimum: every other variable within its bounds, every held
+    bound's multiplier of the right sign (the tolerances of the cold method), KKT residuals
+    within :data:`KKT_TOL`. ``x`` is overwritten either way."""
+    work, snap, idx, K, rhs, lam, mu = w.work, w.snap, w.idx, w.K, w.rhs, w.lam, w.mu
+    n = x.size
+    f = 0
+    for j in range(n):
+        a = abs(lb[j]) if math.isfinite(lb[j]) else 0.0
+        bb = abs(ub[j]) if math.isfinite(ub[j]) else 0.0
+        snap[j] = 1e-13 * (1.0 + max(a, bb))
+        if work[j] == -1:
+            if not math.isfinite(lb[j]):
+                return False
+            x[j] = lb[j]
+        elif work[j] == 1:
+            if not math.isfinite(ub[j]):
+                return False
+            x[j] = ub[j]
+        else:
+            idx[f] = j
+            f += 1
+    if f < 2:
+        return False
+    size = f + 2
+    r0, r1 = b[0], b[1]
+    for j in range(n):
+        if work[j] != 0:
+            r0 -= A[0, j] * x[j]
+            r1 -= A[1, j] * x[j]
+    for r in range(size):
+        for cc in range(size):
+            K[r, cc] = 0.0
+    for a in range(f):
+        j = idx[a]
+        acc = c[j]
+        for i in range(n):
+            if work[i] != 0:
+                acc += P[j, i] * x[i]
+        for a2 in range(f):
+            K[a, a2] = P[j, idx[a2]]
+        K[a, f] = -A[0, j]
+        K[a, f + 1] = -A[1, j]
+        K[f, a] = A[0, j]
+        K[f + 1, a] = A[1, j]
+        rhs[a] = -acc
+    rhs[f], rhs[f + 1] = r0, r1
+    if not _solve_in_place(K, rhs, size):
+        return False
+    for a in range(f):
+        j = idx[a]
+        v = rhs[a]
+        if not math.isfinite(v):
+            return False
+        if v < lb[j]:
+            if lb[j] - v > snap[j]:
+                return False
+            v = lb[j]
+        elif v > ub[j]:
+            if v - ub[j] > snap[j]:
+                return False
+            v = ub[j]
+        x[j] = v
+    lam[0], lam[1] = rhs[f], rhs[f + 1]
+    gmax = 0.0
+    for j in range(n):
+        acc = c[j]
+        for i in range(n):
+            acc += P[j, i] * x[i]
+        gmax = max(gmax, abs(acc))
+        mu[j] = acc - A[0, j] * lam[0] - A[1, j] * lam[1] if work[j] != 0 else 0.0
+    tol = 1e-12 * (1.0 + gmax)
+    for j in range(n):
+        if (work[j] == -1 and mu[j] < -tol) or (work[j] == 1 and mu[j] > tol):
+            return False
+    kkt_residuals(P, c, A, b, lb, ub, x, lam, mu, out)
+    return bool(max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL)
+
+
+@kernel
+def _cold_start(
+    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+) -> tuple[int, int]:
+    """The primal active-set method from an exact feasible point (see :func:`active_set`)."""
     work, snap, g, p, idx, K, rhs, lam, mu = (
         w.work,
         w.snap,

@@ -1497,17 +1497,17 @@ class Story:
                 out = sentence("no solution")
             elif kind == "reference":
                 out = sentence(
-                    "max ",
-                    Math(r"|\Delta\dot q|", "|Δ<i>q̇</i>|"),
-                    " vs ",
                     entry["reference"]["controller"],
-                    ": ",
+                    " ",
+                    Math(r"\pm", "±"),
+                    " ",
                     self.evidn(
                         key,
                         "reference",
                         "max_abs_qd_difference",
                         fmt=".0e" if entry["reference"]["max_abs_qd_difference"] else ".0f",
                     ),
+                    " rad/s",
                 )
             elif kind == "pair":
                 out = sentence(
