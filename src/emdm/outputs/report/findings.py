@@ -678,11 +678,13 @@ class Story:
             )
         )
         p = sentence(
-            "Started from an exact feasible point, it takes a median of ",
+            "Started from the previous step's working set where that is still optimal, else "
+            "from an exact feasible point, it takes a median of ",
             self.ev(t, "C-EMDM", "solver", "median_iterations", fmt=".0f"),
-            " iterations (at most ",
+            " and at most ",
             self.ev(t, "C-EMDM", "solver", "max_iterations", fmt="d"),
-            ") and terminates finitely, each iteration being an exact equality-constrained solve",
+            " iterations and terminates finitely, each iteration being an exact "
+            "equality-constrained solve",
         )
         lab = "data/task1-lab-C-EMDM/solvers.json"
         ch: dict[str, Any] = {}
