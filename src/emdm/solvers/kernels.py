@@ -380,6 +380,23 @@ def active_set(
 
 
 @kernel
+def _kkt_matrix(P: F64, A: F64, idx: NDArray[np.int64], f: int, K: F64) -> None:
+    """``K[:f+2, :f+2] = [[P_FF, -A_F^T], [A_F, 0]]`` for the free variables ``idx[:f]``."""
+    size = f + 2
+    for r in range(size):
+        for cc in range(size):
+            K[r, cc] = 0.0
+    for a in range(f):
+        j = idx[a]
+        for a2 in range(f):
+            K[a, a2] = P[j, idx[a2]]
+        K[a, f] = -A[0, j]
+        K[a, f + 1] = -A[1, j]
+        K[f, a] = A[0, j]
+        K[f + 1, a] = A[1, j]
+
+
+@kernel
 def _warm_start(
     P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
@@ -413,21 +430,13 @@ def _warm_start(
         if work[j] != 0:
             r0 -= A[0, j] * x[j]
             r1 -= A[1, j] * x[j]
-    for r in range(size):
-        for cc in range(size):
-            K[r, cc] = 0.0
+    _kkt_matrix(P, A, idx, f, K)
     for a in range(f):
         j = idx[a]
         acc = c[j]
         for i in range(n):
             if work[i] != 0:
                 acc += P[j, i] * x[i]
-        for a2 in range(f):
-            K[a, a2] = P[j, idx[a2]]
-        K[a, f] = -A[0, j]
-        K[a, f + 1] = -A[1, j]
-        K[f, a] = A[0, j]
-        K[f + 1, a] = A[1, j]
         rhs[a] = -acc
     rhs[f], rhs[f + 1] = r0, r1
     if not _solve_in_place(K, rhs, size):
@@ -531,19 +540,10 @@ def _cold_start(
             lam1 = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
         else:
             size = f + 2
-            for r in range(size):
-                rhs[r] = 0.0
-                for cc in range(size):
-                    K[r, cc] = 0.0
+            _kkt_matrix(P, A, idx, f, K)
             for a in range(f):
-                j = idx[a]
-                for a2 in range(f):
-                    K[a, a2] = P[j, idx[a2]]
-                K[a, f] = -A[0, j]
-                K[a, f + 1] = -A[1, j]
-                K[f, a] = A[0, j]
-                K[f + 1, a] = A[1, j]
-                rhs[a] = -g[j]
+                rhs[a] = -g[idx[a]]
+            rhs[f], rhs[f + 1] = 0.0, 0.0
             if not _solve_in_place(K, rhs, size):
                 return NEEDS_REFERENCE, iteration
             for a in range(f):
