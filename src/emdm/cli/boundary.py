@@ -146,6 +146,8 @@ def _handler(signum: int, frame: FrameType | None) -> None:
         return
     _State.stopping = True
     logging.disable(logging.CRITICAL)  # workers that vanish are expected now, not news
+    for name in ("asyncio", "distributed"):  # a worker stopped while starting is reported by
+        logging.getLogger(name).disabled = True  # asyncio when its task is collected, at exit
     warnings.simplefilter("ignore")
     _no_dask_restarts()
     stop_children()
