@@ -65,3 +65,17 @@ __all__ = [
     "reference_program",
     "reference_solve",
 ]
+
+
+@pytest.fixture(scope="session")
+def numpy_solver():
+    """The numpy active set (null-space steps by SVD) as a solver the loop hands every step to."""
+    from emdm.solvers import Family, SolverSpec, register, solve_active_set
+    from emdm.solvers.base import _REGISTRY
+
+    def solve(qp, *, history=False):
+        return solve_active_set(qp, history=True)
+
+    register(SolverSpec("numpy-active-set", Family.EXACT, solve, "test: the numpy method"))
+    yield "numpy-active-set"
+    _REGISTRY.pop("numpy-active-set")

@@ -9,23 +9,9 @@ import reference
 
 import emdm
 from emdm.sim import loop
-from emdm.solvers import Family, SolverSpec, register, solve_active_set
-from emdm.solvers.base import _REGISTRY
 
 CONTROLLERS = ["UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"]
 FIELDS = ("q", "p", "e", "v", "m", "qd", "effort", "manip_rate", "alpha", "delta", "lo", "hi")
-
-
-@pytest.fixture(scope="module")
-def numpy_solver():
-    """The numpy active set (null-space steps by SVD) as a solver the loop hands every step to."""
-
-    def solve(qp, *, history=False):
-        return solve_active_set(qp, history=True)
-
-    register(SolverSpec("numpy-active-set", Family.EXACT, solve, "test: the numpy method"))
-    yield "numpy-active-set"
-    _REGISTRY.pop("numpy-active-set")
 
 
 def assert_same_run(a, b, tol=1e-12):

@@ -13,6 +13,13 @@ Slack program (brief section 4): variables ``(qd, delta)``, minimise
 ``w_E E(qd) - w_M M(qd) + 1/2 w_S ||delta||^2`` subject to ``J qd + delta = v`` and
 ``delta_min <= delta <= delta_max``, with ``w_S = c_S / max(||e||, 1e-9 m)``.
 
+Spatial arms track a position (3 rows) or a pose (6 rows) with the same programs; "redundant"
+means more joints than task rows. Three baselines of the manipulability literature are the same
+programs with the slack fixed (Haviland & Corke's comparison): ``RRMC`` (resolved-rate motion
+control, ``qd = J^+ v``) is UC-IVKC without slack; ``PARK`` (gradient projection,
+``qd = J^+ v + (w_M / w_E)(I - J^+ J) Jm``) is UC-EMDM without slack; ``MMC`` (the
+manipulability-maximising controller) is C-EMDM with the slack program on every arm.
+
 When a program is infeasible (the bounds cannot deliver the task) the scenario's ``on_infeasible``
 decides: ``scale`` solves the same program for ``alpha v`` with the largest feasible ``alpha`` in
 [0, 1] (direction-preserving task scaling, as in the SNS method of Flacco, De Luca and Khatib);
@@ -30,7 +37,7 @@ import numpy as np
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
 from .feasibility import task_scale
-from .kernels import ERROR_FLOOR, ProgramData, build_program
+from .kernels import ERROR_FLOOR, ProgramData, build_program, task_kinematics_of
 from .kernels import joint_bounds as _joint_bounds
 from .limits import Bounds
 from .problem import QP
@@ -56,6 +63,9 @@ class Controller:
     name: str
     method: Method
     constrained: bool
+    slack: bool | None = None
+    """Whether the program has task slack; ``None``: the brief's rule (EMDM on an arm that is not
+    redundant)."""
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
         """The weights, slack and bounds of this controller's program on ``scenario``."""
@@ -64,6 +74,8 @@ class Controller:
             w_e, w_m, slack = 1.0, 0.0, False
         else:  # min w_E E - w_M M s.t. J qd = v; the slack program on a non-redundant arm
             w_e, w_m, slack = w.effort, w.manipulability, not scenario.redundant
+        if self.slack is not None:
+            slack = self.slack
         return ProgramData(
             float(w_e),
             float(w_m),
@@ -81,12 +93,21 @@ CONTROLLERS: dict[str, Controller] = {
 }
 
 
+BASELINES: dict[str, Controller] = {
+    "RRMC": Controller("RRMC", Method.IVKC, False, slack=False),
+    "PARK": Controller("PARK", Method.EMDM, False, slack=False),
+    "MMC": Controller("MMC", Method.EMDM, True, slack=True),
+}
+"""The controllers of the manipulability benchmark besides the brief's four (module docstring)."""
+
+
 def get_controller(name: str) -> Controller:
     """The controller called ``name`` (case-insensitive), or an :class:`EmdmError` listing them."""
-    for key, controller in CONTROLLERS.items():
+    for key, controller in (CONTROLLERS | BASELINES).items():
         if key.lower() == name.lower():
             return controller
-    raise EmdmError(f"unknown controller {name!r} (known: {', '.join(CONTROLLERS)})")
+    known = ", ".join([*CONTROLLERS, *BASELINES])
+    raise EmdmError(f"unknown controller {name!r} (known: {known})")
 
 
 def joint_bounds(scenario: Scenario, q: Vector) -> Bounds:
@@ -114,10 +135,10 @@ def step_program(
 ) -> QP:
     """The program of ``controller`` at configuration ``q`` for the desired velocity ``v``."""
     data = controller.program_data(scenario, weights)
-    n = scenario.n
-    nx = n + 2 if data.slack else n
-    P, c, A = np.empty((nx, nx)), np.empty(nx), np.zeros((2, nx))
-    b, lb, ub = np.empty(2), np.empty(nx), np.empty(nx)
+    n, nt = scenario.n, scenario.nt
+    nx = n + nt if data.slack else n
+    P, c, A = np.empty((nx, nx)), np.empty(nx), np.zeros((nt, nx))
+    b, lb, ub = np.empty(nt), np.empty(nx), np.empty(nx)
     build_program(
         scenario.arm_data,
         data,
@@ -203,14 +224,31 @@ class StepState:
 
     @property
     def error_norm(self) -> float:
-        return float(np.hypot(self.e[0], self.e[1]))
+        if self.e.size == 2:
+            return float(np.hypot(self.e[0], self.e[1]))
+        return float(np.linalg.norm(self.e))
 
 
 def state_at(scenario: Scenario, q: Vector) -> StepState:
-    """Brief Algorithm 1, lines 5-8: ``p = f(q)``, ``e = p_goal - p``, ``v = Kp e``, ``J``, ``Jm``."""
-    kin = scenario.planar_arm.kinematics(q)
-    e = scenario.motion.goal - kin.p
-    return StepState(kin, e, scenario.motion.kp * e)
+    """Brief Algorithm 1, lines 5-8: ``p = f(q)``, ``e = p_goal - p``, ``v = Kp e``, ``J``, ``Jm``
+    (for a spatial arm: the task's rows, see :func:`emdm.core.kernels.task_kinematics`)."""
+    if not scenario.spatial:
+        kin = scenario.planar_arm.kinematics(q)
+        e = scenario.motion.goal - kin.p
+        return StepState(kin, e, scenario.motion.kp * e)
+    n, nt = scenario.n, scenario.nt
+    p, e, J, Jm = np.empty(nt), np.empty(nt), np.empty((nt, n)), np.empty(n)
+    m = task_kinematics_of(
+        scenario.arm_data,
+        scenario.task_code,
+        np.asarray(scenario.motion.goal, dtype=float),
+        np.asarray(q, dtype=float),
+        p,
+        e,
+        J,
+        Jm,
+    )
+    return StepState(Kinematics(p, J, float(m), Jm), e, scenario.motion.kp * e)
 
 
 def program_at(

@@ -10,6 +10,11 @@ half-planes and make the same formula exact for degenerate zonotopes (segments, 
 Unbounded variables are projected out: with ``Q`` an orthonormal basis of the complement of the
 range of their columns, ``A x = b`` is solvable iff ``Q^T A_B x_B = Q^T b`` is, for bounded ``x_B``.
 
+With other than two task rows (a spatial arm's position or pose), the compiled kernels answer
+both questions by the simplex method; what they leave (unbounded variables whose columns do not
+span the task space) goes to HiGHS through :func:`scipy.optimize.linprog`, the reference of the
+tests as well.
+
 Two questions are answered exactly, in O(n) work:
 
 - :func:`task_scale`: the largest ``alpha`` in [0, 1] with ``A x = alpha b`` feasible (the SNS task
@@ -110,11 +115,12 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
     to the compiled kernel; the numpy projection below handles what it leaves (unbounded variables
     whose columns have rank < 2, more task rows).
     """
-    if A.shape[0] == 2:
-        Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-        alpha = kernels.task_scale_of(Ac, bc, lbc, ubc)
-        if alpha != -2.0:
-            return None if alpha == -1.0 else alpha
+    Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
+    alpha = kernels.task_scale_of(Ac, bc, lbc, ubc)
+    if alpha != -2.0:
+        return None if alpha == -1.0 else alpha
+    if A.shape[0] != 2:
+        return _linprog_scale(A, b, lb, ub)
     Q, G, bounded = _project(A, lb, ub)
     if Q.shape[1] == 0:
         return 1.0
@@ -127,12 +133,14 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
 
 def feasible_point(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> Vector | None:
     """Some ``x`` with ``A x = b`` and ``lb <= x <= ub`` (exact up to rounding), or ``None``."""
-    if A.shape[0] == 2:
-        x = np.empty(A.shape[1])
-        Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-        code, _ = kernels.feasible_point_of(Ac, bc, lbc, ubc, x)
-        if code != kernels.NEEDS_REFERENCE:
-            return x if code == kernels.OK else None
+    x = np.empty(A.shape[1])
+    Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
+    code, _ = kernels.feasible_point_of(Ac, bc, lbc, ubc, x)
+    if code != kernels.NEEDS_REFERENCE:
+        return x if code == kernels.OK else None
+    if A.shape[0] != 2:
+        alpha_x = _linprog(A, b, lb, ub, scale=False)
+        return None if alpha_x is None else alpha_x[1]
     Q, G, bounded = _project(A, lb, ub)
     lbb, ubb = lb[bounded], ub[bounded]
     x = np.zeros(A.shape[1])
@@ -180,3 +188,35 @@ def _boundary_preimage(
             tau = float(np.clip(u @ (target - G @ x) / denom, -1.0, 1.0))
             x[parallel] += tau * half * np.sign(gu)
     return x
+
+
+def _linprog(
+    A: Matrix, b: Vector, lb: Vector, ub: Vector, *, scale: bool
+) -> tuple[float, Vector] | None:
+    """``(alpha, x)`` with ``A x = alpha b`` and ``lb <= x <= ub`` by HiGHS: the largest ``alpha``
+    in [0, 1] (``scale``) or ``alpha = 1``; ``None`` when infeasible."""
+    from scipy.optimize import linprog
+
+    n = A.shape[1]
+    A_eq = np.hstack((A, -np.asarray(b, dtype=float).reshape(-1, 1)))
+    cost = np.zeros(n + 1)
+    cost[n] = -1.0
+    bounds = [
+        (None if np.isneginf(lo) else lo, None if np.isposinf(hi) else hi)
+        for lo, hi in zip(lb, ub, strict=True)
+    ]
+    bounds.append((0.0, 1.0) if scale else (1.0, 1.0))
+    result = linprog(cost, A_eq=A_eq, b_eq=np.zeros(A.shape[0]), bounds=bounds, method="highs")
+    if result.status != 0:
+        return None
+    x = np.clip(result.x[:n], lb, ub)
+    alpha = float(np.clip(result.x[n], 0.0, 1.0))
+    size = 1.0 + float(np.abs(b).max()) + float(np.abs(A).max() * np.abs(x).sum())
+    if np.max(np.abs(A @ x - alpha * b)) > FEASIBILITY_TOL * size:
+        return None
+    return alpha, x
+
+
+def _linprog_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
+    found = _linprog(A, b, lb, ub, scale=True)
+    return None if found is None else found[0]

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
+from .serial_kernels import manipulability_gradient, serial_hessian, serial_kinematics
 
 F64 = NDArray[np.float64]
 
@@ -28,9 +29,18 @@ FEASIBILITY_TOL = 1e-10
 # what a feasibility kernel returns
 OK, NEEDS_REFERENCE, INFEASIBLE = 0, 1, 2
 
+# the task of a run: the planar tip position, the 3-D position or the 6-D pose of a spatial arm
+TASK_PLANAR, TASK_POSITION, TASK_POSE = 0, 1, 2
+
 
 class ArmData(NamedTuple):
-    """A planar arm and its joint limits as kernel input (per joint: m, rad, rad/s, rad, rad, -)."""
+    """An arm and its joint limits as kernel input (per joint: m, rad, rad/s, rad, rad, -).
+
+    A planar arm has its link ``lengths`` and an empty ``dh`` (0 x 4); a spatial arm has its DH
+    rows ``[a, alpha, d, offset]`` in ``dh`` (``modified`` for Craig's convention), its ``tool``
+    transform, and ``lengths`` = the length of each link (``hypot(a, d)``, for scales only).
+    ``rows`` selects the Jacobian rows of the manipulability (``serial_kernels.ROWS_*``).
+    """
 
     lengths: F64
     q_min: F64
@@ -40,44 +50,119 @@ class ArmData(NamedTuple):
     influence: F64
     stop: F64
     gain: F64
+    dh: F64
+    modified: bool
+    tool: F64
+    rows: int
 
 
 class KinWork(NamedTuple):
-    """Scratch buffers of :func:`kinematics`: tip vectors, Cauchy-Binet minors and ``G = dc/dq``."""
+    """Scratch buffers of the kinematics: tip vectors, Cauchy-Binet minors and ``G = dc/dq`` (planar);
+    link frames, one link, the end-effector pose, the 6 x n Jacobian and the Hessian (spatial)."""
 
     rx: F64
     ry: F64
     minors: F64
     G: F64
+    frames: F64
+    link: F64
+    T: F64
+    J6: F64
+    H: F64
+    R: F64
 
 
 class FeasWork(NamedTuple):
-    """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables)."""
+    """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables and ``nt`` task
+    rows): the 2-D zonotope geometry, and the simplex method of programs with other row counts."""
 
     cand: F64
     base: F64
     free: NDArray[np.bool_]
     parallel: NDArray[np.bool_]
     centre: F64
+    status: NDArray[np.int8]
+    val: F64
+    vlo: F64
+    vhi: F64
+    cost: F64
+    sigma: F64
+    basis: NDArray[np.int64]
+    Bm: F64
+    y: F64
+    d: F64
+    Af: F64
 
 
 @kernel
 def kin_work(n: int) -> KinWork:
-    """Buffers for :func:`kinematics` of an ``n``-joint arm."""
+    """Buffers for the kinematics of an ``n``-joint arm (planar or spatial)."""
     npairs = n * (n - 1) // 2
-    return KinWork(np.empty(n), np.empty(n), np.empty(npairs), np.empty((npairs, n)))
+    return KinWork(
+        np.empty(n),
+        np.empty(n),
+        np.empty(npairs),
+        np.empty((npairs, n)),
+        np.empty((n + 1, 4, 4)),
+        np.empty((4, 4)),
+        np.empty((4, 4)),
+        np.empty((6, n)),
+        np.empty((n, 6, n)),
+        np.empty((3, 3)),
+    )
 
 
 @kernel
-def feas_work(nx: int) -> FeasWork:
-    """Buffers for the feasibility kernels of a program with ``nx`` variables."""
+def feas_work(nx: int, nt: int) -> FeasWork:
+    """Buffers for the feasibility kernels of a program with ``nx`` variables and ``nt`` rows."""
+    nv = nx + 1 + nt
     return FeasWork(
         np.empty((4 * (nx + 3), 2)),
         np.empty((nx + 3, 2)),
         np.empty(nx, dtype=np.bool_),
         np.empty(nx, dtype=np.bool_),
         np.empty(nx),
+        np.empty(nv, dtype=np.int8),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nv),
+        np.empty(nt),
+        np.empty(nt, dtype=np.int64),
+        np.empty((nt, nt)),
+        np.empty(nt),
+        np.empty(nt),
+        np.empty((nt, nx)),
     )
+
+
+@kernel
+def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
+    """Gaussian elimination with partial pivoting on ``K[:size, :size]``; ``rhs`` becomes the
+    solution. False for a singular matrix."""
+    for col in range(size):
+        piv = col
+        for r in range(col + 1, size):
+            if abs(K[r, col]) > abs(K[piv, col]):
+                piv = r
+        if K[piv, col] == 0.0:
+            return False
+        if piv != col:
+            for c in range(size):
+                K[col, c], K[piv, c] = K[piv, c], K[col, c]
+            rhs[col], rhs[piv] = rhs[piv], rhs[col]
+        for r in range(col + 1, size):
+            f = K[r, col] / K[col, col]
+            if f != 0.0:
+                for c in range(col, size):
+                    K[r, c] -= f * K[col, c]
+                rhs[r] -= f * rhs[col]
+    for r in range(size - 1, -1, -1):
+        s = rhs[r]
+        for c in range(r + 1, size):
+            s -= K[r, c] * rhs[c]
+        rhs[r] = s / K[r, r]
+    return True
 
 
 # ------------------------------------------------------------------------------ kinematics
@@ -152,6 +237,104 @@ def kinematics_of(lengths: F64, q: F64, p: F64, J: F64, Jm: F64) -> float:
     """:func:`kinematics` with its own buffers: the entry point for callers in Python (arrays
     only, so numba types the call quickly)."""
     return kinematics(lengths, q, p, J, Jm, kin_work(q.size))
+
+
+# ------------------------------------------------------------------- spatial task kinematics
+@kernel
+def rotation_vector(R: F64, out: F64, at: int) -> None:
+    """``out[at:at+3]`` = the rotation vector ``theta u`` of the rotation matrix ``R`` (theta in
+    [0, pi]): from its skew part ``sin(theta) [u]x`` away from ``theta = pi``, else from its
+    symmetric part ``cos(theta) I + (1 - cos(theta)) u u^T``, the sign taken from the skew part."""
+    sx, sy, sz = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
+    sn = 0.5 * math.sqrt(sx * sx + sy * sy + sz * sz)
+    cs = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)
+    theta = math.atan2(sn, cs)
+    if cs > -0.9:
+        f = 0.5 * theta / sn if sn > 0.0 else 0.5
+        out[at], out[at + 1], out[at + 2] = f * sx, f * sy, f * sz
+        return
+    k = 0
+    for i in range(1, 3):
+        if R[i, i] > R[k, k]:
+            k = i
+    scale = 1.0 - cs
+    mkk = (R[k, k] - cs) / scale
+    norm = math.sqrt(max(mkk, 1e-300))
+    u0 = (0.5 * (R[0, k] + R[k, 0]) - (cs if k == 0 else 0.0)) / scale / norm
+    u1 = (0.5 * (R[1, k] + R[k, 1]) - (cs if k == 1 else 0.0)) / scale / norm
+    u2 = (0.5 * (R[2, k] + R[k, 2]) - (cs if k == 2 else 0.0)) / scale / norm
+    if u0 * sx + u1 * sy + u2 * sz < 0:
+        u0, u1, u2 = -u0, -u1, -u2
+    out[at], out[at + 1], out[at + 2] = theta * u0, theta * u1, theta * u2
+
+
+@kernel
+def rotation_matrix(rx: float, ry: float, rz: float, R: F64) -> None:
+    """``R`` = the rotation of rotation vector ``(rx, ry, rz)`` (Rodrigues' formula)."""
+    theta = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if theta > 0.0:
+        a = math.sin(theta) / theta
+        h = math.sin(0.5 * theta) / theta
+        b = 2.0 * h * h  # (1 - cos theta) / theta^2 without cancellation
+    else:
+        a, b = 1.0, 0.5
+    R[0, 0] = 1.0 - b * (ry * ry + rz * rz)
+    R[1, 1] = 1.0 - b * (rx * rx + rz * rz)
+    R[2, 2] = 1.0 - b * (rx * rx + ry * ry)
+    R[0, 1] = b * rx * ry - a * rz
+    R[1, 0] = b * rx * ry + a * rz
+    R[0, 2] = b * rx * rz + a * ry
+    R[2, 0] = b * rx * rz - a * ry
+    R[1, 2] = b * ry * rz - a * rx
+    R[2, 1] = b * ry * rz + a * rx
+
+
+@kernel
+def task_kinematics(
+    arm: ArmData, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64, w: KinWork
+) -> float:
+    """The task at ``q``: ``p`` (its value), ``e = goal - p`` (its error), ``J`` (its rows of the
+    Jacobian) and ``Jm``; returns the manipulability ``m``.
+
+    Planar arm: ``p`` = tip position (2). Spatial arm, ``TASK_POSITION``: ``p`` = end-effector
+    position (3), ``J`` = the linear rows; ``TASK_POSE``: ``p`` = position and rotation vector of
+    the end effector's orientation ``R`` (6), ``J`` = the geometric Jacobian, and the orientation
+    error is the rotation vector of ``R_goal R^T`` (base frame), where ``R_goal`` is the rotation
+    of the goal's rotation vector. ``m`` and ``Jm`` are over the rows ``arm.rows``.
+    """
+    if arm.dh.shape[0] == 0:
+        m = kinematics(arm.lengths, q, p, J, Jm, w)
+        e[0], e[1] = goal[0] - p[0], goal[1] - p[1]
+        return m
+    n = q.size
+    serial_kinematics(arm.dh, arm.modified, arm.tool, q, w.frames, w.link, w.T, w.J6)
+    serial_hessian(w.J6, w.H)
+    m = manipulability_gradient(w.J6, w.H, arm.rows, Jm)
+    T = w.T
+    rows = 6 if task == TASK_POSE else 3
+    for i in range(rows):
+        for j in range(n):
+            J[i, j] = w.J6[i, j]
+    for i in range(3):
+        p[i] = T[i, 3]
+        e[i] = goal[i] - p[i]
+    if task == TASK_POSE:
+        rotation_vector(T, p, 3)
+        Rg, E = w.R, w.link
+        rotation_matrix(goal[3], goal[4], goal[5], Rg)
+        for i in range(3):
+            for k in range(3):
+                E[i, k] = Rg[i, 0] * T[k, 0] + Rg[i, 1] * T[k, 1] + Rg[i, 2] * T[k, 2]
+        rotation_vector(E, e, 3)
+    return m
+
+
+@kernel
+def task_kinematics_of(
+    arm: ArmData, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64
+) -> float:
+    """:func:`task_kinematics` with its own buffers (the entry point for callers in Python)."""
+    return task_kinematics(arm, task, goal, q, p, e, J, Jm, kin_work(q.size))
 
 
 # ------------------------------------------------------------------------------ joint bounds
@@ -288,26 +471,233 @@ def _boundary_preimage(
 
 
 @kernel
-def free_rank(A: F64, free: NDArray[np.bool_]) -> int:
-    """Rank (0, 1, 2) of the columns of the 2-row ``A`` marked free.
+def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
+    """Rank of the columns of ``A`` marked free (at most the row count ``nt``).
 
-    Rank 2 when some pair of columns has a 2x2 minor above ``RANK_TOL`` times the squared size of
-    the columns: minors are exact zero for parallel columns and accurate to rounding otherwise.
+    Two rows: rank 2 when some pair of columns has a 2x2 minor above ``RANK_TOL`` times the squared
+    size of the columns (minors are exact zero for parallel columns and accurate to rounding
+    otherwise). Other row counts: Gaussian elimination with complete pivoting on a copy, a pivot
+    counting when above ``RANK_TOL`` times the largest entry times the row count.
     """
-    n = A.shape[1]
-    scale = 0.0
+    nt, n = A.shape
+    if nt == 2:
+        scale = 0.0
+        for j in range(n):
+            if free[j]:
+                scale += A[0, j] * A[0, j] + A[1, j] * A[1, j]
+        if scale <= 0:
+            return 0
+        for i in range(n):
+            if not free[i]:
+                continue
+            for k in range(i + 1, n):
+                if free[k] and abs(A[0, i] * A[1, k] - A[1, i] * A[0, k]) > RANK_TOL * scale:
+                    return 2
+        return 1
+    M = w.Af
+    cols = 0
+    big = 0.0
     for j in range(n):
         if free[j]:
-            scale += A[0, j] * A[0, j] + A[1, j] * A[1, j]
-    if scale <= 0:
+            for i in range(nt):
+                M[i, cols] = A[i, j]
+                big = max(big, abs(A[i, j]))
+            cols += 1
+    if big <= 0:
         return 0
-    for i in range(n):
-        if not free[i]:
-            continue
-        for k in range(i + 1, n):
-            if free[k] and abs(A[0, i] * A[1, k] - A[1, i] * A[0, k]) > RANK_TOL * scale:
-                return 2
-    return 1
+    tol = RANK_TOL * big * nt
+    rank = 0
+    for step in range(min(nt, cols)):
+        pr, pc, best = step, step, 0.0
+        for i in range(step, nt):
+            for j in range(step, cols):
+                if abs(M[i, j]) > best:
+                    best, pr, pc = abs(M[i, j]), i, j
+        if best <= tol:
+            break
+        for j in range(cols):
+            M[step, j], M[pr, j] = M[pr, j], M[step, j]
+        for i in range(nt):
+            M[i, step], M[i, pc] = M[i, pc], M[i, step]
+        for i in range(step + 1, nt):
+            f = M[i, step] / M[step, step]
+            for j in range(step, cols):
+                M[i, j] -= f * M[step, j]
+        rank += 1
+    return rank
+
+
+# ------------------------------------------------------------- feasibility (any row count)
+@kernel
+def _column(A: F64, b: F64, sigma: F64, j: int, i: int) -> float:
+    """Row ``i`` of column ``j`` of ``[A, -b, diag(sigma)]`` (variables, task scale, artificials)."""
+    nx = A.shape[1]
+    if j < nx:
+        return float(A[i, j])
+    if j == nx:
+        return float(-b[i])
+    return float(sigma[i]) if j - nx - 1 == i else 0.0
+
+
+@kernel
+def _basis_matrix(A: F64, b: F64, w: FeasWork, transpose: bool) -> None:
+    nt = A.shape[0]
+    for i in range(nt):
+        for r in range(nt):
+            v = _column(A, b, w.sigma, w.basis[r], i)
+            if transpose:
+                w.Bm[r, i] = v
+            else:
+                w.Bm[i, r] = v
+
+
+@kernel
+def _simplex(A: F64, b: F64, w: FeasWork) -> bool:
+    """Minimise ``cost . v`` over ``vlo <= v <= vhi`` with ``A x - alpha b + diag(sigma) a = 0``,
+    ``v = (x, alpha, a)``, from the basis ``w.basis`` (``status`` 0: basic, -1 / +1: at the
+    lower / upper bound). The bounded-variable primal simplex method with Bland's rule (the first
+    improving variable enters, ties leave by smallest index), so it cannot cycle. True at an
+    optimum, False when a basis turns singular or the iteration limit runs out."""
+    nt, nx = A.shape
+    nv = nx + 1 + nt
+    status, val, lo, hi, cost, basis, y, d = (
+        w.status,
+        w.val,
+        w.vlo,
+        w.vhi,
+        w.cost,
+        w.basis,
+        w.y,
+        w.d,
+    )
+    for _ in range(20 * nv):
+        # basic values: B v_B = -(N v_N)
+        for i in range(nt):
+            acc = 0.0
+            for j in range(nv):
+                if status[j] != 0 and val[j] != 0.0:
+                    acc -= _column(A, b, w.sigma, j, i) * val[j]
+            y[i] = acc
+        _basis_matrix(A, b, w, False)
+        if not solve_in_place(w.Bm, y, nt):
+            return False
+        for r in range(nt):
+            val[basis[r]] = y[r]
+        # duals: B^T u = c_B
+        for r in range(nt):
+            y[r] = cost[basis[r]]
+        _basis_matrix(A, b, w, True)
+        if not solve_in_place(w.Bm, y, nt):
+            return False
+        enter = -1
+        for j in range(nv):
+            if status[j] == 0 or lo[j] == hi[j]:
+                continue
+            dj = cost[j]
+            for i in range(nt):
+                dj -= y[i] * _column(A, b, w.sigma, j, i)
+            if (status[j] == -1 and dj < -1e-11) or (status[j] == 1 and dj > 1e-11):
+                enter = j
+                break
+        if enter < 0:
+            return True
+        direction = 1.0 if status[enter] == -1 else -1.0
+        for i in range(nt):
+            d[i] = _column(A, b, w.sigma, enter, i)
+        _basis_matrix(A, b, w, False)
+        if not solve_in_place(w.Bm, d, nt):
+            return False
+        dmax = 0.0
+        for r in range(nt):
+            dmax = max(dmax, abs(d[r]))
+        step = hi[enter] - lo[enter]
+        leave, leave_to = -1, 0
+        for r in range(nt):
+            rate = -direction * d[r]
+            if abs(rate) <= 1e-12 * (1.0 + dmax):
+                continue
+            j = basis[r]
+            if rate < 0:
+                room, to = (val[j] - lo[j]) / -rate, -1
+            elif math.isinf(hi[j]):
+                continue
+            else:
+                room, to = (hi[j] - val[j]) / rate, 1
+            room = max(room, 0.0)
+            if room < step or (room == step and leave >= 0 and j < basis[leave]):
+                step, leave, leave_to = room, r, to
+        if math.isinf(step):
+            return False
+        if leave < 0:  # the entering variable reaches its other bound first
+            status[enter] = -status[enter]
+            val[enter] = hi[enter] if status[enter] == 1 else lo[enter]
+        else:
+            j = basis[leave]
+            status[j] = leave_to
+            val[j] = lo[j] if leave_to < 0 else hi[j]
+            basis[leave] = enter
+            status[enter] = 0
+    return False
+
+
+@kernel
+def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> tuple[int, float]:
+    """``A x = alpha b``, ``lb <= x <= ub`` (every bound finite) by the simplex method: with
+    ``scale``, the largest ``alpha`` in [0, 1]; without, ``alpha = 1``. Returns ``(code, alpha)``
+    and a vertex ``x`` of the feasible set (``OK``), or ``INFEASIBLE`` / ``NEEDS_REFERENCE``.
+
+    Phase 1 starts every variable at its bound nearest zero (``alpha`` at 0, or fixed at 1) and
+    minimises the artificial variables that absorb the residual; phase 2 maximises ``alpha``.
+    """
+    nt, nx = A.shape
+    status, val, lo, hi, cost, sigma = w.status, w.val, w.vlo, w.vhi, w.cost, w.sigma
+    for j in range(nx):
+        lo[j], hi[j] = lb[j], ub[j]
+        if abs(lb[j]) <= abs(ub[j]):
+            status[j], val[j] = -1, lb[j]
+        else:
+            status[j], val[j] = 1, ub[j]
+        cost[j] = 0.0
+    lo[nx], hi[nx] = (0.0, 1.0) if scale else (1.0, 1.0)
+    status[nx], val[nx], cost[nx] = -1, lo[nx], 0.0
+    size = 1.0
+    for i in range(nt):
+        r = val[nx] * b[i]
+        size += abs(b[i])
+        for j in range(nx):
+            r -= A[i, j] * val[j]
+            size += abs(A[i, j]) * max(abs(lb[j]), abs(ub[j]))
+        sigma[i] = 1.0 if r >= 0 else -1.0
+        a = nx + 1 + i
+        lo[a], hi[a], cost[a] = 0.0, math.inf, 1.0
+        status[a], val[a] = 0, abs(r)
+        w.basis[i] = a
+    if not _simplex(A, b, w):
+        return NEEDS_REFERENCE, 0.0
+    left = 0.0
+    for i in range(nt):
+        left += val[nx + 1 + i]
+    if left > FEASIBILITY_TOL * size:
+        return INFEASIBLE, 0.0
+    for i in range(nt):
+        a = nx + 1 + i
+        hi[a], cost[a] = 0.0, 0.0
+        if status[a] != 0:
+            val[a] = 0.0
+    if scale:
+        cost[nx] = -1.0
+        if not _simplex(A, b, w):
+            return NEEDS_REFERENCE, 0.0
+    for j in range(nx):
+        x[j] = min(max(val[j], lb[j]), ub[j])
+    alpha = min(max(float(val[nx]), 0.0), 1.0)
+    for i in range(nt):
+        r = -alpha * b[i]
+        for j in range(nx):
+            r += A[i, j] * x[j]
+        if abs(r) > FEASIBILITY_TOL * size:
+            return NEEDS_REFERENCE, 0.0
+    return OK, alpha
 
 
 @kernel
@@ -327,7 +717,10 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     (unbounded variables whose columns have rank < 2).
     """
     if _mark_free(lb, ub, w.free) > 0:
-        return 1.0 if free_rank(A, w.free) == 2 else -2.0
+        return 1.0 if free_rank(A, w.free, w) == A.shape[0] else -2.0
+    if A.shape[0] != 2:
+        code, alpha = _lp(A, b, lb, ub, True, w.centre, w)
+        return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
     t_lo, t_hi, _, _, _ = _ray_interval(A, lb, ub, 0.0, 0.0, b[0], b[1], w)
     lo = max(0.0, t_lo)
     hi = min(1.0, t_hi)
@@ -339,7 +732,7 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 @kernel
 def task_scale_of(A: F64, b: F64, lb: F64, ub: F64) -> float:
     """:func:`task_scale` with its own buffers (the entry point for callers in Python)."""
-    return task_scale(A, b, lb, ub, feas_work(A.shape[1]))
+    return task_scale(A, b, lb, ub, feas_work(A.shape[1], A.shape[0]))
 
 
 @kernel
@@ -350,12 +743,40 @@ def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tup
     vertex (or edge) that maps there and takes the convex combination that lands on ``b``.
     ``unique`` is True when ``b`` lies on an edge whose preimage is one point (at most one
     generator parallel to the edge): then ``x`` is the only feasible point, hence the optimum.
+    With other than two task rows, the point is a vertex found by the simplex method
+    (``unique`` False). Unbounded variables whose columns span the task space take the
+    least-norm solution for the rest of the task, the bounded ones the point of their box
+    nearest zero.
     """
     free, centre = w.free, w.centre
-    n = A.shape[1]
+    nt, n = A.shape
     if _mark_free(lb, ub, free) > 0:
-        if free_rank(A, free) != 2:
+        if free_rank(A, free, w) != nt:
             return NEEDS_REFERENCE, False
+        if nt != 2:
+            for i in range(nt):
+                w.y[i] = b[i]
+            for j in range(n):
+                if not free[j]:
+                    x[j] = min(max(0.0, lb[j]), ub[j])
+                    for i in range(nt):
+                        w.y[i] -= A[i, j] * x[j]
+            for i in range(nt):
+                for k in range(nt):
+                    acc = 0.0
+                    for j in range(n):
+                        if free[j]:
+                            acc += A[i, j] * A[k, j]
+                    w.Bm[i, k] = acc
+            if not solve_in_place(w.Bm, w.y, nt):
+                return NEEDS_REFERENCE, False
+            for j in range(n):
+                if free[j]:
+                    acc = 0.0
+                    for i in range(nt):
+                        acc += A[i, j] * w.y[i]
+                    x[j] = acc
+            return OK, False
         rx, ry = b[0], b[1]
         g00 = g01 = g11 = 0.0
         for j in range(n):
@@ -374,6 +795,9 @@ def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tup
             if free[j]:
                 x[j] = A[0, j] * l0 + A[1, j] * l1
         return OK, False
+    if nt != 2:
+        code, _ = _lp(A, b, lb, ub, False, x, w)
+        return code, False
     y0x = y0y = 0.0
     for j in range(n):
         centre[j] = 0.5 * (lb[j] + ub[j])
@@ -444,11 +868,13 @@ def build_program(
 ) -> None:
     """The program ``min 1/2 x^T P x + c^T x  s.t.  A x = b, lb <= x <= ub`` of a controller.
 
-    ``x = (qd, delta)``: ``P = diag(w_e, ..., w_S, w_S)``, ``c = (-w_m Jm, 0, 0)``,
+    ``x = (qd, delta)``: ``P = diag(w_e, ..., w_S, ..., w_S)``, ``c = (-w_m Jm, 0, ..., 0)``,
     ``A = [J, I]``, ``b = v``; without slack ``x = qd``, ``P = w_e I``, ``c = -w_m Jm``, ``A = J``.
+    ``J`` has one row per task dimension (2 planar, 3 position, 6 pose).
     """
     n = q.size
     nx = c.size
+    nt = b.size
     for i in range(nx):
         for j in range(nx):
             P[i, j] = 0.0
@@ -458,21 +884,23 @@ def build_program(
         for j in range(n):
             lb[j], ub[j] = -math.inf, math.inf
     for j in range(n):
-        A[0, j], A[1, j] = J[0, j], J[1, j]
+        for i in range(nt):
+            A[i, j] = J[i, j]
         P[j, j] = prog.w_e
         c[j] = -prog.w_m * Jm[j]
     if prog.slack:
         w_s = prog.c_s / max(error_norm, ERROR_FLOOR)
-        for i in range(2):
+        for i in range(nt):
             P[n + i, n + i] = w_s
             c[n + i] = 0.0
-            A[0, n + i] = 1.0 if i == 0 else 0.0
-            A[1, n + i] = 1.0 if i == 1 else 0.0
+            for r in range(nt):
+                A[r, n + i] = 1.0 if r == i else 0.0
             lb[n + i], ub[n + i] = prog.s_min[i], prog.s_max[i]
-    b[0], b[1] = v[0], v[1]
+    for i in range(nt):
+        b[i] = v[i]
 
 
 @kernel
 def feasible_point_of(A: F64, b: F64, lb: F64, ub: F64, x: F64) -> tuple[int, bool]:
     """:func:`feasible_point` with its own buffers (the entry point for callers in Python)."""
-    return feasible_point(A, b, lb, ub, x, feas_work(x.size))
+    return feasible_point(A, b, lb, ub, x, feas_work(x.size, A.shape[0]))

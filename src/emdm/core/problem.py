@@ -6,7 +6,8 @@ Every program of docs/mathematics.md has the form::
     subject to A x = b,   lb <= x <= ub
 
 with ``x = (qd, delta)``: the joint velocities (rad/s) first, then the task slack (m/s) when the
-program has one. ``A`` always has 2 rows (the planar task), ``P`` is positive definite (``w_E > 0``,
+program has one. ``A`` has one row per task dimension (2 planar, 3 position, 6 pose), ``P`` is
+positive definite (``w_E > 0``,
 ``w_S > 0``), so the optimum is unique. Bounds are either finite on both sides or absent (+-inf).
 """
 
@@ -56,7 +57,7 @@ class QP:
 
     @property
     def n_slack(self) -> int:
-        """Number of slack variables (0 or 2)."""
+        """Number of slack variables (0, or one per task row)."""
         return self.n - self.n_joints
 
     @property

@@ -23,9 +23,30 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
-from .kernels import ArmData
+from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData
+from .serial import SerialArm
+from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 
-PRESETS = ("task1", "task2")
+PLANAR_PRESETS = ("task1", "task2")
+"""The brief's planar tasks (Tables 1 and 2)."""
+SPATIAL_PRESETS = ("panda", "ur5")
+"""Spatial arms: Franka Emika Panda (modified DH) and Universal Robots UR5 (standard DH)."""
+PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS
+
+
+class Task(StrEnum):
+    """What the controller tracks: the planar tip, or a spatial arm's position or pose."""
+
+    PLANAR = "planar"  # 2 rows: tip position in the plane
+    POSITION = "position"  # 3 rows: end-effector position
+    POSE = "pose"  # 6 rows: position and orientation (rotation vector of R_goal R^T)
+
+
+TASK_ROWS = {Task.PLANAR: 2, Task.POSITION: 3, Task.POSE: 6}
+TASK_CODES = {Task.PLANAR: TASK_PLANAR, Task.POSITION: TASK_POSITION, Task.POSE: TASK_POSE}
+AXES = ("all", "trans", "rot")
+SPATIAL_ONLY = ("arm.dh", "arm.convention", "arm.tool", "motion.task", "motion.axes")
+"""Keys of spatial arms only (a planar scenario neither needs nor writes them)."""
 
 
 class Policy(StrEnum):
@@ -44,8 +65,9 @@ class ScenarioWarning(UserWarning):
 
 
 # ---------------------------------------------------------------------------------------- schema
-# kind: "joints" (n values, scalar allowed), "vec2" (2 values, scalar allowed for kp only),
-# "number", "str". Missing optional keys take the default (the brief's values).
+# kind: "joints" (n values, scalar allowed), "task" (one value per task row: 2 planar, 3 position,
+# 6 pose), "dh" (n rows of 4), "vec3", "number", "str". Missing optional keys take the default
+# (the brief's values); "" marks a key that is optional without a default.
 @dataclass(frozen=True)
 class _Key:
     kind: str
@@ -55,7 +77,10 @@ class _Key:
 
 SCHEMA: dict[str, dict[str, _Key]] = {
     "arm": {
-        "lengths": _Key("joints", scalar_ok=False),
+        "lengths": _Key("joints", "", scalar_ok=False),
+        "dh": _Key("dh", ""),
+        "convention": _Key("str", "standard"),
+        "tool": _Key("vec3", [0.0, 0.0, 0.0]),
         "q_min": _Key("joints"),
         "q_max": _Key("joints"),
         "qd_min": _Key("joints"),
@@ -63,9 +88,11 @@ SCHEMA: dict[str, dict[str, _Key]] = {
     },
     "motion": {
         "q0": _Key("joints", scalar_ok=False),
-        "goal": _Key("vec2", scalar_ok=False),
+        "task": _Key("str", ""),
+        "axes": _Key("str", "all"),
+        "goal": _Key("task", scalar_ok=False),
         "dt": _Key("number", 0.05),
-        "kp": _Key("vec2", 1.0),
+        "kp": _Key("task", 1.0),
         "tolerance": _Key("number", 1e-3),
         "max_time": _Key("number", 30.0),
     },
@@ -74,7 +101,7 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "manipulability": _Key("number", 5.0),
         "slack": _Key("number", 10.0),
     },
-    "slack": {"min": _Key("vec2", [-1.0, -1.0]), "max": _Key("vec2", [1.0, 1.0])},
+    "slack": {"min": _Key("task", -1.0), "max": _Key("task", 1.0)},
     "damper": {
         "influence": _Key("joints", 0.785398),
         "stop": _Key("joints", 0.0872665),
@@ -93,9 +120,14 @@ def _frozen(values: Any) -> Vector:
 # ---------------------------------------------------------------------------------- sections
 @dataclass(frozen=True, eq=False)
 class ArmSpec:
-    """Link lengths (m), joint limits ``q_min, q_max`` (rad) and velocity limits (rad/s), per joint."""
+    """The arm: planar link ``lengths`` (m), or spatial DH rows ``dh`` (``[a, alpha, d, offset]``;
+    m, rad) with their ``convention`` and the ``tool`` translation (m); joint limits ``q_min,
+    q_max`` (rad) and velocity limits (rad/s), per joint."""
 
-    lengths: Vector
+    lengths: Vector | None
+    dh: Vector | None
+    convention: str
+    tool: Vector
     q_min: Vector
     q_max: Vector
     qd_min: Vector
@@ -104,9 +136,13 @@ class ArmSpec:
 
 @dataclass(frozen=True, eq=False)
 class Motion:
-    """Start ``q0`` (rad), goal (m), sampling time ``dt`` (s), gain ``kp`` (1/s, diagonal), stop rules."""
+    """Start ``q0`` (rad), the ``task`` and its goal (m; a pose's orientation as a rotation vector,
+    rad), the manipulability's Jacobian rows ``axes``, sampling time ``dt`` (s), gain ``kp`` (1/s,
+    diagonal), stop rules."""
 
     q0: Vector
+    task: Task
+    axes: str
     goal: Vector
     dt: float
     kp: Vector
@@ -164,36 +200,75 @@ class Scenario:
     @property
     def n(self) -> int:
         """Number of joints."""
-        return int(self.arm.lengths.size)
+        return int(self.arm.q_min.size)
+
+    @property
+    def spatial(self) -> bool:
+        """True for an arm in 3-D (given by DH rows)."""
+        return self.arm.dh is not None
+
+    @property
+    def nt(self) -> int:
+        """Number of task rows: 2 (planar), 3 (position) or 6 (pose)."""
+        return TASK_ROWS[self.motion.task]
+
+    @property
+    def task_code(self) -> int:
+        """The task as the kernels know it (``core.kernels.TASK_*``)."""
+        return TASK_CODES[self.motion.task]
 
     @property
     def redundant(self) -> bool:
-        """True when the arm has more joints than the 2 task dimensions."""
-        return self.n > 2
+        """True when the arm has more joints than task rows."""
+        return self.n > self.nt
 
     @cached_property
     def planar_arm(self) -> PlanarArm:
-        """The kinematic model of this scenario's arm."""
+        """The kinematic model of this scenario's planar arm."""
+        if self.arm.lengths is None:
+            raise ScenarioError(self.source, "arm", "is a spatial arm (arm.dh), not a planar one")
         return PlanarArm(self.arm.lengths)
+
+    @cached_property
+    def serial_arm(self) -> SerialArm:
+        """The kinematic model of this scenario's spatial arm."""
+        if self.arm.dh is None:
+            raise ScenarioError(
+                self.source, "arm", "is a planar arm (arm.lengths), not a spatial one"
+            )
+        return SerialArm(self.arm.dh, self.arm.convention, self.arm.tool)  # type: ignore[arg-type]
+
+    @property
+    def link_lengths(self) -> Vector:
+        """Length of each link (m): the planar lengths, or ``hypot(a, d)`` of each DH row."""
+        if self.arm.lengths is not None:
+            return self.arm.lengths
+        return np.hypot(self.arm.dh[:, 0], self.arm.dh[:, 2])  # type: ignore[index]
 
     @cached_property
     def arm_data(self) -> ArmData:
         """The arm, its limits and dampers as input of the compiled kernels."""
         a, d = self.arm, self.damper
+        rows = {"all": ROWS_ALL, "trans": ROWS_TRANS, "rot": ROWS_ROT}[self.motion.axes]
+        tool = np.eye(4)
+        tool[:3, 3] = a.tool
+
+        def f64(x: Any) -> Vector:
+            return np.array(x, dtype=float)
+
         return ArmData(
-            *(
-                np.array(x, dtype=float)
-                for x in (
-                    a.lengths,
-                    a.q_min,
-                    a.q_max,
-                    a.qd_min,
-                    a.qd_max,
-                    d.influence,
-                    d.stop,
-                    d.gain,
-                )
-            )
+            f64(self.link_lengths),
+            f64(a.q_min),
+            f64(a.q_max),
+            f64(a.qd_min),
+            f64(a.qd_max),
+            f64(d.influence),
+            f64(d.stop),
+            f64(d.gain),
+            f64(a.dh if a.dh is not None else np.zeros((0, 4))),
+            a.convention == "modified",
+            tool,
+            rows,
         )
 
     @property
@@ -206,7 +281,12 @@ class Scenario:
         out: dict[str, Any] = {"name": self.name}
         for section in SCHEMA:
             obj = getattr(self, section)
-            out[section] = {key: _plain(getattr(obj, key)) for key in SCHEMA[section]}
+            out[section] = {
+                key: _plain(getattr(obj, key))
+                for key in SCHEMA[section]
+                if getattr(obj, key) is not None
+                and (self.spatial or f"{section}.{key}" not in SPATIAL_ONLY)
+            }
         return out
 
     def to_toml(self) -> str:
@@ -237,18 +317,39 @@ class Scenario:
                     f"unknown key (known: name, {known})",
                 )
             data[section][key] = value
-        lengths = overrides.get("arm.lengths")
-        if isinstance(lengths, list) and len(lengths) != self.n:
-            self._resize(data, overrides, len(lengths))
+        for key in ("arm.lengths", "arm.dh"):
+            rows = overrides.get(key)
+            if (key == "arm.dh") != self.spatial:
+                continue  # the other kind of arm: scenario_from_dict names the conflict
+            if isinstance(rows, list) and len(rows) != self.n:
+                self._resize(data, overrides, len(rows), key)
+        task = overrides.get("motion.task")
+        if isinstance(task, str) and task in Task.__members__.values() and task != self.motion.task:
+            for section, keys in SCHEMA.items():  # per-row values follow when they are uniform
+                for key, spec in keys.items():
+                    dotted = f"{section}.{key}"
+                    if spec.kind == "task" and spec.scalar_ok and dotted not in overrides:
+                        values = data[section][key]
+                        if len(set(values)) != 1:
+                            raise ScenarioError(
+                                self.source,
+                                "motion.task",
+                                f"changes the task rows, and {dotted} differs per row: set "
+                                f"{dotted} as well",
+                            )
+                        data[section][key] = values[0]
         return scenario_from_dict(data, source=self.source)
 
-    def _resize(self, data: dict[str, Any], overrides: Mapping[str, Any], n: int) -> None:
-        """``arm.lengths`` overridden with another number of joints: the per-joint values not
-        overridden follow when they are one value for every joint, else the lengths are blamed."""
+    def _resize(self, data: dict[str, Any], overrides: Mapping[str, Any], n: int, by: str) -> None:
+        """``arm.lengths`` (or ``arm.dh``) overridden with another number of joints: the per-joint
+        values not overridden follow when they are one value for every joint, else ``by`` is
+        blamed."""
         for section, keys in SCHEMA.items():
             for key, spec in keys.items():
                 dotted = f"{section}.{key}"
-                if spec.kind != "joints" or dotted in overrides or dotted == "arm.lengths":
+                if spec.kind != "joints" or dotted in overrides or key not in data[section]:
+                    continue
+                if dotted in ("arm.lengths", "arm.dh"):
                     continue
                 values = data[section][key]
                 if spec.scalar_ok and len(set(values)) == 1:
@@ -256,7 +357,7 @@ class Scenario:
                 else:
                     raise ScenarioError(
                         self.source,
-                        "arm.lengths",
+                        by,
                         f"gives {n} joints where the scenario has {self.n}, and {dotted} "
                         f"differs per joint: set {dotted} ({n} values) as well",
                     )
@@ -274,8 +375,8 @@ _SECTION_TYPES: dict[str, Callable[..., Any]] = {
 
 def _plain(value: Any) -> Any:
     if isinstance(value, np.ndarray):
-        return [float(v) for v in value]
-    return value
+        return [_plain(v) if isinstance(v, np.ndarray) else float(v) for v in value]
+    return str(value) if isinstance(value, StrEnum) else value
 
 
 def _toml_value(value: Any) -> str:
@@ -307,6 +408,16 @@ class _Checker:
         if not math.isfinite(number):
             raise self.fail(key, f"must be finite, got {value}")
         return number
+
+    def table(self, key: str, value: Any, rows: int, cols: int) -> Vector:
+        if not isinstance(value, list) or len(value) != rows:
+            raise self.fail(key, f"must be a list of {rows} rows of {cols} numbers")
+        out = []
+        for i, row in enumerate(value):
+            if not isinstance(row, list) or len(row) != cols:
+                raise self.fail(f"{key}[{i}]", f"must be a row of {cols} numbers, got {_show(row)}")
+            out.append([self.number(f"{key}[{i}][{j}]", v) for j, v in enumerate(row)])
+        return _frozen(out)
 
     def vector(self, key: str, value: Any, size: int, scalar_ok: bool) -> Vector:
         if isinstance(value, list):
@@ -354,12 +465,37 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                         f"unknown key (known in [{key}]: {', '.join(SCHEMA[key])})",
                     )
 
-    raw_lengths = data.get("arm", {}).get("lengths")
-    if raw_lengths is None:
-        raise check.fail("arm.lengths", "is required")
-    if not isinstance(raw_lengths, list) or len(raw_lengths) < 2:
-        raise check.fail("arm.lengths", "must be a list of at least 2 link lengths")
-    n = len(raw_lengths)
+    raw_arm = data.get("arm", {})
+    raw_lengths, raw_dh = raw_arm.get("lengths"), raw_arm.get("dh")
+    if raw_lengths is not None and raw_dh is not None:
+        raise check.fail(
+            "arm.dh", "a planar arm has arm.lengths, a spatial one arm.dh: give one of them"
+        )
+    spatial = raw_dh is not None
+    if spatial:
+        if not isinstance(raw_dh, list) or len(raw_dh) < 1:
+            raise check.fail(
+                "arm.dh", "must be a list of rows [a, alpha, d, offset], one per joint"
+            )
+        n = len(raw_dh)
+    else:
+        if raw_lengths is None:
+            raise check.fail("arm.lengths", "is required (or arm.dh for a spatial arm)")
+        if not isinstance(raw_lengths, list) or len(raw_lengths) < 2:
+            raise check.fail("arm.lengths", "must be a list of at least 2 link lengths")
+        n = len(raw_lengths)
+        for dotted in SPATIAL_ONLY:
+            section, key = dotted.split(".")
+            if key in data.get(section, {}):
+                raise check.fail(dotted, "is for spatial arms only (given by arm.dh)")
+    raw_task = data.get("motion", {}).get("task", "pose" if spatial else "planar")
+    tasks = ("position", "pose") if spatial else ("planar",)
+    if raw_task not in tasks:
+        raise check.fail(
+            "motion.task", f"must be {' or '.join(repr(t) for t in tasks)}, got {_show(raw_task)}"
+        )
+    task = Task(raw_task)
+    nt = TASK_ROWS[task]
 
     parsed: dict[str, dict[str, Any]] = {}
     for section, keys in SCHEMA.items():
@@ -370,16 +506,33 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
             value = raw_section.get(key, spec.default)
             if value is None:
                 raise check.fail(dotted, "is required")
-            if spec.kind == "joints":
+            if value == "" and spec.kind != "str":
+                parsed[section][key] = None
+            elif spec.kind == "joints":
                 parsed[section][key] = check.vector(dotted, value, n, spec.scalar_ok)
-            elif spec.kind == "vec2":
-                parsed[section][key] = check.vector(dotted, value, 2, spec.scalar_ok)
+            elif spec.kind == "task":
+                parsed[section][key] = check.vector(dotted, value, nt, spec.scalar_ok)
+            elif spec.kind == "vec3":
+                parsed[section][key] = check.vector(dotted, value, 3, False)
+            elif spec.kind == "dh":
+                parsed[section][key] = check.table(dotted, value, n, 4)
             elif spec.kind == "number":
                 parsed[section][key] = check.number(dotted, value)
             else:
                 if not isinstance(value, str):
                     raise check.fail(dotted, f"must be a string, got {_show(value)}")
                 parsed[section][key] = value
+    parsed["motion"]["task"] = task
+    if parsed["arm"]["convention"] not in ("standard", "modified"):
+        raise check.fail(
+            "arm.convention",
+            f'must be "standard" or "modified", got {_show(parsed["arm"]["convention"])}',
+        )
+    if parsed["motion"]["axes"] not in AXES:
+        raise check.fail(
+            "motion.axes",
+            f"must be one of {', '.join(AXES)}, got {_show(parsed['motion']['axes'])}",
+        )
 
     warnings_found = _check_consistency(check, parsed, n)
     parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
@@ -390,6 +543,8 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
 
 RANGES: dict[str, tuple[float, float, str]] = {
     "arm.lengths": (1e-6, 1e6, " m"),
+    "arm.dh": (-1e6, 1e6, " (m or rad)"),
+    "arm.tool": (-1e6, 1e6, " m"),
     "arm.q_min": (-1e6, 1e6, " rad"),
     "arm.q_max": (-1e6, 1e6, " rad"),
     "arm.qd_min": (-1e6, 1e6, " rad/s"),
@@ -416,7 +571,9 @@ def _check_ranges(check: _Checker, p: dict[str, dict[str, Any]]) -> None:
     """Values that are valid in sign but make the program meaningless, with their valid range."""
     for dotted, (low, high, unit) in RANGES.items():
         section, key = dotted.split(".")
-        values = np.atleast_1d(p[section][key])
+        if p[section][key] is None:
+            continue
+        values = np.atleast_1d(p[section][key]).ravel()
         bad = (values < low) | (values > high)
         if np.any(bad):
             value = values[int(np.argmax(bad))]
@@ -458,7 +615,8 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
                 dotted, f"must be > 0, got {_fmt(arr) if arr.size > 1 else f'{arr[0]:g}'}"
             )
 
-    positive("arm.lengths", arm["lengths"])
+    if arm["lengths"] is not None:
+        positive("arm.lengths", arm["lengths"])
     if np.any(arm["q_min"] >= arm["q_max"]):
         j = int(np.argmax(arm["q_min"] >= arm["q_max"]))
         raise check.fail(
@@ -536,14 +694,24 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
             "damper: max |qd| * dt > influence - stop: a joint outside its influence zone can "
             "cross the zone and the stop distance in one step"
         )
-    lengths = arm["lengths"]
-    radius = float(np.hypot(*motion["goal"]))
-    reach, inner = float(lengths.sum()), max(0.0, float(2 * lengths.max() - lengths.sum()))
-    if radius > reach or radius < inner:
-        found.append(
-            f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
-            f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached"
-        )
+    if arm["lengths"] is not None:
+        lengths = arm["lengths"]
+        radius = float(np.hypot(*motion["goal"]))
+        reach, inner = float(lengths.sum()), max(0.0, float(2 * lengths.max() - lengths.sum()))
+        if radius > reach or radius < inner:
+            found.append(
+                f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
+                f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached"
+            )
+    else:
+        dh = arm["dh"]
+        reach = float(np.sum(np.abs(dh[:, 0]) + np.abs(dh[:, 2])) + np.linalg.norm(arm["tool"]))
+        radius = float(np.linalg.norm(motion["goal"][:3]))
+        if radius > reach:
+            found.append(
+                f"motion.goal: {_fmt(motion['goal'][:3])} is {radius:g} m from the base, beyond "
+                f"the arm's reach ({reach:g} m, the sum of its links): the goal cannot be reached"
+            )
     return found
 
 

@@ -142,7 +142,7 @@ def with_links(scenario: Scenario, n: int) -> Scenario:
     for section in ("arm", "damper"):
         for key, value in data[section].items():
             data[section][key] = value[0]
-    data["arm"]["lengths"] = [float(scenario.arm.lengths.sum()) / n] * n
+    data["arm"]["lengths"] = [float(scenario.link_lengths.sum()) / n] * n
     q0 = scenario.motion.q0
     start = np.array([float(q0[0])] + [float(q0[1:].sum()) / (n - 1)] * (n - 1))
     margin = scenario.damper.stop[0] + 1e-3
@@ -282,7 +282,7 @@ def ellipse_scale(scenario: Scenario) -> float:
     length from joint ``j`` to the tip, reached when the arm is stretched; that ellipse is drawn
     ``ELLIPSE_SHARE`` of the reach long, so sizes compare across runs, drags and time.
     """
-    lengths = scenario.arm.lengths
+    lengths = scenario.link_lengths
     tips = np.cumsum(lengths[::-1])[::-1]
     return ELLIPSE_SHARE * float(lengths.sum()) / float(np.sqrt(tips @ tips))
 
@@ -345,7 +345,7 @@ def scene_data(run: Run, scale: float) -> tuple[dict[str, np.ndarray], dict[str,
     """
     sc = run.scenario
     K, n = run.steps, sc.n
-    pts = joint_positions(sc.arm.lengths, run.q)
+    pts = joint_positions(sc.link_lengths, run.q)
     codes = np.full((K + 1, n + 1), TIP, dtype=np.int8)
     codes[:, :n] = joint_states(run)
     ew, eh, ea = ellipses(pts, scale)

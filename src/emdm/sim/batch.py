@@ -23,6 +23,7 @@ from ..core.scenario import Policy, Scenario
 from .loop import (
     REACHED,
     TIMEOUT,
+    WARM_UP_PRESETS,
     Exit,
     Motion,
     _warm_up,
@@ -51,11 +52,12 @@ def run_share(
 ) -> None:
     """Runs ``first, first + stride, ...`` with one record and one set of buffers."""
     runs, n = q0s.shape
-    nx = prog.s_min.size + n if prog.slack else n
-    rec = new_record(motion.n_steps, n)
-    work = step_work(n, nx)
+    nt = goals.shape[1]
+    nx = nt + n if prog.slack else n
+    rec = new_record(motion.n_steps, n, nt)
+    work = step_work(n, nx, nt)
     for r in range(first, runs, stride):
-        task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps)
+        task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps, motion.task)
         for j in range(n):
             rec.q[0, j] = q0s[r, j]
         code, k = run_kernel(arm, task, prog, True, True, rec, 0, work)
@@ -94,7 +96,7 @@ def _warm_up_batch() -> None:
     """Compile (or load) the batch kernel on a two-step run of each kind of program."""
     from ..core.scenario import load_scenario
 
-    for task in ("task1", "task2"):
+    for task in WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in ("UC-IVKC", "C-EMDM"):
             q0s = np.array([sc.motion.q0], dtype=float)
@@ -120,6 +122,7 @@ class BatchResult:
     total_effort: F64
     final_error: F64
     max_abs_qd: F64
+    final_manipulability: F64
     reference_runs: NDArray[np.int64]
 
     def outcomes(self) -> dict[str, np.ndarray]:
@@ -139,8 +142,9 @@ def simulate_batch(
 ) -> BatchResult:
     """Many closed-loop runs of ``controller``, in parallel on every core.
 
-    ``goals`` (R x 2, m) and ``q0s`` (R x n, rad) default to the scenario's; either may be given
-    alone (one row is broadcast). The outcomes equal those of :func:`emdm.simulate` run by run.
+    ``goals`` (R x task rows: m, and rad for a pose's orientation) and ``q0s`` (R x n, rad)
+    default to the scenario's; either may be given alone (one row is broadcast). The outcomes
+    equal those of :func:`emdm.simulate` run by run.
     """
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     ensure_compiled(_warm_up)
@@ -149,7 +153,7 @@ def simulate_batch(
     g = np.atleast_2d(np.asarray(goals if goals is not None else scenario.motion.goal, dtype=float))
     q = np.atleast_2d(np.asarray(q0s if q0s is not None else scenario.motion.q0, dtype=float))
     runs = max(g.shape[0], q.shape[0])
-    g = np.ascontiguousarray(np.broadcast_to(g, (runs, 2)))
+    g = np.ascontiguousarray(np.broadcast_to(g, (runs, scenario.nt)))
     q = np.ascontiguousarray(np.broadcast_to(q, (runs, n)))
     out = np.empty((runs, len(OUTCOMES)))
     codes = np.full(runs, Exit.HANDOFF, dtype=np.int64)

@@ -38,14 +38,14 @@ from ..core.kernels import (
     ProgramData,
     build_program,
     kin_work,
-    kinematics,
+    task_kinematics,
     task_scale,
 )
 from ..core.problem import QP
 from ..core.scenario import Policy, Scenario
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
-from ..solvers.kernels import OK, QPWork, active_set, qp_work
+from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, qp_work
 
 F64 = NDArray[np.float64]
 
@@ -66,13 +66,16 @@ REACHED, TIMEOUT, HANDOFF, FULL = (int(e) for e in Exit)  # IntEnum does not cro
 
 
 class Motion(NamedTuple):
-    """The task as kernel input: goal (m), gain (1/s, per axis), dt (s), tolerance (m), steps."""
+    """The task as kernel input: goal (m; a pose's orientation as a rotation vector, rad), gain
+    (1/s, per task row), dt (s), tolerance (m, and rad for a pose), steps, and the kind of task
+    (``core.kernels.TASK_*``)."""
 
     goal: F64
     kp: F64
     dt: float
     tolerance: float
     n_steps: int
+    task: int
 
 
 class Record(NamedTuple):
@@ -115,18 +118,18 @@ class StepWork(NamedTuple):
 
 
 @kernel
-def new_record(cap: int, n: int) -> Record:
-    """A record with room for ``cap`` commands of an ``n``-joint arm."""
+def new_record(cap: int, n: int, nt: int) -> Record:
+    """A record with room for ``cap`` commands of an ``n``-joint arm on an ``nt``-row task."""
     return Record(
         np.empty((cap + 1, n)),
-        np.empty((cap + 1, 2)),
-        np.empty((cap + 1, 2)),
-        np.empty((cap + 1, 2)),
+        np.empty((cap + 1, nt)),
+        np.empty((cap + 1, nt)),
+        np.empty((cap + 1, nt)),
         np.empty(cap + 1),
         np.empty((cap, n)),
         np.empty(cap),
         np.empty(cap),
-        np.zeros((cap, 2)),
+        np.zeros((cap, nt)),
         np.empty(cap),
         np.empty((cap, n)),
         np.empty((cap, n)),
@@ -139,17 +142,18 @@ def new_record(cap: int, n: int) -> Record:
 
 
 @kernel
-def step_work(n: int, nx: int) -> StepWork:
-    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables."""
+def step_work(n: int, nx: int, nt: int) -> StepWork:
+    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables and ``nt``
+    task rows."""
     return StepWork(
         kin_work(n),
-        qp_work(nx),
-        np.empty((2, n)),
+        qp_work(nx, nt),
+        np.empty((nt, n)),
         np.empty(n),
         np.empty((nx, nx)),
         np.empty(nx),
-        np.zeros((2, nx)),
-        np.empty(2),
+        np.zeros((nt, nx)),
+        np.empty(nt),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx),
@@ -186,17 +190,20 @@ def run_kernel(
 ) -> tuple[int, int]:
     """Run from state ``k0`` (``rec.q[k0]`` set) until an :class:`Exit`; returns ``(exit, k)``."""
     n = arm.lengths.size
+    nt = rec.p.shape[1]
     if k0 == 0:  # a new run: no working set to try first, so a run never depends on the last
         w.qp.warm[0] = False
     cap = rec.qd.shape[0]
     for k in range(k0, cap + 1):
-        m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
+        m = task_kinematics(
+            arm, motion.task, motion.goal, rec.q[k], rec.p[k], rec.e[k], w.J, w.Jm, w.kin
+        )
         rec.m[k] = m
-        ex = motion.goal[0] - rec.p[k, 0]
-        ey = motion.goal[1] - rec.p[k, 1]
-        rec.e[k, 0], rec.e[k, 1] = ex, ey
-        rec.v[k, 0], rec.v[k, 1] = motion.kp[0] * ex, motion.kp[1] * ey
-        err = math.hypot(ex, ey)
+        err2 = 0.0
+        for i in range(nt):
+            rec.v[k, i] = motion.kp[i] * rec.e[k, i]
+            err2 += rec.e[k, i] * rec.e[k, i]
+        err = math.hypot(rec.e[k, 0], rec.e[k, 1]) if nt == 2 else math.sqrt(err2)
         if err < motion.tolerance:
             return REACHED, k
         if k >= motion.n_steps:
@@ -208,16 +215,29 @@ def run_kernel(
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
             return HANDOFF, k
-        alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
-        if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
-            return HANDOFF, k
-        w.b[0] *= alpha
-        w.b[1] *= alpha
-        start = ticks()
-        code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+        if nt == 2:  # the exact 2-D task scale first (cheap), then the solve
+            alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
+            if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
+                return HANDOFF, k
+            for i in range(nt):
+                w.b[i] *= alpha
+            start = ticks()
+            code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+        else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
+            alpha = 1.0
+            start = ticks()
+            code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+            if code == INFEASIBLE:
+                alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
+                if alpha < 0.0 or not scale_policy:
+                    return HANDOFF, k
+                for i in range(nt):
+                    w.b[i] *= alpha
+                code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
-            w.b[0], w.b[1] = rec.v[k, 0], rec.v[k, 1]  # the nominal program, for the chain
+            for i in range(nt):
+                w.b[i] = rec.v[k, i]  # the nominal program, for the chain
             return HANDOFF, k
         effort = 0.0
         manip = 0.0
@@ -231,7 +251,8 @@ def run_kernel(
         rec.manip[k] = manip
         mark_active(rec.qd[k], w.lb, w.ub, rec.active[k])
         if prog.slack:
-            rec.delta[k, 0], rec.delta[k, 1] = w.x[n], w.x[n + 1]
+            for i in range(nt):
+                rec.delta[k, i] = w.x[n + i]
         rec.alpha[k] = alpha
         rec.iterations[k] = iterations
         rec.ticks[k] = stop - start
@@ -304,22 +325,23 @@ def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
         float(mo.dt),
         float(mo.tolerance),
         scenario.max_steps,
+        scenario.task_code,
     )
 
 
 _local = threading.local()
 
 
-def _work(n: int, nx: int) -> StepWork:
-    """This thread's step buffers for the shape ``(n, nx)``, built once (they hold no result)."""
-    cache: dict[tuple[int, int], StepWork] = _local.__dict__.setdefault("work", {})
-    if (n, nx) not in cache:
-        cache[n, nx] = step_work(n, nx)
-    return cache[n, nx]
+def _work(n: int, nx: int, nt: int) -> StepWork:
+    """This thread's step buffers for the shape ``(n, nx, nt)``, built once (they hold no result)."""
+    cache: dict[tuple[int, int, int], StepWork] = _local.__dict__.setdefault("work", {})
+    if (n, nx, nt) not in cache:
+        cache[n, nx, nt] = step_work(n, nx, nt)
+    return cache[n, nx, nt]
 
 
 def _grow(rec: Record, cap: int, n: int) -> Record:
-    bigger = plain(new_record)(cap, n)
+    bigger = plain(new_record)(cap, n, rec.p.shape[1])
     for old, new in zip(rec, bigger, strict=True):
         old_arr, new_arr = np.asarray(old), np.asarray(new)
         new_arr[: old_arr.shape[0]] = old_arr
@@ -368,16 +390,16 @@ def simulate(
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
     ensure_compiled(_warm_up)
-    n = scenario.n
+    n, nt = scenario.n, scenario.nt
     prog = ctrl.program_data(scenario)
-    nx = n + 2 if prog.slack else n
+    nx = n + nt if prog.slack else n
     arm, motion = scenario.arm_data, motion_data(scenario)
     policy = scenario.controller.on_infeasible
     in_kernel = solver == DEFAULT_SOLVER
     cap = min(motion.n_steps, FIRST_CHUNK)
-    rec = plain(new_record)(cap, n)
+    rec = plain(new_record)(cap, n, nt)
     rec.q[0] = scenario.motion.q0
-    work = _work(n, nx)
+    work = _work(n, nx, nt)
     steps = _Steps()
     k = 0
     while True:
@@ -411,7 +433,7 @@ def _chain_step(
     """Step ``k`` through the policy and the solver chain; its nominal program is in ``w``."""
     n = scenario.n
     nominal = QP(w.P.copy(), w.c.copy(), w.A.copy(), w.b.copy(), w.lb.copy(), w.ub.copy(), n)
-    error_norm = float(math.hypot(rec.e[k, 0], rec.e[k, 1]))
+    error_norm = float(np.linalg.norm(rec.e[k]))
     t = k * scenario.motion.dt
     program = admissible(
         nominal,
@@ -422,7 +444,7 @@ def _chain_step(
     result = solve_chain(program.qp, chain, context=f"step {k} (t = {t:g} s): ", certify=certify)
     x = result.x
     rec.qd[k] = x[:n]
-    rec.delta[k] = x[n : n + 2] if program.qp.n_slack else 0.0
+    rec.delta[k] = x[n : n + scenario.nt] if program.qp.n_slack else 0.0
     mark_active(rec.qd[k], rec.lo[k], rec.hi[k], rec.active[k])
     rec.effort[k] = 0.5 * float(rec.qd[k] @ rec.qd[k])
     rec.manip[k] = float(w.Jm @ rec.qd[k])
@@ -482,20 +504,25 @@ def _run(
     )
 
 
+WARM_UP_PRESETS = ("task1", "task2", "panda", "ur5")
+"""One preset of each kind of task and program: planar (redundant, slack), pose (redundant, slack)."""
+
+
 def _warm_up() -> None:
     """Compile (or load) every kernel of the loop: one short run of each kind of program."""
     from ..core.scenario import load_scenario
 
     seconds_per_tick()
-    for task in ("task1", "task2"):
+    for task in WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in ("UC-IVKC", "C-EMDM"):
             ctrl = get_controller(name)
             prog = ctrl.program_data(sc)
-            nx = sc.n + 2 if prog.slack else sc.n
-            rec = new_record(2, sc.n)
+            nx = sc.n + sc.nt if prog.slack else sc.n
+            rec = new_record(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
-            run_kernel(sc.arm_data, motion_data(sc), prog, True, True, rec, 0, step_work(sc.n, nx))
+            work = step_work(sc.n, nx, sc.nt)
+            run_kernel(sc.arm_data, motion_data(sc), prog, True, True, rec, 0, work)
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

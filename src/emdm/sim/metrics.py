@@ -29,6 +29,7 @@ OUTCOMES = (
     "total_effort",
     "final_error",
     "max_abs_qd",
+    "final_manipulability",
 )
 """The outcomes :func:`outcomes` writes, in order."""
 
@@ -37,10 +38,11 @@ OUTCOMES = (
 def outcomes(
     m: F64, effort: F64, qd: F64, e: F64, K: int, reached: bool, dt: float, out: F64
 ) -> None:
-    """``out[:8]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
+    """``out[:9]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
 
     ``time_to_goal = K dt`` (NaN when not reached); ``total_effort = sum_k E(qd_k) dt``
-    (rad^2/s); ``final_error = ||e_K||`` (m); manipulability over the states ``0..K``.
+    (rad^2/s); ``final_error = ||e_K||`` (m; and rad for a pose); manipulability over the states
+    ``0..K``, and at state ``K``.
     """
     mmin, msum = math.inf, 0.0
     for k in range(K + 1):
@@ -58,8 +60,15 @@ def outcomes(
     out[3] = mmin
     out[4] = msum / (K + 1)
     out[5] = total * dt
-    out[6] = math.hypot(e[K, 0], e[K, 1])
+    if e.shape[1] == 2:
+        out[6] = math.hypot(e[K, 0], e[K, 1])
+    else:
+        acc = 0.0
+        for i in range(e.shape[1]):
+            acc += e[K, i] * e[K, i]
+        out[6] = math.sqrt(acc)
     out[7] = qmax
+    out[8] = m[K]
 
 
 def metrics(run: Run) -> dict[str, Any]:
@@ -86,13 +95,13 @@ def metrics(run: Run) -> dict[str, Any]:
         "final_error": base["final_error"],
         "min_manipulability": base["min_manipulability"],
         "mean_manipulability": base["mean_manipulability"],
-        "final_manipulability": float(run.m[-1]),
+        "final_manipulability": base["final_manipulability"],
         "total_effort": base["total_effort"],
         "mean_manip_rate": float(run.manip_rate.mean()) if has_cmd else 0.0,
         "max_abs_qd": base["max_abs_qd"],
         "min_joint_margin": float(margin.min()),
         "min_stop_margin": float((margin - sc.damper.stop).min()),
-        "path_length": float(np.linalg.norm(np.diff(run.p, axis=0), axis=1).sum()),
+        "path_length": float(np.linalg.norm(np.diff(run.p[:, :3], axis=0), axis=1).sum()),
         "scaled_steps": int(np.count_nonzero(run.alpha < 1.0)),
         "min_alpha": float(run.alpha.min()) if has_cmd else 1.0,
         "slack_steps": int(np.count_nonzero(np.any(run.delta != 0.0, axis=1))),

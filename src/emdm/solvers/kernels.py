@@ -1,8 +1,9 @@
 """The compiled solver and certificate: the primal active-set method and the KKT residuals.
 
-Programs have the form ``min 1/2 x^T P x + c^T x  s.t.  A x = b (2 rows), lb <= x <= ub``.
+Programs have the form ``min 1/2 x^T P x + c^T x  s.t.  A x = b (nt rows), lb <= x <= ub``,
+with ``nt`` = 2 for a planar task, 3 for a position and 6 for a pose.
 
-:func:`active_set` is Nocedal & Wright's Algorithm 16.3 specialised to two equality rows and simple
+:func:`active_set` is Nocedal & Wright's Algorithm 16.3 specialised to equality rows and simple
 bounds (see :mod:`emdm.solvers.active_set` for the method); it starts from the exact feasible point
 of :func:`emdm.core.kernels.feasible_point` and returns the multipliers of its final working set.
 
@@ -38,6 +39,7 @@ from ..core.kernels import (
     feas_work,
     feasible_point,
     free_rank,
+    solve_in_place,
 )
 
 F64 = NDArray[np.float64]
@@ -79,19 +81,19 @@ class QPWork(NamedTuple):
 
 
 @kernel
-def qp_work(nx: int) -> QPWork:
-    """Buffers for programs with ``nx`` variables and two equality rows."""
-    cols = 4 + 2 * nx
+def qp_work(nx: int, nt: int) -> QPWork:
+    """Buffers for programs with ``nx`` variables and ``nt`` equality rows."""
+    cols = 2 * nt + 2 * nx
     return QPWork(
-        feas_work(nx),  # compiled here; a Python caller of qp_work.py_func gets it boxed once
+        feas_work(nx, nt),  # compiled here; a Python caller of qp_work.py_func gets it boxed once
         np.empty(nx, dtype=np.int8),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx, dtype=np.int64),
-        np.empty((nx + 2, nx + 2)),
-        np.empty(nx + 2),
-        np.empty(2),
+        np.empty((nx + nt, nx + nt)),
+        np.empty(nx + nt),
+        np.empty(nt),
         np.empty(nx),
         np.empty((nx, cols)),
         np.empty(cols),
@@ -105,35 +107,6 @@ def qp_work(nx: int) -> QPWork:
     )
 
 
-@kernel
-def _solve_in_place(K: F64, rhs: F64, size: int) -> bool:
-    """Gaussian elimination with partial pivoting on ``K[:size, :size]``; ``rhs`` becomes the
-    solution. False for a singular matrix."""
-    for col in range(size):
-        piv = col
-        for r in range(col + 1, size):
-            if abs(K[r, col]) > abs(K[piv, col]):
-                piv = r
-        if K[piv, col] == 0.0:
-            return False
-        if piv != col:
-            for c in range(size):
-                K[col, c], K[piv, c] = K[piv, c], K[col, c]
-            rhs[col], rhs[piv] = rhs[piv], rhs[col]
-        for r in range(col + 1, size):
-            f = K[r, col] / K[col, col]
-            if f != 0.0:
-                for c in range(col, size):
-                    K[r, c] -= f * K[col, c]
-                rhs[r] -= f * rhs[col]
-    for r in range(size - 1, -1, -1):
-        s = rhs[r]
-        for c in range(r + 1, size):
-            s -= K[r, c] * rhs[c]
-        rhs[r] = s / K[r, r]
-    return True
-
-
 # ------------------------------------------------------------------------------ certificate
 @kernel
 def kkt_residuals(
@@ -145,6 +118,7 @@ def kkt_residuals(
     multiplier of a bound that does not exist counts in full as complementarity (dual infeasible).
     """
     n = x.size
+    nt = A.shape[0]
     scale_g = 1.0
     stat = 0.0
     comp = 0.0
@@ -152,10 +126,11 @@ def kkt_residuals(
         px = 0.0
         for i in range(n):
             px += P[j, i] * x[i]
-        a0 = A[0, j] * lam[0]
-        a1 = A[1, j] * lam[1]
+        alam = 0.0
+        for i in range(nt):
+            alam += A[i, j] * lam[i]
         scale_g = max(scale_g, abs(px), abs(c[j]))
-        stat = max(stat, abs(px + c[j] - a0 - a1 - mu[j]))
+        stat = max(stat, abs(px + c[j] - alam - mu[j]))
         if mu[j] > 0:
             gap = x[j] - lb[j] if math.isfinite(lb[j]) else math.inf
         elif mu[j] < 0:
@@ -169,7 +144,7 @@ def kkt_residuals(
     scale_eq = 1.0
     eq = 0.0
     excess = 0.0
-    for i in range(2):
+    for i in range(nt):
         ax = 0.0
         aax = 0.0
         for j in range(n):
@@ -247,9 +222,11 @@ def best_multipliers(
     """Sign-feasible ``(lam, mu)`` over the bounds active at ``x`` that fit ``P x + c`` best.
 
     Non-negative least squares (Lawson and Hanson) on the columns ``[A^T, -A^T, e_lo, -e_hi]``
-    (``lam = lam+ - lam-``), the same problem as the reference certificate of the tests.
+    (``lam = lam+ - lam-``, one pair of columns per task row), the same problem as the
+    reference certificate of the tests.
     """
     n = x.size
+    nt = A.shape[0]
     M, z, s, wv, r, passive, B, g = w.M, w.z, w.s, w.w, w.r, w.passive, w.B, w.g
     skip = w.skip
     for j in range(n):
@@ -257,12 +234,12 @@ def best_multipliers(
         for i in range(n):
             acc += P[j, i] * x[i]
         g[j] = acc
-    cols = 4
+    cols = 2 * nt
     for j in range(n):
         for k in range(M.shape[1]):
             M[j, k] = 0.0
-        M[j, 0], M[j, 1] = A[0, j], A[1, j]
-        M[j, 2], M[j, 3] = -A[0, j], -A[1, j]
+        for i in range(nt):
+            M[j, i], M[j, nt + i] = A[i, j], -A[i, j]
     for j in range(n):
         if math.isfinite(lb[j]) and x[j] - lb[j] <= ACTIVE_TOL * (1.0 + abs(lb[j])):
             M[j, cols] = 1.0
@@ -339,11 +316,11 @@ def best_multipliers(
             for k in range(cols):
                 acc -= Mv[j, k] * zv[k]
             r[j] = acc
-    lam[0] = zv[0] - zv[2]
-    lam[1] = zv[1] - zv[3]
+    for i in range(nt):
+        lam[i] = zv[i] - zv[nt + i]
     for j in range(n):
         mu[j] = 0.0
-    for k in range(4, cols):
+    for k in range(2 * nt, cols):
         for j in range(n):
             if Mv[j, k] != 0.0:
                 mu[j] += Mv[j, k] * zv[k]
@@ -381,8 +358,9 @@ def active_set(
 
 @kernel
 def _kkt_matrix(P: F64, A: F64, idx: NDArray[np.int64], f: int, K: F64) -> None:
-    """``K[:f+2, :f+2] = [[P_FF, -A_F^T], [A_F, 0]]`` for the free variables ``idx[:f]``."""
-    size = f + 2
+    """``K[:f+nt, :f+nt] = [[P_FF, -A_F^T], [A_F, 0]]`` for the free variables ``idx[:f]``."""
+    nt = A.shape[0]
+    size = f + nt
     for r in range(size):
         for cc in range(size):
             K[r, cc] = 0.0
@@ -390,10 +368,9 @@ def _kkt_matrix(P: F64, A: F64, idx: NDArray[np.int64], f: int, K: F64) -> None:
         j = idx[a]
         for a2 in range(f):
             K[a, a2] = P[j, idx[a2]]
-        K[a, f] = -A[0, j]
-        K[a, f + 1] = -A[1, j]
-        K[f, a] = A[0, j]
-        K[f + 1, a] = A[1, j]
+        for i in range(nt):
+            K[a, f + i] = -A[i, j]
+            K[f + i, a] = A[i, j]
 
 
 @kernel
@@ -406,6 +383,7 @@ def _warm_start(
     within :data:`KKT_TOL`. ``x`` is overwritten either way."""
     work, snap, idx, K, rhs, lam, mu = w.work, w.snap, w.idx, w.K, w.rhs, w.lam, w.mu
     n = x.size
+    nt = A.shape[0]
     f = 0
     for j in range(n):
         a = abs(lb[j]) if math.isfinite(lb[j]) else 0.0
@@ -422,14 +400,15 @@ def _warm_start(
         else:
             idx[f] = j
             f += 1
-    if f < 2:
+    if f < nt:
         return False
-    size = f + 2
-    r0, r1 = b[0], b[1]
-    for j in range(n):
-        if work[j] != 0:
-            r0 -= A[0, j] * x[j]
-            r1 -= A[1, j] * x[j]
+    size = f + nt
+    for i in range(nt):
+        acc = b[i]
+        for j in range(n):
+            if work[j] != 0:
+                acc -= A[i, j] * x[j]
+        rhs[f + i] = acc
     _kkt_matrix(P, A, idx, f, K)
     for a in range(f):
         j = idx[a]
@@ -438,8 +417,7 @@ def _warm_start(
             if work[i] != 0:
                 acc += P[j, i] * x[i]
         rhs[a] = -acc
-    rhs[f], rhs[f + 1] = r0, r1
-    if not _solve_in_place(K, rhs, size):
+    if not solve_in_place(K, rhs, size):
         return False
     for a in range(f):
         j = idx[a]
@@ -455,14 +433,20 @@ def _warm_start(
                 return False
             v = ub[j]
         x[j] = v
-    lam[0], lam[1] = rhs[f], rhs[f + 1]
+    for i in range(nt):
+        lam[i] = rhs[f + i]
     gmax = 0.0
     for j in range(n):
         acc = c[j]
         for i in range(n):
             acc += P[j, i] * x[i]
         gmax = max(gmax, abs(acc))
-        mu[j] = acc - A[0, j] * lam[0] - A[1, j] * lam[1] if work[j] != 0 else 0.0
+        if work[j] != 0:
+            for i in range(nt):
+                acc -= A[i, j] * lam[i]
+            mu[j] = acc
+        else:
+            mu[j] = 0.0
     tol = 1e-12 * (1.0 + gmax)
     for j in range(n):
         if (work[j] == -1 and mu[j] < -tol) or (work[j] == 1 and mu[j] > tol):
@@ -489,6 +473,7 @@ def _cold_start(
     )
     free = w.feas.free
     n = x.size
+    nt = A.shape[0]
     code, unique = feasible_point(A, b, lb, ub, x, w.feas)
     if code != OK:
         return code, 0
@@ -512,7 +497,7 @@ def _cold_start(
             x[j] = ub[j]
         if at_lo or at_hi:
             free[j] = False
-            if free_rank(A, free) == 2:
+            if free_rank(A, free, w.feas) == nt:
                 work[j] = -1 if at_lo else 1
             else:
                 free[j] = True
@@ -529,31 +514,35 @@ def _cold_start(
             if work[j] == 0:
                 idx[f] = j
                 f += 1
-        lam0 = lam1 = 0.0
-        if f == 2:  # no null space: p = 0, A_F^T lam = g_F
+        if f == 2 and nt == 2:  # no null space: p = 0, A_F^T lam = g_F
             i0, i1 = idx[0], idx[1]
             det = A[0, i0] * A[1, i1] - A[1, i0] * A[0, i1]
             size = math.hypot(A[0, i0], A[1, i0]) * math.hypot(A[0, i1], A[1, i1])
             if abs(det) <= RANK_TOL * size:  # dependent task rows: the numpy method's case
                 return NEEDS_REFERENCE, iteration
-            lam0 = (g[i0] * A[1, i1] - g[i1] * A[1, i0]) / det
-            lam1 = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
+            lam[0] = (g[i0] * A[1, i1] - g[i1] * A[1, i0]) / det
+            lam[1] = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
         else:
-            size = f + 2
+            size = f + nt
             _kkt_matrix(P, A, idx, f, K)
             for a in range(f):
                 rhs[a] = -g[idx[a]]
-            rhs[f], rhs[f + 1] = 0.0, 0.0
-            if not _solve_in_place(K, rhs, size):
+            for i in range(nt):
+                rhs[f + i] = 0.0
+            if not solve_in_place(K, rhs, size):
                 return NEEDS_REFERENCE, iteration
             for a in range(f):
                 p[idx[a]] = rhs[a]
-            lam0, lam1 = rhs[f], rhs[f + 1]
+            for i in range(nt):
+                lam[i] = rhs[f + i]
         pmax = xmax = 0.0
         for j in range(n):
             pmax = max(pmax, abs(p[j]))
             xmax = max(xmax, abs(x[j]))
-        if not (math.isfinite(pmax) and math.isfinite(lam0) and math.isfinite(lam1)):
+        finite = math.isfinite(pmax)
+        for i in range(nt):
+            finite = finite and math.isfinite(lam[i])
+        if not finite:
             return NEEDS_REFERENCE, iteration
         if pmax <= 1e-12 * (1.0 + xmax):
             gmax = 0.0
@@ -564,13 +553,15 @@ def _cold_start(
             for j in range(n):
                 mu[j] = 0.0
                 if work[j] != 0:
-                    mu[j] = g[j] - A[0, j] * lam0 - A[1, j] * lam1
+                    acc = g[j]
+                    for i in range(nt):
+                        acc -= A[i, j] * lam[i]
+                    mu[j] = acc
                     wrong = -mu[j] if work[j] == -1 else mu[j]
                     if wrong > tol and first < 0:
                         first = j
                     if wrong > worst:
                         worst, drop = wrong, j
-            lam[0], lam[1] = lam0, lam1
             if drop < 0:
                 kkt_residuals(P, c, A, b, lb, ub, x, lam, mu, out)
                 return OK, iteration
@@ -611,7 +602,7 @@ def _cold_start(
             x[block] = lb[block] if side < 0 else ub[block]
             for j in range(n):
                 free[j] = work[j] == 0 and j != block
-            if free_rank(A, free) == 2:
+            if free_rank(A, free, w.feas) == nt:
                 work[block] = side
     return MAX_ITER_EXCEEDED, limit
 
@@ -621,10 +612,10 @@ def active_set_of(
     P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64
 ) -> tuple[int, int]:
     """:func:`active_set` with its own buffers (the entry point for callers in Python)."""
-    return active_set(P, c, A, b, lb, ub, x, qp_work(x.size), out)
+    return active_set(P, c, A, b, lb, ub, x, qp_work(x.size, A.shape[0]), out)
 
 
 @kernel
 def certify_of(P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64) -> None:
     """:func:`certify` with its own buffers (the entry point for callers in Python)."""
-    certify(P, c, A, b, lb, ub, x, qp_work(x.size), out)
+    certify(P, c, A, b, lb, ub, x, qp_work(x.size, A.shape[0]), out)

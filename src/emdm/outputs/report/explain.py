@@ -310,7 +310,7 @@ def geometry(scenario: Scenario, start: np.ndarray) -> dict[str, Any] | None:
     """Two-link arm: the goal's two inverse-kinematics solutions and what the joint stops allow."""
     if scenario.n != 2:
         return None
-    l1, l2 = (float(x) for x in scenario.arm.lengths)
+    l1, l2 = (float(x) for x in scenario.link_lengths)
     goal = np.asarray(scenario.motion.goal, dtype=float)
     r2 = float(goal @ goal)
     c2 = (r2 - l1 * l1 - l2 * l2) / (2 * l1 * l2)
