@@ -236,3 +236,34 @@ def test_spatial_scenario_round_trips_through_toml(tmp_path):
 def test_an_unreachable_spatial_goal_warns():
     with pytest.warns(emdm.ScenarioWarning, match="beyond the arm's reach"):
         emdm.load_scenario("ur5", {"motion.goal": [3.0, 0.0, 0.0, 0.0, 0.0, 0.0]})
+
+
+def test_mmc_benchmark_counts_failures_from_the_runs_themselves():
+    from emdm.studies.mmc import draw_tasks, mmc_table, run_mmc_benchmark
+
+    data = run_mmc_benchmark(arms=["ur5"], controllers=["RRMC", "MMC"], trials=12, seed=3)
+    q0s, goals = draw_tasks("ur5", 12, 3)
+    sc = emdm.load_scenario("ur5")
+    for name in ("RRMC", "MMC"):
+        failed, means = 0, []
+        for q0, goal in zip(q0s, goals, strict=True):
+            one = sc.with_overrides({"motion.q0": q0.tolist(), "motion.goal": goal.tolist()})
+            run = emdm.simulate(one, name)
+            outside = np.any(run.q < sc.arm.q_min) or np.any(run.q > sc.arm.q_max)
+            failed += (not run.reached) or outside
+            means.append(run.m.mean())
+        row = data["results"]["ur5"][name]
+        assert row["failure_rate"] == pytest.approx(100.0 * failed / 12)
+        assert row["mean_manipulability"] == pytest.approx(np.mean(means), rel=1e-12)
+        assert row["published"] is not None
+    assert data["results"]["ur5"]["MMC"]["left_joint_limits"] == 0
+    assert "(0.0563)" in mmc_table(data)
+
+
+def test_mmc_command_writes_its_table(tmp_path, capsys):
+    from emdm.cli.main import main
+
+    assert main(["mmc", "--arm", "ur5", "--trials", "3", "--out", str(tmp_path / "m")]) == 0
+    assert "| ur5 | MMC |" in capsys.readouterr().out
+    assert (tmp_path / "m" / "mmc.json").is_file() and (tmp_path / "m" / "mmc.md").is_file()
+    assert main(["mmc", "--trials", "0"]) == 2

@@ -438,6 +438,29 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+# -------------------------------------------------------------------------------------- mmc
+def cmd_mmc(args: argparse.Namespace) -> int:
+    import json as _json
+
+    from ..studies.mmc import mmc_table, run_mmc_benchmark
+
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_out(out)
+    arms = _unique(args.arm) or ["panda", "ur5"]
+    with Progress("mmc", unit="run set") as bar:
+        data = run_mmc_benchmark(
+            arms=arms, trials=args.trials, seed=args.seed, progress=lambda m: bar.step(note=m)
+        )
+    table = mmc_table(data)
+    if out is not None:
+        with atomic_output(out, command="emdm mmc") as staging:
+            write_json(staging / "mmc.json", data)
+            (staging / "mmc.md").write_text(table + "\n", encoding="utf-8")
+    print(_json.dumps(data, indent=2) if args.json else table)
+    return 0
+
+
 # ------------------------------------------------------------------------------------ study
 def cmd_study(args: argparse.Namespace) -> int:
     from ..outputs.study_plots import sweep_trade_off, workspace_maps
@@ -771,6 +794,31 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--out", metavar="DIR", help="also write bench.json and bench.md there")
     bench.set_defaults(func=cmd_bench)
+
+    mmc = _command(
+        sub,
+        "mmc",
+        "the manipulability benchmark (RRMC, Park, MMC, C-EMDM on the Panda and the UR5)",
+        "Run random pose tasks on the spatial presets with the baselines of Haviland & Corke "
+        "(2020) and C-EMDM, and print mean manipulability, mean final manipulability and "
+        "failure rate beside the published table.",
+    )
+    mmc.add_argument(
+        "--arm", action="append", choices=["panda", "ur5"], help="arm (repeatable; default both)"
+    )
+    mmc.add_argument(
+        "--trials",
+        type=integer(1, 10**7),
+        default=1000,
+        metavar="N",
+        help="random tasks per arm (default 1000)",
+    )
+    mmc.add_argument(
+        "--seed", type=integer(0, 2**64 - 1), default=0, metavar="S", help="random seed (default 0)"
+    )
+    mmc.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    mmc.add_argument("--out", metavar="DIR", help="also write mmc.json and mmc.md there")
+    mmc.set_defaults(func=cmd_mmc)
 
     show = _command(
         sub,

@@ -251,6 +251,12 @@ def state_at(scenario: Scenario, q: Vector) -> StepState:
     return StepState(Kinematics(p, J, float(m), Jm), e, scenario.motion.kp * e)
 
 
+def goal_of(scenario: Scenario, q: Vector) -> Vector:
+    """The task value at ``q``: a goal that ``q`` reaches exactly (planar tip position, spatial
+    position, or position and rotation vector of the pose)."""
+    return state_at(scenario, q).kin.p
+
+
 def program_at(
     controller: Controller,
     scenario: Scenario,

@@ -20,6 +20,7 @@ from ..core.controllers import Controller, get_controller
 from ..core.jit import ensure_compiled, kernel
 from ..core.kernels import ArmData, ProgramData
 from ..core.scenario import Policy, Scenario
+from ..errors import NoSolution
 from .loop import (
     REACHED,
     TIMEOUT,
@@ -64,7 +65,19 @@ def run_share(
         codes[r] = code
         if code == REACHED or code == TIMEOUT:
             reached = code == REACHED
-            outcomes(rec.m, rec.effort, rec.qd, rec.e, k, reached, motion.dt, out[r])
+            outcomes(
+                rec.m,
+                rec.effort,
+                rec.qd,
+                rec.e,
+                rec.q,
+                arm.q_min,
+                arm.q_max,
+                k,
+                reached,
+                motion.dt,
+                out[r],
+            )
 
 
 def run_all(
@@ -111,7 +124,9 @@ class BatchResult:
     """One array of ``R`` values per outcome (see :data:`emdm.sim.metrics.OUTCOMES`).
 
     ``reached`` is boolean and ``time_to_goal`` NaN where a run did not reach its goal;
-    ``reference_runs`` lists the runs a step of which the solver chain settled.
+    ``reference_runs`` lists the runs a step of which the solver chain settled, ``stopped_runs``
+    those that ended at a step with no admissible command (:class:`~emdm.errors.NoSolution`; they
+    count as not reached).
     """
 
     steps: NDArray[np.int64]
@@ -123,11 +138,14 @@ class BatchResult:
     final_error: F64
     max_abs_qd: F64
     final_manipulability: F64
+    min_joint_margin: F64
     reference_runs: NDArray[np.int64]
+    stopped_runs: NDArray[np.int64]
 
     def outcomes(self) -> dict[str, np.ndarray]:
         """The outcome arrays by name (everything but ``reference_runs``)."""
-        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "reference_runs"}
+        skip = ("reference_runs", "stopped_runs")
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
 
     def __len__(self) -> int:
         return int(self.steps.size)
@@ -162,11 +180,33 @@ def simulate_batch(
         threads = min(numba.get_num_threads(), runs)
         run_all(scenario.arm_data, motion_data(scenario), prog, g, q, threads, out, codes)
     redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
+    stopped: list[int] = []
     for r in redo:  # finish these runs exactly, through the solver chain where needed
         sc = scenario.with_overrides({"motion.goal": g[r].tolist(), "motion.q0": q[r].tolist()})
-        run = simulate(sc, ctrl)
-        outcomes(run.m, run.effort, run.qd, run.e, run.steps, run.reached, sc.motion.dt, out[r])
+        try:
+            run = simulate(sc, ctrl)
+        except NoSolution as exc:  # the run ends at a step without an admissible command
+            if exc.run is None:
+                raise
+            run = exc.run
+            stopped.append(int(r))
+        lim = sc.arm_data
+        outcomes(
+            run.m,
+            run.effort,
+            run.qd,
+            run.e,
+            run.q,
+            lim.q_min,
+            lim.q_max,
+            run.steps,
+            run.reached,
+            sc.motion.dt,
+            out[r],
+        )
     columns: dict[str, Any] = {name: out[:, i].copy() for i, name in enumerate(OUTCOMES)}
     columns["steps"] = columns["steps"].astype(np.int64)
     columns["reached"] = columns["reached"].astype(bool)
-    return BatchResult(**columns, reference_runs=redo)
+    return BatchResult(
+        **columns, reference_runs=redo, stopped_runs=np.array(stopped, dtype=np.int64)
+    )

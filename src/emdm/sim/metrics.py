@@ -30,19 +30,31 @@ OUTCOMES = (
     "final_error",
     "max_abs_qd",
     "final_manipulability",
+    "min_joint_margin",
 )
 """The outcomes :func:`outcomes` writes, in order."""
 
 
 @kernel
 def outcomes(
-    m: F64, effort: F64, qd: F64, e: F64, K: int, reached: bool, dt: float, out: F64
+    m: F64,
+    effort: F64,
+    qd: F64,
+    e: F64,
+    q: F64,
+    q_min: F64,
+    q_max: F64,
+    K: int,
+    reached: bool,
+    dt: float,
+    out: F64,
 ) -> None:
-    """``out[:9]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
+    """``out[:10]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
 
     ``time_to_goal = K dt`` (NaN when not reached); ``total_effort = sum_k E(qd_k) dt``
     (rad^2/s); ``final_error = ||e_K||`` (m; and rad for a pose); manipulability over the states
-    ``0..K``, and at state ``K``.
+    ``0..K``, and at state ``K``; ``min_joint_margin``: the smallest distance of any joint to
+    its position limits over the states ``0..K`` (rad; negative where a joint left them).
     """
     mmin, msum = math.inf, 0.0
     for k in range(K + 1):
@@ -69,6 +81,11 @@ def outcomes(
         out[6] = math.sqrt(acc)
     out[7] = qmax
     out[8] = m[K]
+    margin = math.inf
+    for k in range(K + 1):
+        for j in range(q.shape[1]):
+            margin = min(margin, q[k, j] - q_min[j], q_max[j] - q[k, j])
+    out[9] = margin
 
 
 def metrics(run: Run) -> dict[str, Any]:
@@ -83,7 +100,20 @@ def metrics(run: Run) -> dict[str, Any]:
     sc = run.scenario
     K = run.steps
     out = np.empty(len(OUTCOMES))
-    outcomes(run.m, run.effort, run.qd, run.e, K, run.reached, sc.motion.dt, out)
+    arm = sc.arm_data
+    outcomes(
+        run.m,
+        run.effort,
+        run.qd,
+        run.e,
+        run.q,
+        arm.q_min,
+        arm.q_max,
+        K,
+        run.reached,
+        sc.motion.dt,
+        out,
+    )
     base = dict(zip(OUTCOMES, out.tolist(), strict=True))
     margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
     has_cmd = K > 0

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import CONTROLLERS
+from ..core.controllers import CONTROLLERS, goal_of
 from ..core.scenario import Scenario, scenario_from_dict
 from ..errors import EmdmError
 
@@ -40,7 +40,8 @@ DEFAULT_CHUNK_BLOCKS = 8
 def draw_block(
     scenario: Scenario, seed: int, block: int, runs: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Starts (runs x n) and reachable goals (runs x 2): the first ``runs`` of block ``block``.
+    """Starts (runs x n) and reachable goals (runs x task rows): the first ``runs`` of block
+    ``block``.
 
     A block always draws all its :data:`BLOCK` runs, so run ``r`` gets the same draw in every
     study of the same seed, whatever its size (a smaller study is a prefix of a larger one).
@@ -50,8 +51,7 @@ def draw_block(
     lo, hi = np.asarray(arm.q_min) + 1.01 * stop, np.asarray(arm.q_max) - 1.01 * stop
     q0s = rng.uniform(lo, hi, (BLOCK, scenario.n))[:runs]
     targets = rng.uniform(arm.q_min, arm.q_max, (BLOCK, scenario.n))[:runs]
-    planar = scenario.planar_arm
-    goals = np.array([planar.forward(t) for t in targets]).reshape(runs, 2)
+    goals = np.array([goal_of(scenario, t) for t in targets]).reshape(runs, scenario.nt)
     return q0s, goals
 
 
