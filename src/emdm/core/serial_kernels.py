@@ -108,12 +108,69 @@ def serial_hessian(J: F64, H: F64) -> None:
                 H[i, 5, k] = 0.0
 
 
+CHOLESKY_PIVOT = 1e-8
+"""Smallest pivot of the Cholesky factor of ``Ja Ja^T``, relative to its largest diagonal entry,
+for which :func:`manipulability_gradient` uses the factor; nearer a singularity it takes the SVD."""
+
+
+@kernel
+def _gradient_by_cholesky(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
+    """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` by a Cholesky factor ``L L^T`` of
+    ``Ja Ja^T`` (``m`` = the product of its pivots); -1 when a pivot is below
+    :data:`CHOLESKY_PIVOT` (near a singularity, where the SVD form is the accurate one)."""
+    n = J.shape[1]
+    L = np.empty((count, count))
+    for a in range(count):
+        for b in range(a + 1):
+            acc = 0.0
+            for j in range(n):
+                acc += J[first + a, j] * J[first + b, j]
+            L[a, b] = acc
+    big = 0.0
+    for a in range(count):
+        big = max(big, L[a, a])
+    m = 1.0
+    for a in range(count):
+        for b in range(a):
+            acc = L[a, b]
+            for c in range(b):
+                acc -= L[a, c] * L[b, c]
+            L[a, b] = acc / L[b, b]
+        acc = L[a, a]
+        for c in range(a):
+            acc -= L[a, c] * L[a, c]
+        if acc <= CHOLESKY_PIVOT * CHOLESKY_PIVOT * big:
+            return -1.0
+        L[a, a] = math.sqrt(acc)
+        m *= L[a, a]
+    B = np.empty((count, n))  # B = (L L^T)^-1 Ja, column by column
+    for j in range(n):
+        for a in range(count):
+            acc = J[first + a, j]
+            for c in range(a):
+                acc -= L[a, c] * B[c, j]
+            B[a, j] = acc / L[a, a]
+        for a in range(count - 1, -1, -1):
+            acc = B[a, j]
+            for c in range(a + 1, count):
+                acc -= L[c, a] * B[c, j]
+            B[a, j] = acc / L[a, a]
+    for i in range(n):
+        acc = 0.0
+        for a in range(count):
+            for b in range(n):
+                acc += B[a, b] * H[i, first + a, b]
+        Jm[i] = m * acc
+    return m
+
+
 @kernel
 def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
     """Manipulability ``m = sqrt(det(Ja Ja^T))`` of the rows ``rows`` (:data:`ROWS_ALL`,
     :data:`ROWS_TRANS`, :data:`ROWS_ROT`) and its gradient ``Jm`` (n,); returns ``m``.
 
-    From the singular values ``s`` and vectors ``u_r, v_r`` of ``Ja``: ``m = prod s`` and
+    Away from singularities, by a Cholesky factor of ``Ja Ja^T`` (:func:`_gradient_by_cholesky`);
+    near one, from the singular values ``s`` and vectors ``u_r, v_r`` of ``Ja``: ``m = prod s`` and
     ``Jm_i = sum_r (prod_{l != r} s_l) u_r^T Ha_i v_r``, the textbook
     ``m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` without its inverse. Where ``Ja`` loses rank (``m = 0``,
     not differentiable) this is the gradient of the signed product of singular values: finite,
@@ -121,6 +178,10 @@ def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
     """
     n = J.shape[1]
     first, count = (0, 6) if rows == ROWS_ALL else ((0, 3) if rows == ROWS_TRANS else (3, 3))
+    if count <= n:
+        m = _gradient_by_cholesky(J, H, first, count, Jm)
+        if m >= 0.0:
+            return m
     k = min(count, n)
     Ja = np.ascontiguousarray(J[first : first + count, :])
     U, s, Vt = np.linalg.svd(Ja, full_matrices=False)

@@ -11,6 +11,7 @@ Every time is the median over repeats, after a warm-up that is not counted.
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import statistics
@@ -163,6 +164,83 @@ def _split(
     return out
 
 
+def _rtb_step(model: Any, sc: Any, ctrl: Any, q: np.ndarray, alpha: float) -> dict[str, float]:
+    """One C-EMDM step on a spatial preset as a robotics-toolbox-python user writes it: ``fkine``,
+    ``p_servo`` (angle-axis error), ``jacob0``, ``jacobm`` and ``joint_velocity_damper`` for the
+    kinematics, then qpsolvers with daqp (the same program and task scale as emdm)."""
+    import roboticstoolbox as rtb
+    from qpsolvers import solve_qp
+    from spatialmath import SE3
+    from spatialmath.base import trexp
+
+    t0 = time.perf_counter()
+    goal = np.asarray(sc.motion.goal)
+    Tep = SE3.Rt(trexp(goal[3:]), goal[:3])
+    v, _ = rtb.p_servo(model.fkine(q), Tep, gain=float(sc.motion.kp[0]), method="angle-axis")
+    J = model.jacob0(q)
+    Jm = model.jacobm(q).ravel()
+    d = sc.damper
+    Ain, bin_ = model.joint_velocity_damper(
+        q=q, ps=float(d.stop[0]), pi=float(d.influence[0]), n=sc.n, gain=float(d.gain[0])
+    )
+    t1 = time.perf_counter()
+    w = sc.weights
+    qd = solve_qp(
+        w.effort * np.eye(sc.n),
+        -w.manipulability * Jm,
+        Ain,
+        bin_,
+        J,
+        alpha * np.asarray(v),
+        np.asarray(sc.arm.qd_min),
+        np.asarray(sc.arm.qd_max),
+        solver="daqp",
+    )
+    t2 = time.perf_counter()
+    return {"kinematics": t1 - t0, "solve": t2 - t1, "failed": float(qd is None)}
+
+
+def run_spatial_bench(*, repeats: int = 3, batch_runs: int = 2000) -> dict[str, Any]:
+    """Panda, pose task, C-EMDM: ``emdm.simulate`` per step against robotics-toolbox-python +
+    qpsolvers (when installed), and batch throughput on random tasks of ``emdm mmc``."""
+    from ..studies.mmc import draw_tasks
+
+    sc = load_scenario("panda")
+    ctrl = get_controller("C-EMDM")
+    run = simulate(sc, ctrl)
+    whole = _median_time(lambda: simulate(sc, ctrl), max(repeats, 5) * 4)
+    out: dict[str, Any] = {
+        "scenario": "panda C-EMDM, pose task",
+        "steps": run.steps,
+        "simulate_us_per_step": whole / run.steps * 1e6,
+    }
+    try:
+        import roboticstoolbox as rtb
+        from spatialmath import SE3
+    except ImportError:
+        out["rtb_stack"] = None
+    else:
+        model = rtb.models.DH.Panda()
+        model.tool = SE3()  # emdm's preset stops at the flange
+        split = _split(
+            lambda q, a: _rtb_step(model, sc, ctrl, q, a), run.q[:-1], run.alpha, repeats
+        )
+        out["rtb_stack"] = {k: v * 1e6 if k != "failed_steps" else v for k, v in split.items()}
+        out["ratio"] = split["total"] / (whole / run.steps)
+    q0s, goals = draw_tasks("panda", batch_runs, 0)
+    simulate_batch(sc, ctrl, goals=goals[:4], q0s=q0s[:4])
+    t0 = time.perf_counter()
+    result = simulate_batch(sc, ctrl, goals=goals, q0s=q0s)
+    seconds = time.perf_counter() - t0
+    out["batch"] = {
+        "runs": batch_runs,
+        "steps": int(result.steps.sum()),
+        "seconds": seconds,
+        "steps_per_second": int(result.steps.sum()) / seconds,
+    }
+    return out
+
+
 STACK = "standard stack, daqp"
 SIMULATE = "emdm.simulate (full record, certified)"
 TARGETS = (
@@ -232,6 +310,9 @@ def run_bench(
     batch_t = statistics.median(times)
     say("batch done")
 
+    spatial = run_spatial_bench(repeats=repeats, batch_runs=100 if quick else 2000)
+    say("spatial done")
+
     base = steps[STACK]["total"]
     per_step = steps[SIMULATE]["total"]
     return {
@@ -260,9 +341,15 @@ def run_bench(
             "seconds": batch_t,
             "steps_per_second": total_steps / batch_t,
         },
+        "spatial": spatial,
         "targets": dict(
             zip(TARGETS, (per_step * 1e6, base / per_step, total_steps / batch_t), strict=True)
-        ),
+        )
+        | {
+            "Panda pose C-EMDM <= 10 us/step": spatial["simulate_us_per_step"],
+            "Panda vs robotics-toolbox-python + qpsolvers >= 50x": spatial.get("ratio", math.nan),
+            "Panda batch >= 2e5 steps/s": spatial["batch"]["steps_per_second"],
+        },
         "wall_time_s": time.perf_counter() - start,
     }
 
@@ -385,6 +472,22 @@ def bench_table(data: dict[str, Any]) -> str:
         lines.append(
             f"| {name} | {r['steps']} | {r['simulate_s'] * 1e3:.3f} | {r['us_per_step']:.2f} |"
         )
+    sp = data["spatial"]
+    stack = sp["rtb_stack"]
+    lines += [
+        "",
+        f"Spatial ({sp['scenario']}, {sp['steps']} steps): emdm.simulate "
+        f"{sp['simulate_us_per_step']:.2f} us/step"
+        + (
+            f"; robotics-toolbox-python + qpsolvers (daqp) {stack['total']:.0f} us/step "
+            f"(kinematics {stack['kinematics']:.0f}, solve {stack['solve']:.0f}) = "
+            f"{sp['ratio']:.0f}x"
+            if stack
+            else "; robotics-toolbox-python is not installed (no ratio)"
+        )
+        + f". Batch: {sp['batch']['runs']} random tasks, {sp['batch']['steps']} steps in "
+        f"{sp['batch']['seconds']:.3f} s = {sp['batch']['steps_per_second']:.3g} steps/s.",
+    ]
     b, first = data["batch"], data["first_use"]
     lines += [
         "",
@@ -402,7 +505,7 @@ def bench_table(data: dict[str, Any]) -> str:
         "| target | measured |",
         "|---|---:|",
     ]
-    units = ("us/step", "x", "steps/s")
+    units = ("us/step", "x", "steps/s", "us/step", "x", "steps/s")
     for (name, value), unit in zip(data["targets"].items(), units, strict=True):
         lines.append(f"| {name} | {value:.3g} {unit} |")
     m = data["machine"]
