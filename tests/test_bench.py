@@ -40,8 +40,15 @@ def test_bench_quick_reports_every_figure(tmp_path, capsys):
         "emdm.simulate task1 C-EMDM <= 5 us/step",
         "emdm.simulate vs the standard stack >= 20x",
         "batch >= 1.5e6 steps/s",
+        "Panda pose C-EMDM <= 10 us/step",
+        "Panda vs robotics-toolbox-python + qpsolvers >= 50x",
+        "Panda batch >= 2e5 steps/s",
     }
+    spatial = data["spatial"]
+    assert spatial["simulate_us_per_step"] > 0 and spatial["batch"]["steps"] > 0
+    assert spatial["rtb_stack"]["failed_steps"] == 0 and spatial["ratio"] > 1
     assert data["first_use"]["cache_load_s"] > 0
     table = (tmp_path / "bench.md").read_text()
     assert "| emdm.simulate (full record, certified) |" in table and "steps/s" in table
+    assert "robotics-toolbox-python + qpsolvers (daqp)" in table
     assert "emdm.simulate" in capsys.readouterr().out

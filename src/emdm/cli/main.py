@@ -817,7 +817,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--seed", type=integer(0, 2**64 - 1), default=0, metavar="S", help="random seed (default 0)"
     )
     mmc.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    mmc.add_argument("--out", metavar="DIR", help="also write mmc.json and mmc.md there")
+    mmc.add_argument(
+        "--out", metavar="DIR", help="output folder for mmc.json and mmc.md (optional)"
+    )
     mmc.set_defaults(func=cmd_mmc)
 
     show = _command(

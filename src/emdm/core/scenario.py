@@ -226,7 +226,12 @@ class Scenario:
     def planar_arm(self) -> PlanarArm:
         """The kinematic model of this scenario's planar arm."""
         if self.arm.lengths is None:
-            raise ScenarioError(self.source, "arm", "is a spatial arm (arm.dh), not a planar one")
+            raise ScenarioError(
+                self.source,
+                "arm",
+                "is a spatial arm (arm.dh); figures, animations, Pareto fronts, studies and the "
+                "playground take planar arms only for now",
+            )
         return PlanarArm(self.arm.lengths)
 
     @cached_property
