@@ -267,3 +267,37 @@ def test_mmc_command_writes_its_table(tmp_path, capsys):
     assert "| ur5 | MMC |" in capsys.readouterr().out
     assert (tmp_path / "m" / "mmc.json").is_file() and (tmp_path / "m" / "mmc.md").is_file()
     assert main(["mmc", "--trials", "0"]) == 2
+
+
+def test_spatial_animation_projects_the_ellipsoid_in_three_views():
+    from emdm.outputs.animate import Animator
+
+    sc = emdm.load_scenario("ur5", {"motion.max_time": 1.0})
+    run = emdm.simulate(sc, "MMC")
+    animator = Animator([run], speedup=4.0)
+    try:
+        frame = animator.draw(0)
+        assert frame.shape[1] > 2 * frame.shape[0]  # three views side by side
+        top = animator.ellipse_at(2)
+        k = animator.indices[2]
+        Jv = sc.serial_arm.jacobian(run.q[k])[:3]
+        shape = Jv[:2] @ Jv[:2].T  # the top view drops z
+        d = top - run.p[k, :2]
+        radii = np.einsum("ij,jk,ik->i", d, np.linalg.inv(shape), d)
+        np.testing.assert_allclose(radii, animator.scale**2, rtol=1e-9)
+    finally:
+        animator.close()
+
+
+def test_spatial_figures_are_written(tmp_path):
+    from emdm.cli.main import main
+
+    out = tmp_path / "figs"
+    assert main(["plot", "ur5", "--controller", "C-EMDM,MMC,RRMC", "--out", str(out)]) == 0
+    assert (out / "baselines" / "path.png").is_file() and (out / "C" / "error.png").is_file()
+    assert (
+        main(
+            ["pareto", "ur5", "--controller", "C-EMDM", "--grid", "3", "--out", str(tmp_path / "p")]
+        )
+        == 0
+    )

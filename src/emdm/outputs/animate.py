@@ -1,6 +1,9 @@
 """Animations of runs: the arm, its end-effector trace, the goal and the manipulability ellipse.
 
-The ellipse at the end effector is ``{x : x^T (J J^T)^-1 x <= 1}``, the set of end-effector
+A planar arm is drawn in its plane; a spatial arm in three orthogonal projections of the base
+frame (top x-y, front x-z, side y-z), each with the projection of the translational
+manipulability ellipsoid ``{J_v qd : ||qd|| <= 1}`` (the ellipse of ``P J_v`` for the projection
+``P``). The ellipse at the end effector is ``{x : x^T (J J^T)^-1 x <= 1}``, the set of end-effector
 velocities reachable with ``||qd|| <= 1`` (brief eq. 7): its semi-axes are the square roots of the
 eigenvalues of ``J J^T`` along its eigenvectors. It is drawn ``scale`` times its size in m/s, so that
 it reads at the arm's scale; the factor is stated on screen.
@@ -26,10 +29,11 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from PIL import Image
 
-from ..core.arm import Matrix, PlanarArm
+from ..core.arm import Matrix
 from ..core.scenario import Scenario
 from ..sim.loop import Run
 from .style import CONTROLLER_STYLE, RC, figure_canvas
+from .views import Views
 
 CIRCLE = np.stack((np.cos(np.linspace(0, 2 * np.pi, 73)), np.sin(np.linspace(0, 2 * np.pi, 73))))
 
@@ -71,79 +75,113 @@ class Animator:
         self.speedup, self.hold = speedup, hold
         self.steps = max(run.steps for run in self.runs)
         self.indices, self.stride = frame_schedule(self.steps, self.dt, speedup, max_fps)
-        arm = sc.planar_arm
+        self.views = Views(sc)
         biggest = max(
-            float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(q) @ arm.jacobian(q).T)[-1]))
+            float(np.sqrt(np.linalg.eigvalsh(J @ J.T)[-1]))
             for run in self.runs
-            for q in run.q
+            for q in run.q[:: max(1, run.steps // 50) if sc.spatial else 1]
+            for J in (self.views.jacobian(q),)
         )
-        self.scale = 0.3 * arm.reach / biggest if biggest > 0 else 1.0
+        self.box = self.views.limits(self.runs)
+        size = 0.5 * float((self.box[:, 1] - self.box[:, 0]).max()) / 1.08
+        self.scale = 0.3 * size / biggest if biggest > 0 else 1.0
         with matplotlib.rc_context(RC):
-            self._build(sc, arm)
+            self._build(sc)
 
-    def _build(self, sc: Scenario, arm: PlanarArm) -> None:
+    def _build(self, sc: Scenario) -> None:
         """Figure, static background and the animated artists (inside the shared style)."""
-        self.fig, self.canvas = figure_canvas(width=3.3 * len(self.runs), height=3.4)
-        axes = self.fig.subplots(1, len(self.runs), squeeze=False)[0]
+        views = self.views
+        cols = len(views.projections)
+        rows = len(self.runs) if cols > 1 else 1
+        per_row = len(self.runs) if cols == 1 else cols
+        self.fig, self.canvas = figure_canvas(width=3.3 * per_row, height=3.4 * rows)
+        grid = self.fig.subplots(rows, per_row, squeeze=False)
         self._artists: list[dict[str, Any]] = []
-        reach = arm.reach
-        for ax, run in zip(axes, self.runs, strict=True):
-            style = CONTROLLER_STYLE.get(run.controller.name, {"color": "#0072B2"})
-            ax.add_patch(Circle((0, 0), reach, color="grey", alpha=0.08, linewidth=0))
-            if arm.inner_reach > 0:
-                ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
-            ax.plot(*sc.motion.goal, marker="*", color="black", markersize=10, linestyle="none")
-            ax.set_xlim(-1.08 * reach, 1.08 * reach)
-            ax.set_ylim(-1.08 * reach, 1.08 * reach)
-            ax.set_aspect("equal")
-            ax.set_xlabel("x (m)")
-            ax.set_ylabel("y (m)")
-            ax.set_title(f"{sc.name}: {run.controller.name}")
-            trace = Line2D([], [], color=style["color"], linewidth=1.0, animated=True)
-            links = Line2D(
-                [],
-                [],
-                color="black",
-                linewidth=2.0,
-                marker="o",
-                markersize=3.5,
-                markerfacecolor="white",
-                animated=True,
-            )
-            ellipse = Polygon(
-                np.zeros((2, 2)),
-                closed=True,
-                facecolor=style["color"],
-                alpha=0.25,
-                edgecolor=style["color"],
-                animated=True,
-            )
-            text = ax.text(
-                0.02,
-                0.98,
-                "",
-                transform=ax.transAxes,
-                va="top",
-                fontsize=7,
-                animated=True,
-                family="monospace",
-            )
-            ax.add_line(trace)
-            ax.add_patch(ellipse)
-            ax.add_line(links)
-            ax.text(
-                0.02,
-                0.02,
-                f"ellipse x{self.scale:.2g} (m/s per rad/s)",
-                transform=ax.transAxes,
-                fontsize=6,
-                color="grey",
-            )
-            self._artists.append(
-                {"ax": ax, "trace": trace, "links": links, "ellipse": ellipse, "text": text}
-            )
+        goal = np.asarray(sc.motion.goal[: 3 if sc.spatial else 2])
+        for index, run in enumerate(self.runs):
+            for v, P in enumerate(views.projections):
+                ax = grid[index, v] if cols > 1 else grid[0, index]
+                self._artists.append(self._panel(ax, sc, run, v, P, goal))
         self.canvas.draw()
         self._background = self.canvas.copy_from_bbox(self.fig.bbox)
+
+    def _panel(
+        self,
+        ax: Any,
+        sc: Scenario,
+        run: Run,
+        v: int,
+        P: Matrix,
+        goal: np.ndarray,
+    ) -> dict[str, Any]:
+        """One view of one run: the static background and its animated artists."""
+        views = self.views
+        style = CONTROLLER_STYLE.get(run.controller.name, {"color": "#0072B2"})
+        if not sc.spatial:
+            arm = sc.planar_arm
+            ax.add_patch(Circle((0, 0), arm.reach, color="grey", alpha=0.08, linewidth=0))
+            if arm.inner_reach > 0:
+                ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
+        ax.plot(*(P @ goal), marker="*", color="black", markersize=10, linestyle="none")
+        ax.set_xlim(*(P @ self.box)[0])
+        ax.set_ylim(*(P @ self.box)[1])
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{views.axes[v][0]} (m)")
+        ax.set_ylabel(f"{views.axes[v][1]} (m)")
+        name = views.names[v]
+        ax.set_title(
+            f"{sc.name}: {run.controller.name}" + (f", {name}" if name else ""),
+            fontsize=8 if name else None,
+        )
+        trace = Line2D([], [], color=style["color"], linewidth=1.0, animated=True)
+        links = Line2D(
+            [],
+            [],
+            color="black",
+            linewidth=2.0,
+            marker="o",
+            markersize=3.5,
+            markerfacecolor="white",
+            animated=True,
+        )
+        ellipse = Polygon(
+            np.zeros((2, 2)),
+            closed=True,
+            facecolor=style["color"],
+            alpha=0.25,
+            edgecolor=style["color"],
+            animated=True,
+        )
+        text = ax.text(
+            0.02,
+            0.98,
+            "",
+            transform=ax.transAxes,
+            va="top",
+            fontsize=7,
+            animated=True,
+            family="monospace",
+        )
+        ax.add_line(trace)
+        ax.add_patch(ellipse)
+        ax.add_line(links)
+        ax.text(
+            0.02,
+            0.02,
+            f"ellipse x{self.scale:.2g} (m/s per rad/s)",
+            transform=ax.transAxes,
+            fontsize=6,
+            color="grey",
+        )
+        return {
+            "ax": ax,
+            "trace": trace,
+            "links": links,
+            "ellipse": ellipse,
+            "text": text if v == 0 else None,
+            "run": run,
+            "P": P,
+        }
 
     @property
     def durations_ms(self) -> list[int]:
@@ -158,19 +196,28 @@ class Animator:
         """Render frame ``frame`` and return it as an RGB array (height x width x 3)."""
         k = self.indices[frame]
         self.canvas.restore_region(self._background)
-        for run, art in zip(self.runs, self._artists, strict=True):
+        views = self.views
+        unit = "m, rad" if run_is_pose(self.runs[0]) else "m"
+        for art in self._artists:
+            run, P = art["run"], art["P"]
             kk = min(k, run.steps)
-            arm = run.scenario.planar_arm
             q = run.q[kk]
-            points = arm.joint_positions(q)
+            points = views.joints(q) @ P.T
+            path = views.position(run)
             art["links"].set_data(points[:, 0], points[:, 1])
-            art["trace"].set_data(run.p[: kk + 1, 0], run.p[: kk + 1, 1])
-            art["ellipse"].set_xy(ellipse_points(arm.jacobian(q), run.p[kk], self.scale))
-            art["text"].set_text(
-                f"t = {run.t[kk]:5.2f} s\nm = {run.m[kk]:.4f}\n|e| = {run.error_norm[kk]:.3f} m"
-            )
+            trace = path[: kk + 1] @ P.T
+            art["trace"].set_data(trace[:, 0], trace[:, 1])
+            J = P @ views.jacobian(q)
+            art["ellipse"].set_xy(ellipse_points(J, P @ path[kk], self.scale))
+            names = ["trace", "ellipse", "links"]
+            if art["text"] is not None:
+                art["text"].set_text(
+                    f"t = {run.t[kk]:5.2f} s\nm = {run.m[kk]:.4f}\n"
+                    f"|e| = {run.error_norm[kk]:.3f} {unit}"
+                )
+                names.append("text")
             ax = art["ax"]
-            for name in ("trace", "ellipse", "links", "text"):
+            for name in names:
                 ax.draw_artist(art[name])
         self.canvas.blit(self.fig.bbox)
         buffer = np.asarray(self.canvas.buffer_rgba())
@@ -179,7 +226,8 @@ class Animator:
     def ellipse_at(self, frame: int, run_index: int = 0) -> Matrix:
         """The ellipse polygon as drawn in ``frame`` for run ``run_index`` (for checks)."""
         self.draw(frame)
-        return np.asarray(self._artists[run_index]["ellipse"].get_xy())
+        first = next(a for a in self._artists if a["run"] is self.runs[run_index])
+        return np.asarray(first["ellipse"].get_xy())
 
     def frames(self) -> list[np.ndarray]:
         return [self.draw(i) for i in range(len(self.indices))]
@@ -229,6 +277,11 @@ class Animator:
     def close(self) -> None:
         """Release the figure's artists (the figure is not registered anywhere else)."""
         self.fig.clear()
+
+
+def run_is_pose(run: Run) -> bool:
+    """True when the run tracks a pose (its error mixes metres and radians)."""
+    return bool(run.e.shape[1] == 6)
 
 
 def animate(

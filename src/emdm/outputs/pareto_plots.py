@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FormatStrFormatter, MaxNLocator
 
 from ..core.scenario import Scenario
 from .style import COLUMN, DOUBLE, color, figure
@@ -65,8 +65,22 @@ def pareto_figure(data: dict[str, Any], out: Path) -> Path:
             ax.set_title(f"k = {step['k']} (t = {step['t']:.2f} s{scaled})")
             ax.set_xlabel("manip. rate M (1/s)")
             ax.xaxis.set_major_locator(MaxNLocator(3))
+            ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
             ax.tick_params(axis="x", labelrotation=30)
-            ax.set_yscale("log")
+            if np.ptp(E) <= 1e-9 * max(float(np.abs(E).max()), 1e-300) and np.ptp(M) <= 1e-9 * max(
+                float(np.abs(M).max()), 1e-300
+            ):  # a degenerate front (e.g. Jm orthogonal to the self-motions)
+                ax.text(
+                    0.5,
+                    0.95,
+                    "one point: every\nweight gives the\nsame command",
+                    transform=ax.transAxes,
+                    ha="center",
+                    va="top",
+                    fontsize=6,
+                )
+            else:
+                ax.set_yscale("log")
         axes[0].set_ylabel("effort E (rad^2/s^2)")
         fig.legend(
             *axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=6

@@ -15,14 +15,18 @@ import numpy as np
 from matplotlib.patches import Circle
 
 from ..sim.loop import Run
-from .style import COLUMN, CONTROLLER_STYLE, color, figure
+from .animate import ellipse_points
+from .style import COLUMN, CONTROLLER_STYLE, DOUBLE, color, figure
+from .views import Views
 
 GROUPS = {
     "UC": ("UC-IVKC", "UC-EMDM"),
     "C": ("C-IVKC", "C-EMDM"),
     "all": ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"),
+    "baselines": ("RRMC", "PARK", "MMC", "C-EMDM"),
 }
-"""The overlays the brief asks for, and all four together."""
+"""The overlays the brief asks for, all four together, and the manipulability benchmark's
+baselines beside C-EMDM."""
 
 
 class Quantity(StrEnum):
@@ -102,7 +106,10 @@ def series_figure(runs: Sequence[Run], quantity: Quantity, stem: Path) -> Path:
         if quantity is Quantity.ALPHA:
             ax.set_ylim(-0.05, 1.05)
         ax.set_xlabel("time t (s)")
-        ax.set_ylabel(LABELS[quantity])
+        label = LABELS[quantity]
+        if runs[0].e.shape[1] == 6:  # a pose: the error and slack rows mix metres and radians
+            label = label.replace("(m)", "(m and rad)").replace("(m/s)", "(m/s and rad/s)")
+        ax.set_ylabel(label)
         ax.set_title(_title(runs))
         ax.legend()
     return stem
@@ -149,9 +156,57 @@ def joints_figure(runs: Sequence[Run], kind: Joints, stem: Path) -> Path:
     return stem
 
 
+def spatial_path_figure(runs: Sequence[Run], stem: Path) -> Path:
+    """End-effector paths of a spatial arm in three orthogonal projections, with the arm at the
+    start, its translational manipulability ellipsoid there, and the goal."""
+    sc = runs[0].scenario
+    views = Views(sc)
+    box = views.limits(runs)
+    q0 = np.asarray(sc.motion.q0)
+    start = views.joints(q0)
+    J = views.jacobian(q0)
+    size = 0.5 * float((box[:, 1] - box[:, 0]).max())
+    scale = 0.3 * size / float(np.sqrt(np.linalg.eigvalsh(J @ J.T)[-1]))
+    with figure(stem, width=DOUBLE, height=2.6, ncols=3) as (fig, axes):
+        for v, (ax, P) in enumerate(zip(axes, views.projections, strict=True)):
+            for i, run in enumerate(runs):
+                path = views.position(run) @ P.T
+                ax.plot(path[:, 0], path[:, 1], **_style(run, i))
+            pts = start @ P.T
+            ax.fill(*ellipse_points(P @ J, P @ start[-1], scale).T, color="grey", alpha=0.2)
+            ax.plot(
+                pts[:, 0],
+                pts[:, 1],
+                color="black",
+                linewidth=1.2,
+                marker="o",
+                markersize=2.5,
+                label="arm at start",
+            )
+            goal = P @ np.asarray(sc.motion.goal[:3])
+            ax.plot(*goal, marker="*", color="black", markersize=9, linestyle="none", label="goal")
+            ax.set_xlim(*(P @ box)[0])
+            ax.set_ylim(*(P @ box)[1])
+            ax.set_aspect("equal")
+            ax.set_xlabel(f"{views.axes[v][0]} (m)")
+            ax.set_ylabel(f"{views.axes[v][1]} (m)")
+            ax.set_title(views.names[v])
+        fig.suptitle(
+            f"{_title(runs)}: end-effector path\n(grey: the translational manipulability "
+            f"ellipsoid at the start, x{scale:.2g} m/s per rad/s)",
+            fontsize=8,
+        )
+        fig.legend(
+            *axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=6, fontsize=6
+        )
+    return stem
+
+
 def path_figure(runs: Sequence[Run], stem: Path) -> Path:
     """End-effector paths in the workspace, with start, goal and the reachable annulus."""
     sc = runs[0].scenario
+    if sc.spatial:
+        return spatial_path_figure(runs, stem)
     arm = sc.planar_arm
     with figure(stem, width=COLUMN, height=3.0) as (_, ax):
         ax.add_patch(
@@ -189,7 +244,7 @@ def run_figures(runs: dict[str, Run], out: Path) -> list[Path]:
     stems: list[Path] = []
     for group, names in GROUPS.items():
         chosen = [runs[name] for name in names if name in runs]
-        if not chosen or (group == "all" and len(chosen) < 3):
+        if not chosen or (group in ("all", "baselines") and len(chosen) < 3):
             continue
         folder = out / group
         for quantity in Quantity:

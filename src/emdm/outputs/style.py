@@ -31,6 +31,9 @@ CONTROLLER_STYLE: dict[str, dict[str, Any]] = {
     "C-IVKC": {"color": "#D55E00", "linestyle": "-"},
     "UC-EMDM": {"color": "#56B4E9", "linestyle": "--"},
     "C-EMDM": {"color": "#0072B2", "linestyle": "-"},
+    "RRMC": {"color": "#999999", "linestyle": ":"},
+    "PARK": {"color": "#CC79A7", "linestyle": "-."},
+    "MMC": {"color": "#009E73", "linestyle": "-"},
 }
 FAMILY_COLOR = {"exact": "#0072B2", "gradient": "#009E73", "gradient-free": "#D55E00"}
 

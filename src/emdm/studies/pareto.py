@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import Controller, get_controller, program_at
+from ..core.controllers import Controller, get_controller, program_at, state_at
 from ..core.scenario import Scenario, Weights
 from ..errors import NoSolution
 from ..sim.loop import Run, simulate
@@ -42,13 +42,13 @@ def front_at(
 ) -> list[dict[str, Any]]:
     """The points of the front at configuration ``q`` (``w_M = 0`` first, then each ratio)."""
     w0 = scenario.weights
+    Jm = state_at(scenario, q).kin.Jm
     points = []
     for ratio in [0.0, *sweep]:
         weights = Weights(effort=w0.effort, manipulability=ratio * w0.effort, slack=w0.slack)
         program = program_at(controller, scenario, q, weights=weights)
         result = solve_chain(program.qp, [DEFAULT_SOLVER, *DEFAULT_FALLBACK])
         qd = result.x[: scenario.n]
-        Jm = scenario.planar_arm.manipulability_jacobian(q)
         points.append(
             {
                 "w_effort": weights.effort,
