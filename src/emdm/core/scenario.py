@@ -244,6 +244,15 @@ class Scenario:
         return SerialArm(self.arm.dh, self.arm.convention, self.arm.tool)  # type: ignore[arg-type]
 
     @property
+    def reach(self) -> float:
+        """Farthest the end effector can be from the base (m): the sum of the link lengths, or
+        of ``|a| + |d|`` over the DH rows plus the tool's length."""
+        if self.arm.dh is None:
+            return float(self.planar_arm.reach)
+        dh = self.arm.dh
+        return float(np.sum(np.abs(dh[:, 0]) + np.abs(dh[:, 2])) + np.linalg.norm(self.arm.tool))
+
+    @property
     def link_lengths(self) -> Vector:
         """Length of each link (m): the planar lengths, or ``hypot(a, d)`` of each DH row."""
         if self.arm.lengths is not None:

@@ -16,7 +16,7 @@ from .style import COLUMN, figure
 
 def workspace_maps(data: dict[str, Any], scenario: Scenario, out: Path) -> Path:
     """Heat maps over goal positions: C-EMDM time to goal, and its gain over C-IVKC."""
-    reach = scenario.planar_arm.reach
+    reach = scenario.reach
     edges = np.linspace(-reach, reach, GRID + 1)
     chosen = {
         "C-EMDM mean time to goal (s)": data["maps"]["C-EMDM time to goal"],

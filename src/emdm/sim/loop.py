@@ -45,7 +45,7 @@ from ..core.problem import QP
 from ..core.scenario import Policy, Scenario
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
-from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, qp_work
+from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, certify, qp_work
 
 F64 = NDArray[np.float64]
 
@@ -193,6 +193,7 @@ def run_kernel(
     nt = rec.p.shape[1]
     if k0 == 0:  # a new run: no working set to try first, so a run never depends on the last
         w.qp.warm[0] = False
+    scaled = False
     cap = rec.qd.shape[0]
     for k in range(k0, cap + 1):
         m = task_kinematics(
@@ -226,14 +227,26 @@ def run_kernel(
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
-            code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+            code, iterations = INFEASIBLE, 0
+            if not scaled:  # after a scaled step the task is most likely scaled again
+                code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
             if code == INFEASIBLE:
                 alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
-                if alpha < 0.0 or not scale_policy:
+                if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                     return HANDOFF, k
-                for i in range(nt):
-                    w.b[i] *= alpha
-                code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+                if alpha < 1.0:
+                    for i in range(nt):
+                        w.b[i] *= alpha
+                    # the scaled task leaves the LP's optimal face, most often its vertex alone:
+                    # that vertex is the optimum when its certificate says so (else the method)
+                    for j in range(w.x.size):
+                        w.x[j] = w.qp.feas.centre[j]
+                    certify(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+                    if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
+                        code, iterations = OK, 0
+                if code != OK:
+                    code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+            scaled = alpha < 1.0
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
             for i in range(nt):

@@ -100,7 +100,7 @@ def run_chunk(
             blocks.append(draw_block(scenario, seed, b, count))
     q0s = np.concatenate([b[0] for b in blocks])
     goals = np.concatenate([b[1] for b in blocks])
-    reach = scenario.planar_arm.reach
+    reach = scenario.reach
     edges = np.linspace(-reach, reach, GRID + 1)
     cell = np.clip(np.digitize(goals[:, 1], edges) - 1, 0, GRID - 1) * GRID + np.clip(
         np.digitize(goals[:, 0], edges) - 1, 0, GRID - 1
