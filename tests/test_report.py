@@ -111,6 +111,9 @@ def test_the_page_tells_the_papers_story(report):
     assert found == titles
     tex = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
     for section in doc.sections:
+        if section.html_only:  # beyond the brief: the page only
+            assert f"{{{latex_environment().filters['tex'](section.title)}}}" not in tex
+            continue
         assert f"{{{latex_environment().filters['tex'](section.title)}}}" in tex, section.title
         if section.answer:
             assert render_latex(section.answer) in tex, section.key
@@ -118,6 +121,16 @@ def test_the_page_tells_the_papers_story(report):
     for brief_item in ("Task 1.1", "Task 1.2", "Task 2.1", "Task 2.2"):
         assert any(item.startswith(brief_item) for item in answered), brief_item
     assert len(page.tables["tab-answers"]) - 1 == len(doc.answers)
+
+
+def test_beyond_the_brief_puts_the_benchmark_beside_the_published_table(report):
+    root, page = report
+    rows = page.tables["tab-mmc"]
+    data = json.loads((root / "data" / "mmc.json").read_text(encoding="utf-8"))
+    assert len(rows) - 1 == sum(len(v) for v in data["results"].values())
+    mmc = next(r for r in rows if r[:2] == ["Panda", "MMC"])
+    assert "(8.0 %)" in mmc[4].replace("\u202f", " ")
+    assert (root / "paper" / "figures" / "panda-baselines.png").is_file()
 
 
 def test_task2_c_ivkc_is_explained_not_just_compared(report):

@@ -23,6 +23,7 @@ class ReportConfig:
     animation_seconds: float
     mp4: bool
     compile: bool = True
+    mmc_trials: int = 500
 
 
 FULL = ReportConfig(
@@ -48,6 +49,7 @@ QUICK = ReportConfig(
     grid=4,
     animation_seconds=4.0,
     mp4=False,
+    mmc_trials=40,
 )
 
 TASKS = ("task1", "task2")

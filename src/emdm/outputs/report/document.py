@@ -59,6 +59,7 @@ class Section:
     partial: str | None = None
     brief: str | None = None
     html_extra: list[str] = field(default_factory=list)
+    html_only: bool = False
 
 
 @dataclass

@@ -237,6 +237,24 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
     return out
 
 
+def _job_mmc(stage: Path, cfg: ReportConfig) -> list[str]:
+    """Beyond the brief: the manipulability benchmark on the Panda and the UR5 (``data/mmc.json``)
+    and the Panda's baselines on its preset task (a figure for the page)."""
+    from ...studies.mmc import CONTROLLERS as BENCH
+    from ...studies.mmc import PUBLISHED, run_mmc_benchmark
+    from ..plots import spatial_path_figure
+
+    data = run_mmc_benchmark(trials=cfg.mmc_trials, seed=0)
+    data["published"] = PUBLISHED
+    sc = load_scenario("panda")
+    runs = {name: simulate(sc, name) for name in BENCH}
+    data["panda_preset"] = {name: metrics(run) for name, run in runs.items()}
+    write_json(stage / "data" / "mmc.json", data)
+    with pf.png_only(cfg.quick):
+        stem = spatial_path_figure(list(runs.values()), stage / PAPER_FIGURES / "panda-baselines")
+    return [str(stem)]
+
+
 def _job_story_figures(stage: Path, cfg: ReportConfig) -> list[str]:
     """The workspace figure of Task 2, the pitch's headline and its animation stills."""
     with pf.png_only(cfg.quick):
@@ -445,6 +463,7 @@ def build_report(
                         _job_pair_figures, task, group, stage, cfg
                     )
             futures["figures:story"] = pool.submit(_job_story_figures, stage, cfg)
+            futures["mmc"] = pool.submit(_job_mmc, stage, cfg)
             for task in TASKS:
                 for group, (ivkc, emdm) in PAIRS.items():
                     stem = stage / "animations" / task / f"{ivkc}_vs_{emdm}"
