@@ -301,3 +301,10 @@ def test_spatial_figures_are_written(tmp_path):
         )
         == 0
     )
+
+
+def test_planar_only_commands_refuse_a_spatial_arm_in_one_line(tmp_path, capsys):
+    from emdm.cli.main import main
+
+    assert main(["play", "panda", "--no-browser"]) == 2
+    assert "planar arms only" in capsys.readouterr().err

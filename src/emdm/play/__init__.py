@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import warnings
 
-from ..core.scenario import PRESETS, Scenario, load_scenario
+from ..core.scenario import PLANAR_PRESETS, Scenario, load_scenario
 from ..errors import EmdmError
 
 
@@ -20,6 +20,11 @@ def serve(scenario: Scenario, *, port: int = 5006, open_browser: bool = True) ->
     """
     if not 0 <= port <= 65535:
         raise EmdmError(f"--port must be 0 to 65535, got {port}")
+    if scenario.spatial:
+        raise EmdmError(
+            f"{scenario.name} is a spatial arm; the playground takes planar arms only "
+            "(try emdm animate or emdm plot for spatial runs)"
+        )
     try:
         from .server import serve as run
     except ImportError as exc:
@@ -27,7 +32,7 @@ def serve(scenario: Scenario, *, port: int = 5006, open_browser: bool = True) ->
     bases = {scenario.name: scenario}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for name in PRESETS:
+        for name in PLANAR_PRESETS:
             bases.setdefault(name, load_scenario(name))
     return run(bases, port=port, open_browser=open_browser)
 

@@ -1530,6 +1530,7 @@ class Story:
                     self.d.num(f, pp, "C-EMDM", "mean_manipulability", fmt=".4f"),
                     ".",
                 ),
+                wide=True,
                 paper=False,
             )
         )
