@@ -239,7 +239,8 @@ def state_at(scenario: Scenario, q: Vector) -> StepState:
     n, nt = scenario.n, scenario.nt
     p, e, J, Jm = np.empty(nt), np.empty(nt), np.empty((nt, n)), np.empty(n)
     m = task_kinematics_of(
-        scenario.arm_data,
+        scenario.arm_data.lengths,
+        scenario.geometry,
         scenario.task_code,
         np.asarray(scenario.motion.goal, dtype=float),
         np.asarray(q, dtype=float),

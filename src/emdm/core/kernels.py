@@ -34,12 +34,11 @@ TASK_PLANAR, TASK_POSITION, TASK_POSE = 0, 1, 2
 
 
 class ArmData(NamedTuple):
-    """An arm and its joint limits as kernel input (per joint: m, rad, rad/s, rad, rad, -).
+    """An arm's links and joint limits as kernel input (per joint: m, rad, rad/s, rad, rad, -).
 
-    A planar arm has its link ``lengths`` and an empty ``dh`` (0 x 4); a spatial arm has its DH
-    rows ``[a, alpha, d, offset]`` in ``dh`` (``modified`` for Craig's convention), its ``tool``
-    transform, and ``lengths`` = the length of each link (``hypot(a, d)``, for scales only).
-    ``rows`` selects the Jacobian rows of the manipulability (``serial_kernels.ROWS_*``).
+    ``lengths`` are a planar arm's links (a spatial arm's: ``hypot(a, d)`` per DH row, for scales
+    only); a spatial arm's chain is in :class:`Geometry`, kept apart so that the kernels of the
+    joint bounds do not carry it.
     """
 
     lengths: F64
@@ -50,6 +49,13 @@ class ArmData(NamedTuple):
     influence: F64
     stop: F64
     gain: F64
+
+
+class Geometry(NamedTuple):
+    """A spatial arm's chain as kernel input: DH rows ``[a, alpha, d, offset]`` (0 x 4 for a planar
+    arm), ``modified`` for Craig's convention, the ``tool`` transform (4 x 4), and the Jacobian
+    ``rows`` of the manipulability (``serial_kernels.ROWS_*``)."""
+
     dh: F64
     modified: bool
     tool: F64
@@ -57,19 +63,16 @@ class ArmData(NamedTuple):
 
 
 class KinWork(NamedTuple):
-    """Scratch buffers of the kinematics: tip vectors, Cauchy-Binet minors and ``G = dc/dq`` (planar);
-    link frames, one link, the end-effector pose, the 6 x n Jacobian and the Hessian (spatial)."""
+    """Scratch buffers of the kinematics: tip vectors, Cauchy-Binet minors and ``G = dc/dq``
+    (planar), and one flat buffer ``spatial`` for a spatial arm's link frames, one link, the
+    end-effector pose, the 6 x n Jacobian, the Hessian and a rotation (:func:`_spatial_views`).
+    Few arrays: a kernel call counts every array of the tuples it is passed."""
 
     rx: F64
     ry: F64
     minors: F64
     G: F64
-    frames: F64
-    link: F64
-    T: F64
-    J6: F64
-    H: F64
-    R: F64
+    spatial: F64
 
 
 class FeasWork(NamedTuple):
@@ -81,7 +84,16 @@ class FeasWork(NamedTuple):
     free: NDArray[np.bool_]
     parallel: NDArray[np.bool_]
     centre: F64
-    status: NDArray[np.int8]
+    lpf: F64
+    lpi: NDArray[np.int64]
+
+
+class LPViews(NamedTuple):
+    """Views of :class:`FeasWork`'s flat buffers for the simplex method (:func:`_lp_views`):
+    per variable its status (0 basic, -1 / +1 at a bound), value, bounds and cost; per row the
+    artificial's sign, the basis, and scratch; the basis matrix; the free columns."""
+
+    status: NDArray[np.int64]
     val: F64
     vlo: F64
     vhi: F64
@@ -98,18 +110,27 @@ class FeasWork(NamedTuple):
 def kin_work(n: int) -> KinWork:
     """Buffers for the kinematics of an ``n``-joint arm (planar or spatial)."""
     npairs = n * (n - 1) // 2
+    spatial = 16 * (n + 1) + 32 + 6 * n + 6 * n * n + 9
     return KinWork(
-        np.empty(n),
-        np.empty(n),
-        np.empty(npairs),
-        np.empty((npairs, n)),
-        np.empty((n + 1, 4, 4)),
-        np.empty((4, 4)),
-        np.empty((4, 4)),
-        np.empty((6, n)),
-        np.empty((n, 6, n)),
-        np.empty((3, 3)),
+        np.empty(n), np.empty(n), np.empty(npairs), np.empty((npairs, n)), np.empty(spatial)
     )
+
+
+@kernel
+def _spatial_views(w: KinWork, n: int) -> tuple[F64, F64, F64, F64, F64, F64]:
+    """``(frames, link, T, J6, H, R)``: views of ``w.spatial`` ((n+1) x 4 x 4, 4 x 4, 4 x 4,
+    6 x n, n x 6 x n, 3 x 3)."""
+    buf = w.spatial
+    a = 16 * (n + 1)
+    frames = buf[:a].reshape((n + 1, 4, 4))
+    link = buf[a : a + 16].reshape((4, 4))
+    T = buf[a + 16 : a + 32].reshape((4, 4))
+    b = a + 32
+    J6 = buf[b : b + 6 * n].reshape((6, n))
+    c = b + 6 * n
+    H = buf[c : c + 6 * n * n].reshape((n, 6, n))
+    R = buf[c + 6 * n * n : c + 6 * n * n + 9].reshape((3, 3))
+    return frames, link, T, J6, H, R
 
 
 @kernel
@@ -122,17 +143,31 @@ def feas_work(nx: int, nt: int) -> FeasWork:
         np.empty(nx, dtype=np.bool_),
         np.empty(nx, dtype=np.bool_),
         np.empty(nx),
-        np.empty(nv, dtype=np.int8),
-        np.empty(nv),
-        np.empty(nv),
-        np.empty(nv),
-        np.empty(nv),
-        np.empty(nt),
-        np.empty(nt, dtype=np.int64),
-        np.empty((nt, nt)),
-        np.empty(nt),
-        np.empty(nt),
-        np.empty((nt, nx)),
+        np.empty(4 * nv + 3 * nt + nt * nt + nt * nx),
+        np.empty(nv + nt, dtype=np.int64),
+    )
+
+
+@kernel
+def _lp_views(w: FeasWork, nx: int, nt: int) -> LPViews:
+    """The simplex method's arrays as views of ``w.lpf`` and ``w.lpi`` (see :class:`LPViews`)."""
+    nv = nx + 1 + nt
+    f = w.lpf
+    a = 4 * nv
+    b = a + 3 * nt
+    c = b + nt * nt
+    return LPViews(
+        w.lpi[:nv],
+        f[:nv],
+        f[nv : 2 * nv],
+        f[2 * nv : 3 * nv],
+        f[3 * nv : a],
+        f[a : a + nt],
+        w.lpi[nv : nv + nt],
+        f[b:c].reshape((nt, nt)),
+        f[a + nt : a + 2 * nt],
+        f[a + 2 * nt : b],
+        f[c : c + nt * nx].reshape((nt, nx)),
     )
 
 
@@ -291,7 +326,16 @@ def rotation_matrix(rx: float, ry: float, rz: float, R: F64) -> None:
 
 @kernel
 def task_kinematics(
-    arm: ArmData, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64, w: KinWork
+    lengths: F64,
+    geo: Geometry,
+    task: int,
+    goal: F64,
+    q: F64,
+    p: F64,
+    e: F64,
+    J: F64,
+    Jm: F64,
+    w: KinWork,
 ) -> float:
     """The task at ``q``: ``p`` (its value), ``e = goal - p`` (its error), ``J`` (its rows of the
     Jacobian) and ``Jm``; returns the manipulability ``m``.
@@ -300,27 +344,27 @@ def task_kinematics(
     position (3), ``J`` = the linear rows; ``TASK_POSE``: ``p`` = position and rotation vector of
     the end effector's orientation ``R`` (6), ``J`` = the geometric Jacobian, and the orientation
     error is the rotation vector of ``R_goal R^T`` (base frame), where ``R_goal`` is the rotation
-    of the goal's rotation vector. ``m`` and ``Jm`` are over the rows ``arm.rows``.
+    of the goal's rotation vector. ``m`` and ``Jm`` are over the rows ``geo.rows``.
     """
-    if arm.dh.shape[0] == 0:
-        m = kinematics(arm.lengths, q, p, J, Jm, w)
+    if geo.dh.shape[0] == 0:
+        m = kinematics(lengths, q, p, J, Jm, w)
         e[0], e[1] = goal[0] - p[0], goal[1] - p[1]
         return m
     n = q.size
-    serial_kinematics(arm.dh, arm.modified, arm.tool, q, w.frames, w.link, w.T, w.J6)
-    serial_hessian(w.J6, w.H)
-    m = manipulability_gradient(w.J6, w.H, arm.rows, Jm)
-    T = w.T
+    frames, link, T, J6, H, Rg = _spatial_views(w, n)
+    serial_kinematics(geo.dh, geo.modified, geo.tool, q, frames, link, T, J6)
+    serial_hessian(J6, H)
+    m = manipulability_gradient(J6, H, geo.rows, Jm)
     rows = 6 if task == TASK_POSE else 3
     for i in range(rows):
         for j in range(n):
-            J[i, j] = w.J6[i, j]
+            J[i, j] = J6[i, j]
     for i in range(3):
         p[i] = T[i, 3]
         e[i] = goal[i] - p[i]
     if task == TASK_POSE:
         rotation_vector(T, p, 3)
-        Rg, E = w.R, w.link
+        E = link
         rotation_matrix(goal[3], goal[4], goal[5], Rg)
         for i in range(3):
             for k in range(3):
@@ -331,10 +375,10 @@ def task_kinematics(
 
 @kernel
 def task_kinematics_of(
-    arm: ArmData, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64
+    lengths: F64, geo: Geometry, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64
 ) -> float:
     """:func:`task_kinematics` with its own buffers (the entry point for callers in Python)."""
-    return task_kinematics(arm, task, goal, q, p, e, J, Jm, kin_work(q.size))
+    return task_kinematics(lengths, geo, task, goal, q, p, e, J, Jm, kin_work(q.size))
 
 
 # ------------------------------------------------------------------------------ joint bounds
@@ -494,7 +538,7 @@ def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
                 if free[k] and abs(A[0, i] * A[1, k] - A[1, i] * A[0, k]) > RANK_TOL * scale:
                     return 2
         return 1
-    M = w.Af
+    M = _lp_views(w, n, nt).Af
     cols = 0
     big = 0.0
     for j in range(n):
@@ -540,7 +584,7 @@ def _column(A: F64, b: F64, sigma: F64, j: int, i: int) -> float:
 
 
 @kernel
-def _basis_matrix(A: F64, b: F64, w: FeasWork, transpose: bool) -> None:
+def _basis_matrix(A: F64, b: F64, w: LPViews, transpose: bool) -> None:
     nt = A.shape[0]
     for i in range(nt):
         for r in range(nt):
@@ -552,7 +596,7 @@ def _basis_matrix(A: F64, b: F64, w: FeasWork, transpose: bool) -> None:
 
 
 @kernel
-def _simplex(A: F64, b: F64, w: FeasWork) -> bool:
+def _simplex(A: F64, b: F64, w: LPViews) -> bool:
     """Minimise ``cost . v`` over ``vlo <= v <= vhi`` with ``A x - alpha b + diag(sigma) a = 0``,
     ``v = (x, alpha, a)``, from the basis ``w.basis`` (``status`` 0: basic, -1 / +1: at the
     lower / upper bound). The bounded-variable primal simplex method with Bland's rule (the first
@@ -650,7 +694,8 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
     minimises the artificial variables that absorb the residual; phase 2 maximises ``alpha``.
     """
     nt, nx = A.shape
-    status, val, lo, hi, cost, sigma = w.status, w.val, w.vlo, w.vhi, w.cost, w.sigma
+    v = _lp_views(w, nx, nt)
+    status, val, lo, hi, cost, sigma = v.status, v.val, v.vlo, v.vhi, v.cost, v.sigma
     for j in range(nx):
         lo[j], hi[j] = lb[j], ub[j]
         if abs(lb[j]) <= abs(ub[j]):
@@ -671,8 +716,8 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
         a = nx + 1 + i
         lo[a], hi[a], cost[a] = 0.0, math.inf, 1.0
         status[a], val[a] = 0, abs(r)
-        w.basis[i] = a
-    if not _simplex(A, b, w):
+        v.basis[i] = a
+    if not _simplex(A, b, v):
         return NEEDS_REFERENCE, 0.0
     left = 0.0
     for i in range(nt):
@@ -686,7 +731,7 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
             val[a] = 0.0
     if scale:
         cost[nx] = -1.0
-        if not _simplex(A, b, w):
+        if not _simplex(A, b, v):
             return NEEDS_REFERENCE, 0.0
     for j in range(nx):
         x[j] = min(max(val[j], lb[j]), ub[j])
@@ -711,16 +756,14 @@ def _mark_free(lb: F64, ub: F64, free: NDArray[np.bool_]) -> int:
 
 @kernel
 def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
-    """Largest ``alpha`` in [0, 1] with ``A x = alpha b``, ``lb <= x <= ub`` feasible.
+    """Largest ``alpha`` in [0, 1] with ``A x = alpha b``, ``lb <= x <= ub`` feasible (two rows;
+    :func:`task_scale_rows` takes any).
 
     Returns -1 when no ``alpha`` in [0, 1] is, and -2 for the case left to the numpy reference
     (unbounded variables whose columns have rank < 2).
     """
     if _mark_free(lb, ub, w.free) > 0:
         return 1.0 if free_rank(A, w.free, w) == A.shape[0] else -2.0
-    if A.shape[0] != 2:
-        code, alpha = _lp(A, b, lb, ub, True, w.centre, w)
-        return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
     t_lo, t_hi, _, _, _ = _ray_interval(A, lb, ub, 0.0, 0.0, b[0], b[1], w)
     lo = max(0.0, t_lo)
     hi = min(1.0, t_hi)
@@ -730,9 +773,22 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 
 
 @kernel
+def task_scale_rows(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
+    """:func:`task_scale` for programs of any row count, by the simplex method (:func:`_lp`); the
+    answer's vertex is left in ``w.centre``. Kept apart from the 2-D kernel, whose hot path would
+    otherwise carry the simplex method's code."""
+    if A.shape[0] == 2:
+        return task_scale(A, b, lb, ub, w)
+    if _mark_free(lb, ub, w.free) > 0:
+        return 1.0 if free_rank(A, w.free, w) == A.shape[0] else -2.0
+    code, alpha = _lp(A, b, lb, ub, True, w.centre, w)
+    return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
+
+
+@kernel
 def task_scale_of(A: F64, b: F64, lb: F64, ub: F64) -> float:
-    """:func:`task_scale` with its own buffers (the entry point for callers in Python)."""
-    return task_scale(A, b, lb, ub, feas_work(A.shape[1], A.shape[0]))
+    """:func:`task_scale_rows` with its own buffers (the entry point for callers in Python)."""
+    return task_scale_rows(A, b, lb, ub, feas_work(A.shape[1], A.shape[0]))
 
 
 @kernel
@@ -743,40 +799,13 @@ def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tup
     vertex (or edge) that maps there and takes the convex combination that lands on ``b``.
     ``unique`` is True when ``b`` lies on an edge whose preimage is one point (at most one
     generator parallel to the edge): then ``x`` is the only feasible point, hence the optimum.
-    With other than two task rows, the point is a vertex found by the simplex method
-    (``unique`` False). Unbounded variables whose columns span the task space take the
-    least-norm solution for the rest of the task, the bounded ones the point of their box
-    nearest zero.
+    Two task rows; :func:`feasible_point_rows` takes any.
     """
     free, centre = w.free, w.centre
-    nt, n = A.shape
+    n = A.shape[1]
     if _mark_free(lb, ub, free) > 0:
-        if free_rank(A, free, w) != nt:
+        if free_rank(A, free, w) != 2:
             return NEEDS_REFERENCE, False
-        if nt != 2:
-            for i in range(nt):
-                w.y[i] = b[i]
-            for j in range(n):
-                if not free[j]:
-                    x[j] = min(max(0.0, lb[j]), ub[j])
-                    for i in range(nt):
-                        w.y[i] -= A[i, j] * x[j]
-            for i in range(nt):
-                for k in range(nt):
-                    acc = 0.0
-                    for j in range(n):
-                        if free[j]:
-                            acc += A[i, j] * A[k, j]
-                    w.Bm[i, k] = acc
-            if not solve_in_place(w.Bm, w.y, nt):
-                return NEEDS_REFERENCE, False
-            for j in range(n):
-                if free[j]:
-                    acc = 0.0
-                    for i in range(nt):
-                        acc += A[i, j] * w.y[i]
-                    x[j] = acc
-            return OK, False
         rx, ry = b[0], b[1]
         g00 = g01 = g11 = 0.0
         for j in range(n):
@@ -795,9 +824,6 @@ def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tup
             if free[j]:
                 x[j] = A[0, j] * l0 + A[1, j] * l1
         return OK, False
-    if nt != 2:
-        code, _ = _lp(A, b, lb, ub, False, x, w)
-        return code, False
     y0x = y0y = 0.0
     for j in range(n):
         centre[j] = 0.5 * (lb[j] + ub[j])
@@ -901,6 +927,48 @@ def build_program(
 
 
 @kernel
+def feasible_point_rows(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
+    """:func:`feasible_point` for programs of any row count (``unique`` always False with other
+    than two): a vertex found by the simplex method (:func:`_lp`); unbounded variables whose
+    columns span the task space take the least-norm solution for the rest of the task, the
+    bounded ones the point of their box nearest zero. Kept apart from the 2-D kernel, whose hot
+    path would otherwise carry the simplex method's code."""
+    nt, n = A.shape
+    if nt == 2:
+        return feasible_point(A, b, lb, ub, x, w)
+    free = w.free
+    if _mark_free(lb, ub, free) > 0:
+        if free_rank(A, free, w) != nt:
+            return NEEDS_REFERENCE, False
+        lp = _lp_views(w, n, nt)
+        for i in range(nt):
+            lp.y[i] = b[i]
+        for j in range(n):
+            if not free[j]:
+                x[j] = min(max(0.0, lb[j]), ub[j])
+                for i in range(nt):
+                    lp.y[i] -= A[i, j] * x[j]
+        for i in range(nt):
+            for k in range(nt):
+                acc = 0.0
+                for j in range(n):
+                    if free[j]:
+                        acc += A[i, j] * A[k, j]
+                lp.Bm[i, k] = acc
+        if not solve_in_place(lp.Bm, lp.y, nt):
+            return NEEDS_REFERENCE, False
+        for j in range(n):
+            if free[j]:
+                acc = 0.0
+                for i in range(nt):
+                    acc += A[i, j] * lp.y[i]
+                x[j] = acc
+        return OK, False
+    code, _ = _lp(A, b, lb, ub, False, x, w)
+    return code, False
+
+
+@kernel
 def feasible_point_of(A: F64, b: F64, lb: F64, ub: F64, x: F64) -> tuple[int, bool]:
-    """:func:`feasible_point` with its own buffers (the entry point for callers in Python)."""
-    return feasible_point(A, b, lb, ub, x, feas_work(x.size, A.shape[0]))
+    """:func:`feasible_point_rows` with its own buffers (the entry point for callers in Python)."""
+    return feasible_point_rows(A, b, lb, ub, x, feas_work(x.size, A.shape[0]))

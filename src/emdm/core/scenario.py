@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
-from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData
+from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry
 from .serial import SerialArm
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 
@@ -261,29 +261,34 @@ class Scenario:
 
     @cached_property
     def arm_data(self) -> ArmData:
-        """The arm, its limits and dampers as input of the compiled kernels."""
+        """The arm's links, limits and dampers as input of the compiled kernels."""
         a, d = self.arm, self.damper
+        return ArmData(
+            *(
+                np.array(x, dtype=float)
+                for x in (
+                    self.link_lengths,
+                    a.q_min,
+                    a.q_max,
+                    a.qd_min,
+                    a.qd_max,
+                    d.influence,
+                    d.stop,
+                    d.gain,
+                )
+            )
+        )
+
+    @cached_property
+    def geometry(self) -> Geometry:
+        """A spatial arm's chain (DH rows, convention, tool, manipulability rows) as kernel
+        input; a planar arm has no DH rows."""
+        a = self.arm
         rows = {"all": ROWS_ALL, "trans": ROWS_TRANS, "rot": ROWS_ROT}[self.motion.axes]
         tool = np.eye(4)
         tool[:3, 3] = a.tool
-
-        def f64(x: Any) -> Vector:
-            return np.array(x, dtype=float)
-
-        return ArmData(
-            f64(self.link_lengths),
-            f64(a.q_min),
-            f64(a.q_max),
-            f64(a.qd_min),
-            f64(a.qd_max),
-            f64(d.influence),
-            f64(d.stop),
-            f64(d.gain),
-            f64(a.dh if a.dh is not None else np.zeros((0, 4))),
-            a.convention == "modified",
-            tool,
-            rows,
-        )
+        dh = np.array(a.dh if a.dh is not None else np.zeros((0, 4)), dtype=float)
+        return Geometry(dh, a.convention == "modified", tool, rows)
 
     @property
     def max_steps(self) -> int:

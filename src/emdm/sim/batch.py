@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core.controllers import Controller, get_controller
 from ..core.jit import ensure_compiled, kernel
-from ..core.kernels import ArmData, ProgramData
+from ..core.kernels import ArmData, Geometry, ProgramData
 from ..core.scenario import Policy, Scenario
 from ..errors import NoSolution
 from .loop import (
@@ -42,6 +42,7 @@ F64 = NDArray[np.float64]
 @kernel
 def run_share(
     arm: ArmData,
+    geo: Geometry,
     motion: Motion,
     prog: ProgramData,
     goals: F64,
@@ -61,7 +62,7 @@ def run_share(
         task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps, motion.task)
         for j in range(n):
             rec.q[0, j] = q0s[r, j]
-        code, k = run_kernel(arm, task, prog, True, True, rec, 0, work)
+        code, k = run_kernel(arm, geo, task, prog, True, True, rec, 0, work)
         codes[r] = code
         if code == REACHED or code == TIMEOUT:
             reached = code == REACHED
@@ -82,6 +83,7 @@ def run_share(
 
 def run_all(
     arm: ArmData,
+    geo: Geometry,
     motion: Motion,
     prog: ProgramData,
     goals: F64,
@@ -94,11 +96,11 @@ def run_all(
     outcomes, ``codes[r]`` = how the run ended. :func:`run_share` releases the GIL, so plain
     threads run in parallel (no parallel compile of the whole loop is needed)."""
     if threads <= 1:
-        run_share(arm, motion, prog, goals, q0s, 0, 1, out, codes)
+        run_share(arm, geo, motion, prog, goals, q0s, 0, 1, out, codes)
         return
     with ThreadPoolExecutor(max_workers=threads) as pool:
         jobs = [
-            pool.submit(run_share, arm, motion, prog, goals, q0s, t, threads, out, codes)
+            pool.submit(run_share, arm, geo, motion, prog, goals, q0s, t, threads, out, codes)
             for t in range(threads)
         ]
         for job in jobs:
@@ -116,7 +118,7 @@ def _warm_up_batch() -> None:
             goals = np.array([sc.motion.goal], dtype=float)
             out, codes = np.empty((1, len(OUTCOMES))), np.empty(1, dtype=np.int64)
             prog = get_controller(name).program_data(sc)
-            run_share(sc.arm_data, motion_data(sc), prog, goals, q0s, 0, 1, out, codes)
+            run_share(sc.arm_data, sc.geometry, motion_data(sc), prog, goals, q0s, 0, 1, out, codes)
 
 
 @dataclass(frozen=True)
@@ -178,7 +180,17 @@ def simulate_batch(
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
         prog = ctrl.program_data(scenario)
         threads = min(numba.get_num_threads(), runs)
-        run_all(scenario.arm_data, motion_data(scenario), prog, g, q, threads, out, codes)
+        run_all(
+            scenario.arm_data,
+            scenario.geometry,
+            motion_data(scenario),
+            prog,
+            g,
+            q,
+            threads,
+            out,
+            codes,
+        )
     redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
     stopped: list[int] = []
     for r in redo:  # finish these runs exactly, through the solver chain where needed

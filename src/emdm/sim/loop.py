@@ -34,12 +34,15 @@ from ..core.controllers import Controller, admissible, get_controller, slack_wei
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
+    Geometry,
     KinWork,
     ProgramData,
     build_program,
     kin_work,
+    kinematics,
     task_kinematics,
     task_scale,
+    task_scale_rows,
 )
 from ..core.problem import QP
 from ..core.scenario import Policy, Scenario
@@ -180,6 +183,7 @@ def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
 @kernel
 def run_kernel(
     arm: ArmData,
+    geo: Geometry,
     motion: Motion,
     prog: ProgramData,
     scale_policy: bool,
@@ -196,9 +200,23 @@ def run_kernel(
     scaled = False
     cap = rec.qd.shape[0]
     for k in range(k0, cap + 1):
-        m = task_kinematics(
-            arm, motion.task, motion.goal, rec.q[k], rec.p[k], rec.e[k], w.J, w.Jm, w.kin
-        )
+        if nt == 2:  # the planar kinematics directly: the hot path carries no spatial code
+            m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
+            rec.e[k, 0] = motion.goal[0] - rec.p[k, 0]
+            rec.e[k, 1] = motion.goal[1] - rec.p[k, 1]
+        else:
+            m = task_kinematics(
+                arm.lengths,
+                geo,
+                motion.task,
+                motion.goal,
+                rec.q[k],
+                rec.p[k],
+                rec.e[k],
+                w.J,
+                w.Jm,
+                w.kin,
+            )
         rec.m[k] = m
         err2 = 0.0
         for i in range(nt):
@@ -231,7 +249,7 @@ def run_kernel(
             if not scaled:  # after a scaled step the task is most likely scaled again
                 code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
             if code == INFEASIBLE:
-                alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
+                alpha = task_scale_rows(w.A, w.b, w.lb, w.ub, w.qp.feas)
                 if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                     return HANDOFF, k
                 if alpha < 1.0:
@@ -406,7 +424,7 @@ def simulate(
     n, nt = scenario.n, scenario.nt
     prog = ctrl.program_data(scenario)
     nx = n + nt if prog.slack else n
-    arm, motion = scenario.arm_data, motion_data(scenario)
+    arm, geo, motion = scenario.arm_data, scenario.geometry, motion_data(scenario)
     policy = scenario.controller.on_infeasible
     in_kernel = solver == DEFAULT_SOLVER
     cap = min(motion.n_steps, FIRST_CHUNK)
@@ -416,7 +434,9 @@ def simulate(
     steps = _Steps()
     k = 0
     while True:
-        code, k = run_kernel(arm, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work)
+        code, k = run_kernel(
+            arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work
+        )
         if code == Exit.FULL:
             cap = min(motion.n_steps, 4 * cap)
             rec = _grow(rec, cap, n)
@@ -535,7 +555,7 @@ def _warm_up() -> None:
             rec = new_record(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
             work = step_work(sc.n, nx, sc.nt)
-            run_kernel(sc.arm_data, motion_data(sc), prog, True, True, rec, 0, work)
+            run_kernel(sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

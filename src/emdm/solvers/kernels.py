@@ -37,7 +37,7 @@ from ..core.kernels import (
     RANK_TOL,
     FeasWork,
     feas_work,
-    feasible_point,
+    feasible_point_rows,
     free_rank,
     solve_in_place,
 )
@@ -126,11 +126,11 @@ def kkt_residuals(
         px = 0.0
         for i in range(n):
             px += P[j, i] * x[i]
-        alam = 0.0
+        residual = px + c[j]
         for i in range(nt):
-            alam += A[i, j] * lam[i]
+            residual -= A[i, j] * lam[i]
         scale_g = max(scale_g, abs(px), abs(c[j]))
-        stat = max(stat, abs(px + c[j] - alam - mu[j]))
+        stat = max(stat, abs(residual - mu[j]))
         if mu[j] > 0:
             gap = x[j] - lb[j] if math.isfinite(lb[j]) else math.inf
         elif mu[j] < 0:
@@ -474,7 +474,7 @@ def _cold_start(
     free = w.feas.free
     n = x.size
     nt = A.shape[0]
-    code, unique = feasible_point(A, b, lb, ub, x, w.feas)
+    code, unique = feasible_point_rows(A, b, lb, ub, x, w.feas)
     if code != OK:
         return code, 0
     if unique:  # the (scaled) task leaves one feasible point: it is the optimum
