@@ -63,16 +63,26 @@ class Geometry(NamedTuple):
 
 
 class KinWork(NamedTuple):
-    """Scratch buffers of the kinematics: tip vectors, Cauchy-Binet minors and ``G = dc/dq``
-    (planar), and one flat buffer ``spatial`` for a spatial arm's link frames, one link, the
-    end-effector pose, the 6 x n Jacobian, the Hessian and a rotation (:func:`_spatial_views`).
-    Few arrays: a kernel call counts every array of the tuples it is passed."""
+    """Scratch buffers of the planar kinematics: tip vectors, Cauchy-Binet minors and
+    ``G = dc/dq``."""
 
     rx: F64
     ry: F64
     minors: F64
     G: F64
-    spatial: F64
+
+
+class SpatialWork(NamedTuple):
+    """Scratch buffers of a spatial arm's kinematics: link frames, one link, the end-effector
+    pose, the 6 x n Jacobian, the Hessian and a rotation. Apart from :class:`KinWork`, as a kernel
+    call counts every array of the tuples it is passed and the planar path needs none of these."""
+
+    frames: F64
+    link: F64
+    T: F64
+    J6: F64
+    H: F64
+    R: F64
 
 
 class FeasWork(NamedTuple):
@@ -108,29 +118,22 @@ class LPViews(NamedTuple):
 
 @kernel
 def kin_work(n: int) -> KinWork:
-    """Buffers for the kinematics of an ``n``-joint arm (planar or spatial)."""
+    """Buffers for the planar kinematics of an ``n``-joint arm."""
     npairs = n * (n - 1) // 2
-    spatial = 16 * (n + 1) + 32 + 6 * n + 6 * n * n + 9
-    return KinWork(
-        np.empty(n), np.empty(n), np.empty(npairs), np.empty((npairs, n)), np.empty(spatial)
-    )
+    return KinWork(np.empty(n), np.empty(n), np.empty(npairs), np.empty((npairs, n)))
 
 
 @kernel
-def _spatial_views(w: KinWork, n: int) -> tuple[F64, F64, F64, F64, F64, F64]:
-    """``(frames, link, T, J6, H, R)``: views of ``w.spatial`` ((n+1) x 4 x 4, 4 x 4, 4 x 4,
-    6 x n, n x 6 x n, 3 x 3)."""
-    buf = w.spatial
-    a = 16 * (n + 1)
-    frames = buf[:a].reshape((n + 1, 4, 4))
-    link = buf[a : a + 16].reshape((4, 4))
-    T = buf[a + 16 : a + 32].reshape((4, 4))
-    b = a + 32
-    J6 = buf[b : b + 6 * n].reshape((6, n))
-    c = b + 6 * n
-    H = buf[c : c + 6 * n * n].reshape((n, 6, n))
-    R = buf[c + 6 * n * n : c + 6 * n * n + 9].reshape((3, 3))
-    return frames, link, T, J6, H, R
+def spatial_work(n: int) -> SpatialWork:
+    """Buffers for the kinematics of an ``n``-joint spatial arm."""
+    return SpatialWork(
+        np.empty((n + 1, 4, 4)),
+        np.empty((4, 4)),
+        np.empty((4, 4)),
+        np.empty((6, n)),
+        np.empty((n, 6, n)),
+        np.empty((3, 3)),
+    )
 
 
 @kernel
@@ -336,6 +339,7 @@ def task_kinematics(
     J: F64,
     Jm: F64,
     w: KinWork,
+    sw: SpatialWork,
 ) -> float:
     """The task at ``q``: ``p`` (its value), ``e = goal - p`` (its error), ``J`` (its rows of the
     Jacobian) and ``Jm``; returns the manipulability ``m``.
@@ -351,7 +355,7 @@ def task_kinematics(
         e[0], e[1] = goal[0] - p[0], goal[1] - p[1]
         return m
     n = q.size
-    frames, link, T, J6, H, Rg = _spatial_views(w, n)
+    frames, link, T, J6, H, Rg = sw.frames, sw.link, sw.T, sw.J6, sw.H, sw.R
     serial_kinematics(geo.dh, geo.modified, geo.tool, q, frames, link, T, J6)
     serial_hessian(J6, H)
     m = manipulability_gradient(J6, H, geo.rows, Jm)
@@ -378,7 +382,8 @@ def task_kinematics_of(
     lengths: F64, geo: Geometry, task: int, goal: F64, q: F64, p: F64, e: F64, J: F64, Jm: F64
 ) -> float:
     """:func:`task_kinematics` with its own buffers (the entry point for callers in Python)."""
-    return task_kinematics(lengths, geo, task, goal, q, p, e, J, Jm, kin_work(q.size))
+    n = q.size
+    return task_kinematics(lengths, geo, task, goal, q, p, e, J, Jm, kin_work(n), spatial_work(n))
 
 
 # ------------------------------------------------------------------------------ joint bounds

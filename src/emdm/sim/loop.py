@@ -37,9 +37,11 @@ from ..core.kernels import (
     Geometry,
     KinWork,
     ProgramData,
+    SpatialWork,
     build_program,
     kin_work,
     kinematics,
+    spatial_work,
     task_kinematics,
     task_scale,
     task_scale_rows,
@@ -104,9 +106,11 @@ class Record(NamedTuple):
 
 
 class StepWork(NamedTuple):
-    """One step's buffers: kinematics, the program ``(P, c, A, b, lb, ub)``, answer and residuals."""
+    """One step's buffers: kinematics (planar, and spatial: empty for a planar arm), the program
+    ``(P, c, A, b, lb, ub)``, answer and residuals."""
 
     kin: KinWork
+    sp: SpatialWork
     qp: QPWork
     J: F64
     Jm: F64
@@ -150,6 +154,7 @@ def step_work(n: int, nx: int, nt: int) -> StepWork:
     task rows."""
     return StepWork(
         kin_work(n),
+        spatial_work(n if nt != 2 else 0),
         qp_work(nx, nt),
         np.empty((nt, n)),
         np.empty(n),
@@ -216,6 +221,7 @@ def run_kernel(
                 w.J,
                 w.Jm,
                 w.kin,
+                w.sp,
             )
         rec.m[k] = m
         err2 = 0.0
