@@ -1,7 +1,7 @@
 """The compiler behind every per-step formula: numba, with an on-disk cache and a cycle counter.
 
 Every kernel is compiled with ``cache=True``: the first process on a machine compiles them (about
-20 s, announced by :func:`ensure_compiled` in one line) and writes the machine code to a cache
+45 s, announced by :func:`ensure_compiled` in one line) and writes the machine code to a cache
 folder, where every later process, and every Dask worker on the same machine, loads it in a
 fraction of a second. The folder is ``$XDG_CACHE_HOME/emdm/kernels-<hash>`` (``~/.cache`` by
 default), the hash covering every module that defines kernels: numba checks only the file of a
