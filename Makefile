@@ -27,7 +27,7 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 unit: $(STAMP)
-	$(BIN)/pytest
+	$(BIN)/pytest -n 2   # both cores (pytest-xdist): each worker compiles the kernels once
 
 test: lint typecheck unit
 
