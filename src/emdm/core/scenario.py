@@ -229,8 +229,7 @@ class Scenario:
             raise ScenarioError(
                 self.source,
                 "arm",
-                "is a spatial arm (arm.dh); figures, animations, Pareto fronts, studies and the "
-                "playground take planar arms only for now",
+                "is a spatial arm (arm.dh), and this needs a planar one (arm.lengths)",
             )
         return PlanarArm(self.arm.lengths)
 
