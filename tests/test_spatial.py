@@ -291,16 +291,17 @@ def test_spatial_animation_projects_the_ellipsoid_in_three_views():
 
 def test_spatial_figures_are_written(tmp_path):
     from emdm.cli.main import main
+    from emdm.outputs.style import formats
 
     out = tmp_path / "figs"
-    assert main(["plot", "ur5", "--controller", "C-EMDM,MMC,RRMC", "--out", str(out)]) == 0
+    short = ["--set", "motion.max_time=1.5"]
+    with formats((".png",)):
+        plot = ["plot", "ur5", "--controller", "C-EMDM,MMC,RRMC", *short]
+        assert main([*plot, "--out", str(out)]) == 0
+        pareto = ["pareto", "ur5", "--controller", "C-EMDM", "--grid", "2", *short]
+        assert main([*pareto, "--out", str(tmp_path / "p")]) == 0
     assert (out / "baselines" / "path.png").is_file() and (out / "C" / "error.png").is_file()
-    assert (
-        main(
-            ["pareto", "ur5", "--controller", "C-EMDM", "--grid", "3", "--out", str(tmp_path / "p")]
-        )
-        == 0
-    )
+    assert (tmp_path / "p" / "pareto_front.png").is_file()
 
 
 def test_planar_only_commands_refuse_a_spatial_arm_in_one_line(tmp_path, capsys):
