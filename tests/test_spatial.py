@@ -309,3 +309,18 @@ def test_planar_only_commands_refuse_a_spatial_arm_in_one_line(tmp_path, capsys)
 
     assert main(["play", "panda", "--no-browser"]) == 2
     assert "planar arms only" in capsys.readouterr().err
+
+
+def test_a_written_spatial_scenario_takes_another_task_when_edited(tmp_path):
+    """`emdm scenario panda` writes uniform per-row values once, so a user who switches the file
+    to a position task gives only the new goal."""
+    text = emdm.load_scenario("panda").to_toml()
+    text = text.replace('task = "pose"', 'task = "position"')
+    lines = [
+        "goal = [0.4, 0.2, 0.5]" if line.startswith("goal = ") else line
+        for line in text.splitlines()
+    ]
+    path = tmp_path / "pos.toml"
+    path.write_text("\n".join(lines) + "\n")
+    sc = emdm.load_scenario(path)
+    assert sc.nt == 3 and sc.motion.kp.tolist() == [1.0, 1.0, 1.0]

@@ -305,6 +305,13 @@ class Scenario:
                 if getattr(obj, key) is not None
                 and (self.spatial or f"{section}.{key}" not in SPATIAL_ONLY)
             }
+            if (
+                self.spatial
+            ):  # one value per task row, when uniform: the file then takes another task
+                for key, spec in SCHEMA[section].items():
+                    value = out[section].get(key)
+                    if spec.kind == "task" and spec.scalar_ok and len(set(value)) == 1:
+                        out[section][key] = value[0]
         return out
 
     def to_toml(self) -> str:
@@ -348,6 +355,8 @@ class Scenario:
                     dotted = f"{section}.{key}"
                     if spec.kind == "task" and spec.scalar_ok and dotted not in overrides:
                         values = data[section][key]
+                        if not isinstance(values, list):
+                            continue
                         if len(set(values)) != 1:
                             raise ScenarioError(
                                 self.source,
