@@ -378,7 +378,7 @@ MEANINGLESS = [
     (["study", "task1", "--chunk", "0"], "--chunk must be between 1"),
     (["study", "task1", "--workers", "0"], "--workers must be between 1"),
     (["pareto", "task1", "--grid", "0"], "--grid must be between 2"),
-    (["pareto", "task1", "--controller", "C-IVKC"], "--controller must be UC-EMDM or C-EMDM"),
+    (["pareto", "task1", "--controller", "C-IVKC"], "--controller must weigh manipulability"),
     (["animate", "task2", "--speedup", "nan"], "--speedup must be > 0"),
     (["animate", "task2", "--speedup", "inf"], "--speedup must be > 0"),
     (["animate", "task2", "--speedup", "0.123457", "--no-mp4"], "no frame duration"),

@@ -282,4 +282,4 @@ def test_pareto_command(tmp_path, capsys):
         assert (out / f"{stem}.png").stat().st_size > 5000
     capsys.readouterr()
     assert main(["pareto", "task1", "--controller", "C-IVKC", "--out", str(tmp_path / "no")]) == 2
-    assert "must be UC-EMDM or C-EMDM" in capsys.readouterr().err
+    assert "must weigh manipulability" in capsys.readouterr().err

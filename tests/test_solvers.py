@@ -130,7 +130,7 @@ def test_faulty_solver_in_a_run_is_recorded():
         assert run.reached
         assert run.fallback.all()
         assert set(run.solver) == {"quadprog"}
-        assert all(a.startswith("faulty-run: not optimal") for a in run.attempts)
+        assert all(a.startswith("faulty-run: not certified") for a in run.attempts)
     finally:
         del _REGISTRY[name]
 

@@ -324,3 +324,19 @@ def test_a_written_spatial_scenario_takes_another_task_when_edited(tmp_path):
     path.write_text("\n".join(lines) + "\n")
     sc = emdm.load_scenario(path)
     assert sc.nt == 3 and sc.motion.kp.tolist() == [1.0, 1.0, 1.0]
+
+
+def test_a_spatial_run_folder_reads_back_exactly_and_plots(tmp_path):
+    from emdm.cli.main import main
+    from emdm.outputs.records import read_run
+    from emdm.outputs.style import formats
+
+    folder = tmp_path / "run"
+    short = ["--set", "motion.max_time=1.0"]
+    assert main(["run", "ur5", "--controller", "MMC,RRMC", *short, "--out", str(folder)]) == 0
+    again = read_run(folder, "MMC")
+    fresh = emdm.simulate(emdm.load_scenario("ur5", {"motion.max_time": 1.0}), "MMC")
+    assert_same_run(again, fresh, tol=0.0)
+    with formats((".png",)):  # no --controller: the runs the folder holds
+        assert main(["plot", str(folder), "--out", str(tmp_path / "figs")]) == 0
+    assert (tmp_path / "figs" / "baselines" / "path.png").is_file()

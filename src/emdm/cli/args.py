@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NoReturn
 
-from ..core.controllers import CONTROLLERS, get_controller
+from ..core.controllers import BASELINES, CONTROLLERS, get_controller
 from ..core.scenario import PRESETS
 from ..errors import EmdmError, one_line
 from ..solvers import get_solver
@@ -156,7 +156,8 @@ def add_controllers(parser: argparse.ArgumentParser, what: str, default: str = "
         action="extend",
         type=names("controller"),
         metavar="NAME",
-        help=f"{what} (repeatable; default {default}; names: {', '.join(CONTROLLERS)})",
+        help=f"{what} (repeatable; default {default}; names: "
+        f"{', '.join([*CONTROLLERS, *BASELINES])})",
     )
 
 

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..core.controllers import CONTROLLERS, get_controller
+from ..core.controllers import BASELINES, CONTROLLERS, get_controller
 from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
 from ..errors import EmdmError, NoSolution
 from ..outputs.records import (
@@ -162,7 +162,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                 staging, scenario, runs, solver=solver, fallback=fallback, stopped=details
             )
         print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
-        print(summary_table(results))
+        print(summary_table(results, "m,rad" if scenario.nt == 6 else "m"))
     if stopped:
         first, *others = stopped.items()
         message = f"run stopped: {_stopped(*first)}"
@@ -247,6 +247,12 @@ def _source(args: argparse.Namespace) -> tuple[Scenario, Path | None]:
     return read_scenario(folder), folder
 
 
+def _held(folder: Path) -> list[str]:
+    """The controllers whose runs ``folder`` holds, in the order of ``emdm list``."""
+    known = [*CONTROLLERS, *BASELINES]
+    return [n for n in known if (folder / "trajectories" / f"{n}.csv").is_file()]
+
+
 def _runs(
     scenario: Scenario, folder: Path | None, controllers: Sequence[str], bar: Progress
 ) -> dict[str, Run]:
@@ -257,7 +263,9 @@ def _runs(
     if folder is not None:
         available = [n for n in controllers if (folder / "trajectories" / f"{n}.csv").is_file()]
         if not available:
-            raise UsageError(f"{folder}: none of {', '.join(controllers)} was run there")
+            held = _held(folder)
+            hint = f" (it holds {', '.join(held)}: pass --controller)" if held else ""
+            raise UsageError(f"{folder}: none of {', '.join(controllers)} was run there{hint}")
         for name in available:
             bar.note(f"reading {name}")
             runs[name] = read_run(folder, name)
@@ -271,8 +279,9 @@ def _runs(
 def cmd_plot(args: argparse.Namespace) -> int:
     from ..outputs.plots import run_figures
 
-    controllers = _unique(args.controller) or list(CONTROLLERS)
     scenario, folder = _source(args)
+    default = _held(folder) if folder is not None else list(CONTROLLERS)
+    controllers = _unique(args.controller) or default or list(CONTROLLERS)
     out = _out(args, f"{safe(scenario.name)}-figures", _inputs(args))
     with Progress(f"plot {scenario.name}") as bar:
         runs = _runs(scenario, folder, controllers, bar)
@@ -356,7 +365,9 @@ def cmd_pareto(args: argparse.Namespace) -> int:
     controllers = _unique(args.controller) or ["UC-EMDM"]
     for name in controllers:
         if get_controller(name).method != "EMDM":
-            raise UsageError(f"--controller must be UC-EMDM or C-EMDM, got {name}")
+            raise UsageError(
+                f"--controller must weigh manipulability (UC-EMDM, C-EMDM, PARK, MMC), got {name}"
+            )
     scenario = _scenario(args)
     tag = controllers[0] if len(controllers) == 1 else "EMDM"
     out = _out(args, f"{safe(scenario.name)}-pareto-{tag}", _inputs(args))
@@ -553,6 +564,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 def cmd_list(args: argparse.Namespace) -> int:
     print("controllers: " + ", ".join(CONTROLLERS))
+    print("baselines (manipulability benchmark): " + ", ".join(BASELINES))
     print("presets:     " + ", ".join(PRESETS))
     print("solvers:")
     for spec in registered_solvers().values():
@@ -701,7 +713,9 @@ def build_parser() -> argparse.ArgumentParser:
         "Weight sweeps at four steps of a run, and over whole runs.",
     )
     add_scenario(par)
-    add_controllers(par, "UC-EMDM or C-EMDM", "UC-EMDM")
+    add_controllers(
+        par, "a controller that weighs manipulability (UC-EMDM, C-EMDM, PARK, MMC)", "UC-EMDM"
+    )
     par.add_argument(
         "--grid",
         type=integer(2, 1000),

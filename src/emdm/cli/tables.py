@@ -18,8 +18,9 @@ def _table(rows: list[list[str]], header: list[str]) -> str:
     return "\n".join([line, "-" * len(line), *body])
 
 
-def summary_table(results: dict[str, dict[str, Any]]) -> str:
-    """A readable table of the main metrics, one row per controller."""
+def summary_table(results: dict[str, dict[str, Any]], error_unit: str = "m") -> str:
+    """A readable table of the main metrics, one row per controller (``error_unit``: "m", or
+    "m,rad" for a pose task)."""
     rows = []
     for name, mt in results.items():
         ttg = mt["time_to_goal"]
@@ -47,7 +48,7 @@ def summary_table(results: dict[str, dict[str, Any]]) -> str:
         "reached",
         "steps",
         "t_goal[s]",
-        "final|e|[m]",
+        f"final|e|[{error_unit}]",
         "min m",
         "mean m",
         "effort",

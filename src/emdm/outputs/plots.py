@@ -240,12 +240,20 @@ def path_figure(runs: Sequence[Run], stem: Path) -> Path:
 
 
 def run_figures(runs: dict[str, Run], out: Path) -> list[Path]:
-    """Every run figure for every group of the available controllers; returns the stems."""
+    """Every run figure for every group of the available controllers (or, when no group fits,
+    for all the runs together, in ``runs/``); returns the stems."""
     stems: list[Path] = []
-    for group, names in GROUPS.items():
-        chosen = [runs[name] for name in names if name in runs]
-        if not chosen or (group in ("all", "baselines") and len(chosen) < 3):
-            continue
+    groups = [(g, [runs[n] for n in names if n in runs]) for g, names in GROUPS.items()]
+    groups = [
+        (g, chosen)
+        for g, chosen in groups
+        if chosen
+        and not (g == "all" and len(chosen) < 3)
+        and not (g == "baselines" and len(chosen) < 2)
+    ]
+    if not groups:  # runs that no overlay of the brief or the benchmark gathers: all together
+        groups = [("runs", list(runs.values()))]
+    for group, chosen in groups:
         folder = out / group
         for quantity in Quantity:
             if quantity is Quantity.SLACK and not any(np.any(r.delta != 0) for r in chosen):

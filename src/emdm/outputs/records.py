@@ -39,24 +39,28 @@ def cell(value: Any) -> str:
     return str(value)
 
 
-def trajectory_header(n: int) -> list[str]:
-    """Columns of ``trajectories/<controller>.csv`` (the README lists them)."""
+TASK_AXES = {2: ("x", "y"), 3: ("x", "y", "z"), 6: ("x", "y", "z", "rx", "ry", "rz")}
+"""The task's coordinates by row count: planar tip, spatial position, or position and rotation
+vector (the columns of the value ``p``; the error, velocity and slack take ``e``, ``v`` and
+``delta_`` before them)."""
+
+
+def trajectory_header(n: int, nt: int = 2) -> list[str]:
+    """Columns of ``trajectories/<controller>.csv`` (the README lists them) for an ``n``-joint
+    arm on an ``nt``-row task."""
+    axes = TASK_AXES[nt]
     return [
         "t",
         *[f"q{i}" for i in range(1, n + 1)],
         *[f"qd{i}" for i in range(1, n + 1)],
-        "x",
-        "y",
-        "ex",
-        "ey",
-        "vx",
-        "vy",
+        *axes,
+        *[f"e{a}" for a in axes],
+        *[f"v{a}" for a in axes],
         "m",
         "effort",
         "manip_rate",
         "alpha",
-        "delta_x",
-        "delta_y",
+        *[f"delta_{a}" for a in axes],
         "status",
         "solver",
         "iterations",
@@ -83,7 +87,7 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
                 run.solve_time[k],
             ]
         else:
-            cmd, rest = [""] * n, [""] * 9
+            cmd, rest = [""] * n, [""] * (7 + run.e.shape[1])
         yield [cell(x) for x in (*state, *cmd, *where, *rest)]
 
 
@@ -625,7 +629,7 @@ def read_run(folder: Path, controller: str) -> Run:
         steps = int(meta["controllers"][controller]["steps"])
         reached = bool(meta["controllers"][controller]["reached"])
         where = folder / "trajectories" / f"{controller}.csv"
-        rows = _rows(where, trajectory_header(scenario.n), steps + 1)
+        rows = _rows(where, trajectory_header(scenario.n, scenario.nt), steps + 1)
         where = folder / "diagnostics" / f"{controller}.csv"
         diag = _rows(where, diagnostics_header(scenario.n), steps)
         where = folder / "trajectories" / f"{controller}.csv"
@@ -670,20 +674,21 @@ def _run_from_rows(
         )
 
     joints = [str(i) for i in range(1, n + 1)]
+    axes = TASK_AXES[scenario.nt]
     return Run(
         scenario=scenario,
         controller=controller,
         t=column("t")[:, 0],
         q=column(*[f"q{j}" for j in joints]),
-        p=column("x", "y"),
-        e=column("ex", "ey"),
-        v=column("vx", "vy"),
+        p=column(*axes),
+        e=column(*[f"e{a}" for a in axes]),
+        v=column(*[f"v{a}" for a in axes]),
         m=column("m")[:, 0],
         qd=column(*[f"qd{j}" for j in joints], last=False).reshape(K, n),
         effort=column("effort", last=False).reshape(K),
         manip_rate=column("manip_rate", last=False).reshape(K),
         alpha=column("alpha", last=False).reshape(K),
-        delta=column("delta_x", "delta_y", last=False).reshape(K, 2),
+        delta=column(*[f"delta_{a}" for a in axes], last=False).reshape(K, len(axes)),
         lo=np.array([[_float(d[f"lo{j}"]) for j in joints] for d in diag]).reshape(K, n),
         hi=np.array([[_float(d[f"hi{j}"]) for j in joints] for d in diag]).reshape(K, n),
         active=np.array(
@@ -721,7 +726,7 @@ def write_run_folder(
     for name, run in runs.items():
         write_csv(
             folder / "trajectories" / f"{name}.csv",
-            trajectory_header(scenario.n),
+            trajectory_header(scenario.n, scenario.nt),
             trajectory_rows(run),
         )
         write_csv(

@@ -196,8 +196,9 @@ def solve_chain(
             attempts.append(
                 (
                     name,
-                    f"not optimal ({result.status}, KKT {report.residual:.1e}, "
-                    f"bound excess {report.bound_excess:.1e})",
+                    f"not certified (it says {result.status}; KKT residual "
+                    f"{report.residual:.1e}, limit {tol:.0e}; bound excess "
+                    f"{report.bound_excess:.1e}, limit {BOUND_TOL:.0e})",
                 )
             )
             continue
