@@ -34,7 +34,7 @@ from .loop import (
     simulate,
     step_work,
 )
-from .metrics import OUTCOMES, outcomes
+from .metrics import OUTCOMES, outcomes, run_outcomes
 
 F64 = NDArray[np.float64]
 
@@ -202,20 +202,7 @@ def simulate_batch(
                 raise
             run = exc.run
             stopped.append(int(r))
-        lim = sc.arm_data
-        outcomes(
-            run.m,
-            run.effort,
-            run.qd,
-            run.e,
-            run.q,
-            lim.q_min,
-            lim.q_max,
-            run.steps,
-            run.reached,
-            sc.motion.dt,
-            out[r],
-        )
+        run_outcomes(run, out[r])
     columns: dict[str, Any] = {name: out[:, i].copy() for i, name in enumerate(OUTCOMES)}
     columns["steps"] = columns["steps"].astype(np.int64)
     columns["reached"] = columns["reached"].astype(bool)

@@ -88,6 +88,24 @@ def outcomes(
     out[9] = margin
 
 
+def run_outcomes(run: Run, out: F64) -> None:
+    """``out`` = the :data:`OUTCOMES` of a :class:`Run` (the batch kernel's, from its record)."""
+    arm = run.scenario.arm_data
+    outcomes(
+        run.m,
+        run.effort,
+        run.qd,
+        run.e,
+        run.q,
+        arm.q_min,
+        arm.q_max,
+        run.steps,
+        run.reached,
+        run.scenario.motion.dt,
+        out,
+    )
+
+
 def metrics(run: Run) -> dict[str, Any]:
     """Every outcome of a run, all from its record.
 
@@ -100,20 +118,7 @@ def metrics(run: Run) -> dict[str, Any]:
     sc = run.scenario
     K = run.steps
     out = np.empty(len(OUTCOMES))
-    arm = sc.arm_data
-    outcomes(
-        run.m,
-        run.effort,
-        run.qd,
-        run.e,
-        run.q,
-        arm.q_min,
-        arm.q_max,
-        K,
-        run.reached,
-        sc.motion.dt,
-        out,
-    )
+    run_outcomes(run, out)
     base = dict(zip(OUTCOMES, out.tolist(), strict=True))
     margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
     has_cmd = K > 0
