@@ -46,25 +46,32 @@ def kinematics(lengths, q, singular=1e-14):
     return p, J, m, s[0] * v1 + 0.0
 
 
-def kkt_residual(P, c, A, b, lb, ub, x, active_tol=1e-9):
-    """Largest relative KKT residual of x with scipy-NNLS multipliers over the active bounds."""
+def kkt_residual(P, c, A, b, lb, ub, x, active_tol=1e-9, G=None, h=None):
+    """Largest relative KKT residual of x with scipy-NNLS multipliers over the active bounds (and
+    the active rows of G x <= h, whose multipliers enter as P x + c = ... - G^T nu, nu >= 0)."""
     g = P @ x + c
+    G = np.zeros((0, x.size)) if G is None else np.asarray(G, float)
+    h = np.zeros(0) if h is None else np.asarray(h, float)
     with np.errstate(invalid="ignore"):
         at_lo = np.isfinite(lb) & (x - lb <= active_tol * (1.0 + np.abs(lb)))
         at_hi = np.isfinite(ub) & (ub - x <= active_tol * (1.0 + np.abs(ub)))
+    on_row = h - G @ x <= active_tol * (1.0 + np.abs(h))
     eye = np.eye(x.size)
-    M = np.hstack((A.T, -A.T, eye[:, at_lo], -eye[:, at_hi]))
+    M = np.hstack((A.T, -A.T, eye[:, at_lo], -eye[:, at_hi], -G[on_row].T))
     z, _ = nnls(M, g, maxiter=50 * M.shape[1])
     scale_g = max(1.0, float(np.abs(P @ x).max()), float(np.abs(c).max()))
     stationarity = float(np.abs(g - M @ z).max()) / scale_g
     scale_eq = max(1.0, float(np.abs(b).max()), float((np.abs(A) @ np.abs(x)).max()))
     equality = float(np.abs(A @ x - b).max()) / scale_eq
     k = A.shape[0]
-    mu_lo = z[2 * k : 2 * k + int(at_lo.sum())]
-    mu_hi = z[2 * k + int(at_lo.sum()) :]
+    n_lo, n_hi = int(at_lo.sum()), int(at_hi.sum())
+    mu_lo = z[2 * k : 2 * k + n_lo]
+    mu_hi = z[2 * k + n_lo : 2 * k + n_lo + n_hi]
+    nu = z[2 * k + n_lo + n_hi :]
     comp = max(
         np.abs(mu_lo * (x - lb)[at_lo]).max(initial=0.0),
         np.abs(mu_hi * (ub - x)[at_hi]).max(initial=0.0),
+        np.abs(nu * (h - G @ x)[on_row]).max(initial=0.0),
     )
     return max(stationarity, equality, comp / scale_g)
 

@@ -51,6 +51,11 @@ def linprog_scale(A, b, lb, ub):
     return None if res.status != 0 else float(res.x[n])
 
 
+def NO_ROWS(A):
+    """No inequality rows ``G x <= h`` (G is 0 x n)."""
+    return np.zeros((0, A.shape[1])), np.zeros(0)
+
+
 @pytest.mark.parametrize("nt", [1, 3, 4, 6])
 def test_simplex_task_scale_equals_highs(nt, rng):
     for _ in range(60):
@@ -58,14 +63,14 @@ def test_simplex_task_scale_equals_highs(nt, rng):
         _, _, A, b, lb, ub = random_program(rng, nt, n, slack=bool(rng.integers(0, 2)))
         if rng.uniform() < 0.2:  # a box that excludes 0: sometimes no scale works
             lb, ub = lb + 1.6, ub + 1.6
-        alpha = kernels.task_scale_of(A, b, lb, ub)
+        alpha = kernels.task_scale_of(A, b, *NO_ROWS(A), lb, ub)
         expected = linprog_scale(A, b, lb, ub)
         if expected is None:
             assert alpha == -1.0
         else:
             assert alpha == pytest.approx(expected, abs=1e-9)
         x = np.empty(A.shape[1])
-        code, unique = kernels.feasible_point_of(A, b, lb, ub, x)
+        code, unique = kernels.feasible_point_of(A, b, *NO_ROWS(A), lb, ub, x)
         assert not unique
         if expected is not None and expected >= 1.0 - 1e-12:
             assert code == kernels.OK
@@ -81,12 +86,12 @@ def test_active_set_with_k_rows_equals_quadprog_and_is_certified(nt, rng):
     for _ in range(80):
         n = nt + int(rng.integers(0, 4))
         P, c, A, b, lb, ub = random_program(rng, nt, n, slack=bool(rng.integers(0, 2)))
-        alpha = kernels.task_scale_of(A, b, lb, ub)
+        alpha = kernels.task_scale_of(A, b, *NO_ROWS(A), lb, ub)
         if alpha < 0:
             continue
         b = alpha * b
         x, out = np.empty(c.size), np.empty(4)
-        code, _ = active_set_of(P, c, A, b, lb, ub, x, out)
+        code, _ = active_set_of(P, c, A, b, *NO_ROWS(A), lb, ub, x, out)
         ref = solve_problem(Problem(P, c, A=A, b=b, lb=lb, ub=ub), solver="quadprog")
         if not ref.found:
             continue

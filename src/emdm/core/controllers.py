@@ -172,7 +172,7 @@ class Admissible:
 
 def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = None) -> Admissible:
     """Apply the infeasibility policy ``policy`` (``scale``, ``slack`` or ``error``) to ``qp``."""
-    alpha = task_scale(qp.A, qp.b, qp.lb, qp.ub)
+    alpha = task_scale(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h)
     if alpha == 1.0:
         return Admissible(qp, 1.0, None)
     where = f"step {step}: " if step is not None else ""
@@ -200,7 +200,7 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
         return Admissible(qp.with_rhs(alpha * qp.b), alpha, "scale")
     if policy == "slack":
         relaxed = qp.with_free_slack(slack_weight)
-        if task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub) != 1.0:
+        if task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub, relaxed.G, relaxed.h) != 1.0:
             raise NoSolution(
                 f"{where}the program is infeasible even with free slack "
                 "(the joint bounds are empty)",

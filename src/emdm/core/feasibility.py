@@ -107,20 +107,37 @@ def _ray_interval(
     return t_lo, t_hi, w
 
 
-def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
-    """Largest ``alpha`` in [0, 1] such that ``A x = alpha b``, ``lb <= x <= ub`` is feasible.
+def _rows(A: Matrix, G: Matrix | None, h: Vector | None) -> tuple[Matrix, Vector]:
+    if G is None or h is None:
+        return np.zeros((0, A.shape[1])), np.zeros(0)
+    return _contiguous(np.asarray(G, dtype=float).reshape(-1, A.shape[1]), h)  # type: ignore[return-value]
+
+
+def task_scale(
+    A: Matrix,
+    b: Vector,
+    lb: Vector,
+    ub: Vector,
+    G: Matrix | None = None,
+    h: Vector | None = None,
+) -> float | None:
+    """Largest ``alpha`` in [0, 1] such that ``A x = alpha b``, ``G x <= h``, ``lb <= x <= ub``
+    is feasible.
 
     Returns 1.0 for a feasible program and ``None`` when no ``alpha`` in [0, 1] works (for instance a
-    box that excludes ``x = 0`` and cannot reach the task direction either). Two-row programs go
-    to the compiled kernel; the numpy projection below handles what it leaves (unbounded variables
-    whose columns have rank < 2, more task rows).
+    box that excludes ``x = 0`` and cannot reach the task direction either). The compiled kernel
+    answers first; the numpy projection below handles what it leaves for two rows (unbounded
+    variables whose columns have rank < 2), HiGHS the rest (more task rows, or inequality rows
+    with unbounded variables).
     """
+    Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-    alpha = kernels.task_scale_of(Ac, bc, lbc, ubc)
+    alpha = kernels.task_scale_of(Ac, bc, Gc, hc, lbc, ubc)
     if alpha != -2.0:
         return None if alpha == -1.0 else alpha
-    if A.shape[0] != 2:
-        return _linprog_scale(A, b, lb, ub)
+    if A.shape[0] != 2 or hc.size:
+        found = _linprog(A, b, lb, ub, scale=True, G=Gc, h=hc)
+        return None if found is None else found[0]
     Q, G, bounded = _project(A, lb, ub)
     if Q.shape[1] == 0:
         return 1.0
@@ -131,15 +148,24 @@ def task_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
     return max(lo, hi) if hi >= lo else lo
 
 
-def feasible_point(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> Vector | None:
-    """Some ``x`` with ``A x = b`` and ``lb <= x <= ub`` (exact up to rounding), or ``None``."""
+def feasible_point(
+    A: Matrix,
+    b: Vector,
+    lb: Vector,
+    ub: Vector,
+    G: Matrix | None = None,
+    h: Vector | None = None,
+) -> Vector | None:
+    """Some ``x`` with ``A x = b``, ``G x <= h`` and ``lb <= x <= ub`` (exact up to rounding), or
+    ``None``."""
     x = np.empty(A.shape[1])
+    Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-    code, _ = kernels.feasible_point_of(Ac, bc, lbc, ubc, x)
+    code, _ = kernels.feasible_point_of(Ac, bc, Gc, hc, lbc, ubc, x)
     if code != kernels.NEEDS_REFERENCE:
         return x if code == kernels.OK else None
-    if A.shape[0] != 2:
-        alpha_x = _linprog(A, b, lb, ub, scale=False)
+    if A.shape[0] != 2 or hc.size:
+        alpha_x = _linprog(A, b, lb, ub, scale=False, G=Gc, h=hc)
         return None if alpha_x is None else alpha_x[1]
     Q, G, bounded = _project(A, lb, ub)
     lbb, ubb = lb[bounded], ub[bounded]
@@ -191,13 +217,23 @@ def _boundary_preimage(
 
 
 def _linprog(
-    A: Matrix, b: Vector, lb: Vector, ub: Vector, *, scale: bool
+    A: Matrix,
+    b: Vector,
+    lb: Vector,
+    ub: Vector,
+    *,
+    scale: bool,
+    G: Matrix | None = None,
+    h: Vector | None = None,
 ) -> tuple[float, Vector] | None:
-    """``(alpha, x)`` with ``A x = alpha b`` and ``lb <= x <= ub`` by HiGHS: the largest ``alpha``
-    in [0, 1] (``scale``) or ``alpha = 1``; ``None`` when infeasible."""
+    """``(alpha, x)`` with ``A x = alpha b``, ``G x <= h`` and ``lb <= x <= ub`` by HiGHS: the
+    largest ``alpha`` in [0, 1] (``scale``) or ``alpha = 1``; ``None`` when infeasible."""
     from scipy.optimize import linprog
 
     n = A.shape[1]
+    rows: dict[str, Matrix | Vector] = {}
+    if G is not None and h is not None and np.size(h):
+        rows = {"A_ub": np.hstack((G, np.zeros((G.shape[0], 1)))), "b_ub": h}
     A_eq = np.hstack((A, -np.asarray(b, dtype=float).reshape(-1, 1)))
     cost = np.zeros(n + 1)
     cost[n] = -1.0
@@ -206,7 +242,9 @@ def _linprog(
         for lo, hi in zip(lb, ub, strict=True)
     ]
     bounds.append((0.0, 1.0) if scale else (1.0, 1.0))
-    result = linprog(cost, A_eq=A_eq, b_eq=np.zeros(A.shape[0]), bounds=bounds, method="highs")
+    result = linprog(
+        cost, A_eq=A_eq, b_eq=np.zeros(A.shape[0]), bounds=bounds, method="highs", **rows
+    )
     if result.status != 0:
         return None
     x = np.clip(result.x[:n], lb, ub)
@@ -214,9 +252,6 @@ def _linprog(
     size = 1.0 + float(np.abs(b).max()) + float(np.abs(A).max() * np.abs(x).sum())
     if np.max(np.abs(A @ x - alpha * b)) > FEASIBILITY_TOL * size:
         return None
+    if rows and not kernels.rows_hold(*_contiguous(G, h, x)):  # type: ignore[arg-type]
+        return None
     return alpha, x
-
-
-def _linprog_scale(A: Matrix, b: Vector, lb: Vector, ub: Vector) -> float | None:
-    found = _linprog(A, b, lb, ub, scale=True)
-    return None if found is None else found[0]

@@ -86,8 +86,10 @@ class SpatialWork(NamedTuple):
 
 
 class FeasWork(NamedTuple):
-    """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables and ``nt`` task
-    rows): the 2-D zonotope geometry, and the simplex method of programs with other row counts."""
+    """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables, ``nt`` task
+    rows and ``ng`` inequality rows): the 2-D zonotope geometry, the simplex method of programs
+    with other row counts, and the program with its inequality rows made equalities
+    (:func:`_augment`: ``Ag``, ``bg``, ``lg``, ``ug``, answer ``xg``)."""
 
     cand: F64
     base: F64
@@ -96,6 +98,11 @@ class FeasWork(NamedTuple):
     centre: F64
     lpf: F64
     lpi: NDArray[np.int64]
+    Ag: F64
+    bg: F64
+    lg: F64
+    ug: F64
+    xg: F64
 
 
 class LPViews(NamedTuple):
@@ -137,17 +144,26 @@ def spatial_work(n: int) -> SpatialWork:
 
 
 @kernel
-def feas_work(nx: int, nt: int) -> FeasWork:
-    """Buffers for the feasibility kernels of a program with ``nx`` variables and ``nt`` rows."""
-    nv = nx + 1 + nt
+def feas_work(nx: int, nt: int, ng: int) -> FeasWork:
+    """Buffers for the feasibility kernels of a program with ``nx`` variables, ``nt`` task rows
+    and ``ng`` inequality rows (the simplex method's buffers fit the augmented program of
+    :func:`_augment`: ``nx + ng + 1`` variables, ``nt + ng`` rows)."""
+    nxa = nx + ng + 1 if ng > 0 else nx
+    nta = nt + ng
+    nv = nxa + 1 + nta
     return FeasWork(
         np.empty((4 * (nx + 3), 2)),
         np.empty((nx + 3, 2)),
+        np.empty(nxa, dtype=np.bool_),
         np.empty(nx, dtype=np.bool_),
-        np.empty(nx, dtype=np.bool_),
-        np.empty(nx),
-        np.empty(4 * nv + 3 * nt + nt * nt + nt * nx),
-        np.empty(nv + nt, dtype=np.int64),
+        np.empty(nxa),
+        np.empty(4 * nv + 3 * nta + nta * nta + nta * nxa),
+        np.empty(nv + nta, dtype=np.int64),
+        np.empty((nta if ng > 0 else 0, nxa if ng > 0 else 0)),
+        np.empty(nta if ng > 0 else 0),
+        np.empty(nxa if ng > 0 else 0),
+        np.empty(nxa if ng > 0 else 0),
+        np.empty(nxa if ng > 0 else 0),
     )
 
 
@@ -778,10 +794,67 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 
 
 @kernel
-def task_scale_rows(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
-    """:func:`task_scale` for programs of any row count, by the simplex method (:func:`_lp`); the
-    answer's vertex is left in ``w.centre``. Kept apart from the 2-D kernel, whose hot path would
-    otherwise carry the simplex method's code."""
+def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> bool:
+    """The program with its inequality rows made equalities, in ``w.Ag``, ``w.bg``, ``w.lg``,
+    ``w.ug``: variables ``(x, s, t)``, rows ``A x = alpha b`` and ``G x + s - h t = 0``, with
+    ``0 <= s <= s_max``, ``t = 1``. ``s_max_i = max(0, h_i - min over the box of G_i x)`` bounds
+    the slack without cutting off any feasible ``x``. False when a variable of ``x`` is unbounded
+    (``s_max`` would be infinite; the caller hands the case to the reference)."""
+    nt, nx = A.shape
+    ng = G.shape[0]
+    Ag, bg, lg, ug = w.Ag, w.bg, w.lg, w.ug
+    for j in range(nx):
+        if math.isinf(lb[j]) or math.isinf(ub[j]):
+            return False
+        lg[j], ug[j] = lb[j], ub[j]
+    for i in range(nt + ng):
+        for j in range(nx + ng + 1):
+            Ag[i, j] = 0.0
+    for i in range(nt):
+        bg[i] = b[i]
+        for j in range(nx):
+            Ag[i, j] = A[i, j]
+    for i in range(ng):
+        r = nt + i
+        bg[r] = 0.0
+        least = 0.0
+        for j in range(nx):
+            Ag[r, j] = G[i, j]
+            least += min(G[i, j] * lb[j], G[i, j] * ub[j])
+        Ag[r, nx + i] = 1.0
+        Ag[r, nx + ng] = -h[i]
+        lg[nx + i], ug[nx + i] = 0.0, max(0.0, h[i] - least)
+    lg[nx + ng], ug[nx + ng] = 1.0, 1.0
+    return True
+
+
+@kernel
+def rows_hold(G: F64, h: F64, x: F64) -> bool:
+    """True when ``G x <= h`` up to rounding (``FEASIBILITY_TOL`` relative to the row's size)."""
+    for i in range(G.shape[0]):
+        gx = 0.0
+        size = 1.0 + abs(h[i])
+        for j in range(x.size):
+            gx += G[i, j] * x[j]
+            size += abs(G[i, j] * x[j])
+        if gx - h[i] > FEASIBILITY_TOL * size:
+            return False
+    return True
+
+
+@kernel
+def task_scale_rows(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> float:
+    """:func:`task_scale` for programs of any row count and with inequality rows ``G x <= h``,
+    by the simplex method (:func:`_lp`); the answer's vertex is left in ``w.centre``. Kept apart
+    from the 2-D kernel, whose hot path would otherwise carry the simplex method's code."""
+    nx = A.shape[1]
+    if G.shape[0] > 0:
+        if not _augment(A, b, G, h, lb, ub, w):
+            return -2.0
+        code, alpha = _lp(w.Ag, w.bg, w.lg, w.ug, True, w.xg, w)
+        for j in range(nx):
+            w.centre[j] = w.xg[j]
+        return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
     if A.shape[0] == 2:
         return task_scale(A, b, lb, ub, w)
     if _mark_free(lb, ub, w.free) > 0:
@@ -791,9 +864,9 @@ def task_scale_rows(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 
 
 @kernel
-def task_scale_of(A: F64, b: F64, lb: F64, ub: F64) -> float:
+def task_scale_of(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64) -> float:
     """:func:`task_scale_rows` with its own buffers (the entry point for callers in Python)."""
-    return task_scale_rows(A, b, lb, ub, feas_work(A.shape[1], A.shape[0]))
+    return task_scale_rows(A, b, G, h, lb, ub, feas_work(A.shape[1], A.shape[0], G.shape[0]))
 
 
 @kernel
@@ -932,12 +1005,31 @@ def build_program(
 
 
 @kernel
-def feasible_point_rows(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
-    """:func:`feasible_point` for programs of any row count (``unique`` always False with other
-    than two): a vertex found by the simplex method (:func:`_lp`); unbounded variables whose
-    columns span the task space take the least-norm solution for the rest of the task, the
-    bounded ones the point of their box nearest zero. Kept apart from the 2-D kernel, whose hot
-    path would otherwise carry the simplex method's code."""
+def feasible_point_rows(
+    A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: FeasWork
+) -> tuple[int, bool]:
+    """:func:`feasible_point` for programs of any row count and with inequality rows
+    ``G x <= h``. Without inequality rows: the 2-D geometry, or a vertex found by the simplex
+    method (:func:`_lp`; ``unique`` always False with other than two rows); unbounded variables
+    whose columns span the task space take the least-norm solution for the rest of the task, the
+    bounded ones the point of their box nearest zero. With them: that point when it keeps every
+    row (an inactive row changes nothing), else a vertex of the augmented program
+    (:func:`_augment`). Kept apart from the 2-D kernel, whose hot path would otherwise carry the
+    simplex method's code."""
+    code, unique = _task_point(A, b, lb, ub, x, w)
+    if G.shape[0] == 0 or code == INFEASIBLE or (code == OK and rows_hold(G, h, x)):
+        return code, unique
+    if not _augment(A, b, G, h, lb, ub, w):
+        return NEEDS_REFERENCE, False
+    code, _ = _lp(w.Ag, w.bg, w.lg, w.ug, False, w.xg, w)
+    for j in range(x.size):
+        x[j] = w.xg[j]
+    return code, False
+
+
+@kernel
+def _task_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
+    """A feasible point of ``A x = b``, ``lb <= x <= ub`` (see :func:`feasible_point_rows`)."""
     nt, n = A.shape
     if nt == 2:
         return feasible_point(A, b, lb, ub, x, w)
@@ -974,6 +1066,6 @@ def feasible_point_rows(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -
 
 
 @kernel
-def feasible_point_of(A: F64, b: F64, lb: F64, ub: F64, x: F64) -> tuple[int, bool]:
+def feasible_point_of(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64) -> tuple[int, bool]:
     """:func:`feasible_point_rows` with its own buffers (the entry point for callers in Python)."""
-    return feasible_point_rows(A, b, lb, ub, x, feas_work(x.size, A.shape[0]))
+    return feasible_point_rows(A, b, G, h, lb, ub, x, feas_work(x.size, A.shape[0], G.shape[0]))

@@ -3,17 +3,18 @@
 Every program of docs/mathematics.md has the form::
 
     minimise   1/2 x^T P x + c^T x
-    subject to A x = b,   lb <= x <= ub
+    subject to A x = b,   G x <= h,   lb <= x <= ub
 
 with ``x = (qd, delta)``: the joint velocities (rad/s) first, then the task slack (m/s) when the
-program has one. ``A`` has one row per task dimension (2 planar, 3 position, 6 pose), ``P`` is
-positive definite (``w_E > 0``,
-``w_S > 0``), so the optimum is unique. Bounds are either finite on both sides or absent (+-inf).
+program has one. ``A`` has one row per task dimension (2 planar, 3 position, 6 pose), ``G`` one row
+per general inequality (none in the brief's programs: box bounds stay boxes, the fast path), ``P``
+is positive definite (``w_E > 0``, ``w_S > 0``), so the optimum is unique. Bounds are either finite
+on both sides or absent (+-inf).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -40,7 +41,8 @@ class Objective:
 
 @dataclass(frozen=True, eq=False, slots=True)
 class QP:
-    """``min 1/2 x^T P x + c^T x  s.t.  A x = b, lb <= x <= ub``; the first ``n_joints`` entries are qd."""
+    """``min 1/2 x^T P x + c^T x  s.t.  A x = b, G x <= h, lb <= x <= ub``; the first ``n_joints``
+    entries are qd. ``G`` and ``h`` default to no rows (``G`` is 0 x n)."""
 
     P: Matrix
     c: Vector
@@ -49,6 +51,23 @@ class QP:
     lb: Vector
     ub: Vector
     n_joints: int
+    G: Matrix = field(default_factory=lambda: np.zeros((0, 0)))
+    h: Vector = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        if self.G.shape[0] == 0 and self.G.shape[1] != self.c.size:
+            object.__setattr__(self, "G", np.zeros((0, self.c.size)))
+            object.__setattr__(self, "h", np.zeros(0))
+        if self.G.shape != (self.h.size, self.c.size):
+            raise ValueError(
+                f"G must be {self.h.size} x {self.c.size} (one row per entry of h), "
+                f"got {self.G.shape[0]} x {self.G.shape[1]}"
+            )
+
+    @property
+    def n_rows(self) -> int:
+        """Number of inequality rows ``G x <= h``."""
+        return int(self.h.size)
 
     @property
     def n(self) -> int:
@@ -74,8 +93,13 @@ class QP:
         return float(np.max(np.abs(self.A @ x - self.b)))
 
     def bound_excess(self, x: Vector) -> float:
-        """Largest amount by which ``x`` leaves its bounds (0 when inside)."""
-        return float(max(0.0, np.max(self.lb - x), np.max(x - self.ub)))
+        """Largest amount by which ``x`` leaves its bounds or a row ``G x <= h`` (0 when inside)."""
+        rows = float(np.max(self.G @ x - self.h)) if self.n_rows else 0.0
+        return float(max(0.0, np.max(self.lb - x), np.max(x - self.ub), rows))
+
+    def row_slack(self, x: Vector) -> Vector:
+        """``h - G x`` (>= 0 where ``x`` keeps the rows; 0 where a row is active)."""
+        return np.asarray(self.h - self.G @ x, dtype=float)
 
     def violation(self, x: Vector) -> float:
         """Largest equality residual or bound excess."""
@@ -104,6 +128,8 @@ class QP:
             lb=np.concatenate((self.lb, np.full(k, -np.inf))),
             ub=np.concatenate((self.ub, np.full(k, np.inf))),
             n_joints=self.n_joints,
+            G=np.hstack((self.G, np.zeros((self.n_rows, k)))),
+            h=self.h,
         )
 
 

@@ -57,7 +57,7 @@ def run_share(
     nt = goals.shape[1]
     nx = nt + n if prog.slack else n
     rec = new_record(motion.n_steps, n, nt)
-    work = step_work(n, nx, nt)
+    work = step_work(n, nx, nt, 0)
     for r in range(first, runs, stride):
         task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps, motion.task)
         for j in range(n):

@@ -107,7 +107,7 @@ class Record(NamedTuple):
 
 class StepWork(NamedTuple):
     """One step's buffers: kinematics (planar, and spatial: empty for a planar arm), the program
-    ``(P, c, A, b, lb, ub)``, answer and residuals."""
+    ``(P, c, A, b, G, h, lb, ub)``, answer and residuals."""
 
     kin: KinWork
     sp: SpatialWork
@@ -118,6 +118,8 @@ class StepWork(NamedTuple):
     c: F64
     A: F64
     b: F64
+    G: F64
+    h: F64
     lb: F64
     ub: F64
     x: F64
@@ -149,19 +151,21 @@ def new_record(cap: int, n: int, nt: int) -> Record:
 
 
 @kernel
-def step_work(n: int, nx: int, nt: int) -> StepWork:
-    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables and ``nt``
-    task rows."""
+def step_work(n: int, nx: int, nt: int, ng: int) -> StepWork:
+    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables, ``nt``
+    task rows and ``ng`` inequality rows."""
     return StepWork(
         kin_work(n),
         spatial_work(n if nt != 2 else 0),
-        qp_work(nx, nt),
+        qp_work(nx, nt, ng),
         np.empty((nt, n)),
         np.empty(n),
         np.empty((nx, nx)),
         np.empty(nx),
         np.zeros((nt, nx)),
         np.empty(nt),
+        np.zeros((ng, nx)),
+        np.zeros(ng),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx),
@@ -240,22 +244,26 @@ def run_kernel(
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
             return HANDOFF, k
-        if nt == 2:  # the exact 2-D task scale first (cheap), then the solve
+        if nt == 2 and w.G.shape[0] == 0:  # the exact 2-D task scale first (cheap), then the solve
             alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
             if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                 return HANDOFF, k
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+            code, iterations = active_set(
+                w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
+            )
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
-                code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+                code, iterations = active_set(
+                    w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
+                )
             if code == INFEASIBLE:
-                alpha = task_scale_rows(w.A, w.b, w.lb, w.ub, w.qp.feas)
+                alpha = task_scale_rows(w.A, w.b, w.G, w.h, w.lb, w.ub, w.qp.feas)
                 if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                     return HANDOFF, k
                 if alpha < 1.0:
@@ -265,11 +273,13 @@ def run_kernel(
                     # that vertex is the optimum when its certificate says so (else the method)
                     for j in range(w.x.size):
                         w.x[j] = w.qp.feas.centre[j]
-                    certify(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+                    certify(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
                     if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
                         code, iterations = OK, 0
                 if code != OK:
-                    code, iterations = active_set(w.P, w.c, w.A, w.b, w.lb, w.ub, w.x, w.qp, w.res)
+                    code, iterations = active_set(
+                        w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
+                    )
             scaled = alpha < 1.0
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
@@ -369,12 +379,13 @@ def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
 _local = threading.local()
 
 
-def _work(n: int, nx: int, nt: int) -> StepWork:
-    """This thread's step buffers for the shape ``(n, nx, nt)``, built once (they hold no result)."""
-    cache: dict[tuple[int, int, int], StepWork] = _local.__dict__.setdefault("work", {})
-    if (n, nx, nt) not in cache:
-        cache[n, nx, nt] = step_work(n, nx, nt)
-    return cache[n, nx, nt]
+def _work(n: int, nx: int, nt: int, ng: int = 0) -> StepWork:
+    """This thread's step buffers for the shape ``(n, nx, nt, ng)``, built once (they hold no
+    result)."""
+    cache: dict[tuple[int, int, int, int], StepWork] = _local.__dict__.setdefault("work", {})
+    if (n, nx, nt, ng) not in cache:
+        cache[n, nx, nt, ng] = step_work(n, nx, nt, ng)
+    return cache[n, nx, nt, ng]
 
 
 def _grow(rec: Record, cap: int, n: int) -> Record:
@@ -471,7 +482,17 @@ def _chain_step(
 ) -> None:
     """Step ``k`` through the policy and the solver chain; its nominal program is in ``w``."""
     n = scenario.n
-    nominal = QP(w.P.copy(), w.c.copy(), w.A.copy(), w.b.copy(), w.lb.copy(), w.ub.copy(), n)
+    nominal = QP(
+        w.P.copy(),
+        w.c.copy(),
+        w.A.copy(),
+        w.b.copy(),
+        w.lb.copy(),
+        w.ub.copy(),
+        n,
+        G=w.G.copy(),
+        h=w.h.copy(),
+    )
     error_norm = float(np.linalg.norm(rec.e[k]))
     t = k * scenario.motion.dt
     program = admissible(
@@ -560,7 +581,7 @@ def _warm_up() -> None:
             nx = sc.n + sc.nt if prog.slack else sc.n
             rec = new_record(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
-            work = step_work(sc.n, nx, sc.nt)
+            work = step_work(sc.n, nx, sc.nt, 0)
             run_kernel(sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
 
 

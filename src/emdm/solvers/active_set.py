@@ -94,17 +94,25 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
     other shapes, an iteration limit, and per-iteration histories.
     """
     start = time.perf_counter()
-    if qp.A.shape[0] == 2 and max_iter is None and not history:
+    if (qp.A.shape[0] == 2 or qp.n_rows) and max_iter is None and not history:
         x = np.empty(qp.n)
-        P, c, A, b, lb, ub = (
-            np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub)
+        P, c, A, b, G, h, lb, ub = (
+            np.ascontiguousarray(a, dtype=float)
+            for a in (qp.P, qp.c, qp.A, qp.b, qp.G, qp.h, qp.lb, qp.ub)
         )
-        code, iterations = kernels.active_set_of(P, c, A, b, lb, ub, x, np.empty(4))
+        code, iterations = kernels.active_set_of(P, c, A, b, G, h, lb, ub, x, np.empty(4))
         if code == kernels.OK:
             return SolverResult(x, "optimal", iterations, time.perf_counter() - start)
         if code == kernels.INFEASIBLE:
             return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
         start = time.perf_counter()  # the kernel left this program to the numpy method
+    if qp.n_rows:  # the numpy method knows bounds only: the chain's next solver takes the rows
+        return SolverResult(
+            None,
+            "unsupported: inequality rows outside the compiled kernel",
+            0,
+            time.perf_counter() - start,
+        )
     x0 = feasible_point(qp.A, qp.b, qp.lb, qp.ub)
     if x0 is None:
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)

@@ -4,8 +4,9 @@ A solver is a plain function ``solve(qp) -> SolverResult``. Whatever it claims, 
 answer with :func:`kkt_report`, which knows nothing of the solver: it finds the best multipliers for
 ``x`` by non-negative least squares and measures how far ``x`` is from satisfying the KKT conditions
 
-    P x + c = A^T lam + mu_lower - mu_upper,   mu >= 0,   A x = b,   lb <= x <= ub,
-    mu_lower_j (x_j - lb_j) = 0,   mu_upper_j (ub_j - x_j) = 0.
+    P x + c = A^T lam + mu_lower - mu_upper - G^T nu,   mu >= 0,   nu >= 0,
+    A x = b,   G x <= h,   lb <= x <= ub,
+    mu_lower_j (x_j - lb_j) = 0,   mu_upper_j (ub_j - x_j) = 0,   nu_i (h_i - G_i x) = 0.
 
 For a strictly convex QP these conditions characterise the unique optimum, so a small report proves
 the answer optimal. A solver that raises, returns NaN, a non-optimal point or runs out of budget
@@ -25,7 +26,7 @@ import numpy as np
 from ..core.arm import Vector
 from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
-from .kernels import BOUND_TOL, KKT_TOL, certify_of
+from .kernels import BOUND_TOL, KKT_TOL, certify_of, multipliers_of
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,12 +72,44 @@ def kkt_report(qp: QP, x: Vector) -> KKTReport:
     """
     if not np.all(np.isfinite(x)):
         return KKTReport(math.inf, math.inf, math.inf, math.inf)
-    P, c, A, b, lb, ub, xc = (
-        np.ascontiguousarray(a, dtype=float) for a in (qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, x)
-    )
     out = np.empty(4)
-    certify_of(P, c, A, b, lb, ub, xc, out)
+    certify_of(*_arrays(qp), np.ascontiguousarray(x, dtype=float), out)
     return KKTReport(*map(float, out))
+
+
+@dataclass(frozen=True, slots=True)
+class Multipliers:
+    """The certificate's multipliers at a point: ``lam`` of the task rows, signed ``mu`` of the
+    bounds (> 0 at the lower, < 0 at the upper bound), ``nu >= 0`` of the rows ``G x <= h``."""
+
+    lam: Vector
+    mu: Vector
+    nu: Vector
+    report: KKTReport
+
+    @property
+    def active_rows(self) -> np.ndarray:
+        """Indices of the rows ``G x <= h`` with a positive multiplier."""
+        return np.flatnonzero(self.nu > 0.0)
+
+
+def multipliers(qp: QP, x: Vector) -> Multipliers:
+    """The best sign-feasible multipliers at ``x`` and the KKT report they give (the certificate
+    of :func:`kkt_report`, with what it found)."""
+    out = np.empty(4)
+    lam, mu, nu = multipliers_of(*_arrays(qp), np.ascontiguousarray(x, dtype=float), out)
+    return Multipliers(lam, mu, nu, KKTReport(*map(float, out)))
+
+
+def _arrays(
+    qp: QP,
+) -> tuple[Vector, Vector, Vector, Vector, Vector, Vector, Vector, Vector]:
+    """The program's arrays as the kernels take them: ``(P, c, A, b, G, h, lb, ub)``."""
+    P, c, A, b, G, h, lb, ub = (
+        np.ascontiguousarray(a, dtype=float)
+        for a in (qp.P, qp.c, qp.A, qp.b, qp.G, qp.h, qp.lb, qp.ub)
+    )
+    return P, c, A, b, G, h, lb, ub
 
 
 # --------------------------------------------------------------------------------- registry

@@ -1,7 +1,8 @@
 """The compiled solver and certificate: the primal active-set method and the KKT residuals.
 
-Programs have the form ``min 1/2 x^T P x + c^T x  s.t.  A x = b (nt rows), lb <= x <= ub``,
-with ``nt`` = 2 for a planar task, 3 for a position and 6 for a pose.
+Programs have the form ``min 1/2 x^T P x + c^T x  s.t.  A x = b (nt rows), G x <= h (ng rows),
+lb <= x <= ub``, with ``nt`` = 2 for a planar task, 3 for a position and 6 for a pose, and ``ng``
+general inequality rows (0 for the brief's programs; box bounds stay boxes, the fast path).
 
 :func:`active_set` is Nocedal & Wright's Algorithm 16.3 specialised to equality rows and simple
 bounds (see :mod:`emdm.solvers.active_set` for the method); it starts from the exact feasible point
@@ -9,15 +10,17 @@ of :func:`emdm.core.kernels.feasible_point` and returns the multipliers of its f
 
 :func:`kkt_residuals` measures how far ``(x, lam, mu)`` is from the KKT conditions
 
-    P x + c = A^T lam + mu,   A x = b,   lb <= x <= ub,
+    P x + c = A^T lam + mu - G^T nu,   A x = b,   G x <= h,   lb <= x <= ub,
     mu_j >= 0 only where x_j = lb_j,   mu_j <= 0 only where x_j = ub_j,
+    nu_i >= 0, and nu_i > 0 only where G_i x = h_i,
 
 with residuals relative to the size of the gradient ``P x + c`` (stationarity, complementarity)
 and of ``|A| |x|`` (equality). The multipliers do not enter the scale: huge multipliers, the mark
 of a rank-deficient task, must not make a wrong point look stationary.
 :func:`best_multipliers` finds, for any ``x``, the sign-feasible multipliers over the bounds active
 at ``x`` that fit stationarity best (non-negative least squares, Lawson-Hanson), so a solver's
-answer can be certified without trusting anything the solver says. For a strictly convex QP, small
+answer can be certified without trusting anything the solver says (and the same for the rows
+``G x <= h`` active at ``x``). For a strictly convex QP, small
 residuals prove ``x`` the unique optimum, whoever found it.
 """
 
@@ -49,7 +52,8 @@ KKT_TOL = 1e-9
 BOUND_TOL = 1e-12
 """Largest bound excess accepted (rad/s or m/s)."""
 ACTIVE_TOL = 1e-9
-"""A bound counts as active in the certificate when ``|x_j - bound| <= ACTIVE_TOL (1 + |bound|)``."""
+"""A bound counts as active in the certificate when ``|x_j - bound| <= ACTIVE_TOL (1 + |bound|)``,
+an inequality row when ``h_i - G_i x <= ACTIVE_TOL (1 + |h_i|)``."""
 MAX_ITER_EXCEEDED = 3
 """Code of :func:`active_set` when its iteration limit ran out."""
 
@@ -57,7 +61,9 @@ __all__ = ["INFEASIBLE", "NEEDS_REFERENCE", "OK"]
 
 
 class QPWork(NamedTuple):
-    """Scratch buffers of the solver kernels for programs of ``nx`` variables."""
+    """Scratch buffers of the solver kernels for programs of ``nx`` variables, ``nt`` equality and
+    ``ng`` inequality rows: ``nu`` holds the rows' multipliers, ``gwork`` the rows held in the
+    working set (1) and ``R`` the rank test's copy of the working rows."""
 
     feas: FeasWork
     work: NDArray[np.int8]
@@ -78,21 +84,25 @@ class QPWork(NamedTuple):
     skip: NDArray[np.bool_]
     B: F64
     warm: NDArray[np.bool_]
+    nu: F64
+    gwork: NDArray[np.int8]
+    R: F64
 
 
 @kernel
-def qp_work(nx: int, nt: int) -> QPWork:
-    """Buffers for programs with ``nx`` variables and ``nt`` equality rows."""
-    cols = 2 * nt + 2 * nx
+def qp_work(nx: int, nt: int, ng: int) -> QPWork:
+    """Buffers for programs with ``nx`` variables, ``nt`` equality and ``ng`` inequality rows."""
+    cols = 2 * nt + 2 * nx + ng
+    size = nx + nt + ng
     return QPWork(
-        feas_work(nx, nt),  # compiled here; a Python caller of qp_work.py_func gets it boxed once
+        feas_work(nx, nt, ng),  # compiled here; a Python caller of qp_work.py_func gets it boxed
         np.empty(nx, dtype=np.int8),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx, dtype=np.int64),
-        np.empty((nx + nt, nx + nt)),
-        np.empty(nx + nt),
+        np.empty((size, size)),
+        np.empty(size),
         np.empty(nt),
         np.empty(nx),
         np.empty((nx, cols)),
@@ -103,22 +113,40 @@ def qp_work(nx: int, nt: int) -> QPWork:
         np.empty(cols, dtype=np.bool_),
         np.empty(cols, dtype=np.bool_),
         np.empty((nx, cols + 1)),
-        np.zeros(1, dtype=np.bool_),  # work holds the last optimum's working set
+        np.zeros(1, dtype=np.bool_),  # work and gwork hold the last optimum's working set
+        np.zeros(ng),
+        np.zeros(ng, dtype=np.int8),
+        np.empty((nt + ng if ng > 0 else 0, nx)),
     )
 
 
 # ------------------------------------------------------------------------------ certificate
 @kernel
 def kkt_residuals(
-    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, lam: F64, mu: F64, out: F64
+    P: F64,
+    c: F64,
+    A: F64,
+    b: F64,
+    G: F64,
+    h: F64,
+    lb: F64,
+    ub: F64,
+    x: F64,
+    lam: F64,
+    mu: F64,
+    nu: F64,
+    out: F64,
 ) -> None:
-    """``out = (stationarity, equality, complementarity, bound excess)`` of ``(x, lam, mu)``.
+    """``out = (stationarity, equality, complementarity, bound excess)`` of ``(x, lam, mu, nu)``.
 
-    ``mu`` is signed (``> 0``: multiplier of the lower bound, ``< 0``: of the upper bound). A
-    multiplier of a bound that does not exist counts in full as complementarity (dual infeasible).
+    ``mu`` is signed (``> 0``: multiplier of the lower bound, ``< 0``: of the upper bound); ``nu``
+    are the multipliers of the rows ``G x <= h`` (``>= 0``). A multiplier of a bound that does not
+    exist, or a negative ``nu``, counts in full as complementarity (dual infeasible). The bound
+    excess covers the rows: ``max(lb - x, x - ub, G x - h)``.
     """
     n = x.size
     nt = A.shape[0]
+    ng = G.shape[0]
     scale_g = 1.0
     stat = 0.0
     comp = 0.0
@@ -129,6 +157,8 @@ def kkt_residuals(
         residual = px + c[j]
         for i in range(nt):
             residual -= A[i, j] * lam[i]
+        for i in range(ng):
+            residual += G[i, j] * nu[i]
         scale_g = max(scale_g, abs(px), abs(c[j]))
         stat = max(stat, abs(residual - mu[j]))
         if mu[j] > 0:
@@ -154,6 +184,15 @@ def kkt_residuals(
         eq = max(eq, abs(ax - b[i]))
     for j in range(n):
         excess = max(excess, lb[j] - x[j], x[j] - ub[j])
+    for i in range(ng):
+        gx = 0.0
+        for j in range(n):
+            gx += G[i, j] * x[j]
+        excess = max(excess, gx - h[i])
+        if nu[i] < 0:
+            comp = max(comp, abs(nu[i]))
+        else:
+            comp = max(comp, nu[i] * max(h[i] - gx, 0.0))
     out[0] = stat / scale_g
     out[1] = eq / scale_eq
     out[2] = comp / scale_g
@@ -217,13 +256,25 @@ def _least_squares(M: F64, passive: NDArray[np.bool_], d: F64, s: F64, B: F64) -
 
 @kernel
 def best_multipliers(
-    P: F64, c: F64, A: F64, lb: F64, ub: F64, x: F64, lam: F64, mu: F64, w: QPWork
+    P: F64,
+    c: F64,
+    A: F64,
+    G: F64,
+    h: F64,
+    lb: F64,
+    ub: F64,
+    x: F64,
+    lam: F64,
+    mu: F64,
+    nu: F64,
+    w: QPWork,
 ) -> None:
-    """Sign-feasible ``(lam, mu)`` over the bounds active at ``x`` that fit ``P x + c`` best.
+    """Sign-feasible ``(lam, mu, nu)`` over the bounds and rows active at ``x`` that fit
+    ``P x + c`` best.
 
-    Non-negative least squares (Lawson and Hanson) on the columns ``[A^T, -A^T, e_lo, -e_hi]``
-    (``lam = lam+ - lam-``, one pair of columns per task row), the same problem as the
-    reference certificate of the tests.
+    Non-negative least squares (Lawson and Hanson) on the columns ``[A^T, -A^T, e_lo, -e_hi,
+    -G_a^T]`` (``lam = lam+ - lam-``, one pair of columns per task row; one column per active
+    inequality row), the same problem as the reference certificate of the tests.
     """
     n = x.size
     nt = A.shape[0]
@@ -247,6 +298,16 @@ def best_multipliers(
     for j in range(n):
         if math.isfinite(ub[j]) and ub[j] - x[j] <= ACTIVE_TOL * (1.0 + abs(ub[j])):
             M[j, cols] = -1.0
+            cols += 1
+    nbounds = cols
+    for i in range(G.shape[0]):
+        nu[i] = 0.0
+        gx = 0.0
+        for j in range(n):
+            gx += G[i, j] * x[j]
+        if h[i] - gx <= ACTIVE_TOL * (1.0 + abs(h[i])):
+            for j in range(n):
+                M[j, cols] = -G[i, j]
             cols += 1
     Mv = M[:, :cols]
     zv, sv, wvv, pv = z[:cols], s[:cols], wv[:cols], passive[:cols]
@@ -320,47 +381,66 @@ def best_multipliers(
         lam[i] = zv[i] - zv[nt + i]
     for j in range(n):
         mu[j] = 0.0
-    for k in range(2 * nt, cols):
+    for k in range(2 * nt, nbounds):
         for j in range(n):
             if Mv[j, k] != 0.0:
                 mu[j] += Mv[j, k] * zv[k]
+    k = nbounds
+    for i in range(G.shape[0]):
+        if k < cols:
+            gx = 0.0
+            for j in range(n):
+                gx += G[i, j] * x[j]
+            if h[i] - gx <= ACTIVE_TOL * (1.0 + abs(h[i])):
+                nu[i] = zv[k]
+                k += 1
 
 
 @kernel
-def certify(P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64) -> None:
+def certify(
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+) -> None:
     """The KKT residuals of ``x`` with the best sign-feasible multipliers (solver-independent)."""
-    best_multipliers(P, c, A, lb, ub, x, w.lam, w.mu, w)
-    kkt_residuals(P, c, A, b, lb, ub, x, w.lam, w.mu, out)
+    best_multipliers(P, c, A, G, h, lb, ub, x, w.lam, w.mu, w.nu, w)
+    kkt_residuals(P, c, A, b, G, h, lb, ub, x, w.lam, w.mu, w.nu, out)
 
 
 # ---------------------------------------------------------------------------- active set
 @kernel
 def active_set(
-    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
     """Exact optimum of the program by the primal active-set method: ``(code, iterations)``.
 
-    On ``OK``, ``x`` is the optimum, ``w.lam`` and ``w.mu`` its multipliers and ``out`` the KKT
-    residuals of :func:`kkt_residuals` for them. ``NEEDS_REFERENCE`` leaves a case this kernel
-    does not settle (dependent equality rows) to the numpy method; ``INFEASIBLE`` means no point
-    satisfies the constraints.
+    On ``OK``, ``x`` is the optimum, ``w.lam``, ``w.mu`` and ``w.nu`` its multipliers and ``out``
+    the KKT residuals of :func:`kkt_residuals` for them. ``NEEDS_REFERENCE`` leaves a case this
+    kernel does not settle (dependent equality rows) to the numpy method; ``INFEASIBLE`` means no
+    point satisfies the constraints.
 
-    In a control loop the optimum's working set rarely changes from one step to the next, so the
-    previous one is tried first (:func:`_warm_start`, one iteration); the method starts from an
-    exact feasible point only when that guess fails its exact optimality conditions.
+    The working set holds bounds (``w.work``: -1 at lb, +1 at ub) and inequality rows
+    (``w.gwork``: 1 when ``G_i x = h_i`` is held). In a control loop the optimum's working set
+    rarely changes from one step to the next, so the previous one is tried first
+    (:func:`_warm_start`, one iteration); the method starts from an exact feasible point only when
+    that guess fails its exact optimality conditions.
     """
-    if w.warm[0] and _warm_start(P, c, A, b, lb, ub, x, w, out):
+    if w.warm[0] and _warm_start(P, c, A, b, G, h, lb, ub, x, w, out):
         return OK, 1
-    code, iterations = _cold_start(P, c, A, b, lb, ub, x, w, out)
+    code, iterations = _cold_start(P, c, A, b, G, h, lb, ub, x, w, out)
     w.warm[0] = code == OK and iterations > 0
     return code, iterations
 
 
 @kernel
-def _kkt_matrix(P: F64, A: F64, idx: NDArray[np.int64], f: int, K: F64) -> None:
-    """``K[:f+nt, :f+nt] = [[P_FF, -A_F^T], [A_F, 0]]`` for the free variables ``idx[:f]``."""
+def _kkt_matrix(
+    P: F64, A: F64, G: F64, gwork: NDArray[np.int8], idx: NDArray[np.int64], f: int, K: F64
+) -> int:
+    """``K = [[P_FF, -A_F^T, G_WF^T], [A_F, 0, 0], [G_WF, 0, 0]]`` for the free variables
+    ``idx[:f]`` and the rows ``W`` held in ``gwork``; returns its size ``f + nt + |W|``."""
     nt = A.shape[0]
-    size = f + nt
+    nw = 0
+    for i in range(G.shape[0]):
+        nw += gwork[i]
+    size = f + nt + nw
     for r in range(size):
         for cc in range(size):
             K[r, cc] = 0.0
@@ -371,19 +451,105 @@ def _kkt_matrix(P: F64, A: F64, idx: NDArray[np.int64], f: int, K: F64) -> None:
         for i in range(nt):
             K[a, f + i] = -A[i, j]
             K[f + i, a] = A[i, j]
+        r = f + nt
+        for i in range(G.shape[0]):
+            if gwork[i]:
+                K[a, r] = G[i, j]
+                K[r, a] = G[i, j]
+                r += 1
+    return int(size)
+
+
+@kernel
+def _row_value(G: F64, i: int, x: F64) -> float:
+    acc = 0.0
+    for j in range(x.size):
+        acc += G[i, j] * x[j]
+    return acc
+
+
+@kernel
+def _independent(
+    A: F64, G: F64, gwork: NDArray[np.int8], extra: int, free: NDArray[np.bool_], w: QPWork
+) -> bool:
+    """True when the working rows restricted to the free variables, ``[A_F; G_WF]`` plus row
+    ``extra`` of ``G`` (if ``>= 0``), are linearly independent: Gaussian elimination with complete
+    pivoting on a copy, a pivot counting when above ``RANK_TOL`` times the largest entry times the
+    row count. Without inequality rows this is :func:`emdm.core.kernels.free_rank`'s test."""
+    if G.shape[0] == 0:
+        return bool(free_rank(A, free, w.feas) == A.shape[0])
+    nt, n = A.shape
+    M = w.R
+    rows = 0
+    for i in range(nt + G.shape[0]):
+        if i < nt:
+            src, gi = A, i
+        else:
+            gi = i - nt
+            if not (gwork[gi] or gi == extra):
+                continue
+            src = G
+        cols = 0
+        for j in range(n):
+            if free[j]:
+                M[rows, cols] = src[gi, j]
+                cols += 1
+        rows += 1
+    cols = 0
+    big = 0.0
+    for j in range(n):
+        if free[j]:
+            cols += 1
+    if rows > cols:
+        return False
+    for r in range(rows):
+        for cc in range(cols):
+            big = max(big, abs(M[r, cc]))
+    if big <= 0:
+        return rows == 0
+    tol = RANK_TOL * big * rows
+    for step in range(rows):
+        pr, pc, best = step, step, 0.0
+        for r in range(step, rows):
+            for cc in range(step, cols):
+                if abs(M[r, cc]) > best:
+                    best, pr, pc = abs(M[r, cc]), r, cc
+        if best <= tol:
+            return False
+        for cc in range(cols):
+            M[step, cc], M[pr, cc] = M[pr, cc], M[step, cc]
+        for r in range(rows):
+            M[r, step], M[r, pc] = M[r, pc], M[r, step]
+        for r in range(step + 1, rows):
+            f = M[r, step] / M[step, step]
+            for cc in range(step, cols):
+                M[r, cc] -= f * M[step, cc]
+    return True
 
 
 @kernel
 def _warm_start(
-    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
-    """Solve the equality-constrained program with the bounds of ``w.work`` held, and accept its
-    answer only where it is the optimum: every other variable within its bounds, every held
-    bound's multiplier of the right sign (the tolerances of the cold method), KKT residuals
-    within :data:`KKT_TOL`. ``x`` is overwritten either way."""
-    work, snap, idx, K, rhs, lam, mu = w.work, w.snap, w.idx, w.K, w.rhs, w.lam, w.mu
+    """Solve the equality-constrained program with the bounds of ``w.work`` and the rows of
+    ``w.gwork`` held, and accept its answer only where it is the optimum: every other variable
+    within its bounds and every other row kept, every held bound's and row's multiplier of the
+    right sign (the tolerances of the cold method), KKT residuals within :data:`KKT_TOL`. ``x``
+    is overwritten either way."""
+    work, gwork, snap, idx, K, rhs, lam, mu, nu = (
+        w.work,
+        w.gwork,
+        w.snap,
+        w.idx,
+        w.K,
+        w.rhs,
+        w.lam,
+        w.mu,
+        w.nu,
+    )
     n = x.size
     nt = A.shape[0]
+    ng = G.shape[0]
     f = 0
     for j in range(n):
         a = abs(lb[j]) if math.isfinite(lb[j]) else 0.0
@@ -400,16 +566,24 @@ def _warm_start(
         else:
             idx[f] = j
             f += 1
-    if f < nt:
+    size = _kkt_matrix(P, A, G, gwork, idx, f, K)
+    if f < size - f:
         return False
-    size = f + nt
     for i in range(nt):
         acc = b[i]
         for j in range(n):
             if work[j] != 0:
                 acc -= A[i, j] * x[j]
         rhs[f + i] = acc
-    _kkt_matrix(P, A, idx, f, K)
+    r = f + nt
+    for i in range(ng):
+        if gwork[i]:
+            acc = h[i]
+            for j in range(n):
+                if work[j] != 0:
+                    acc -= G[i, j] * x[j]
+            rhs[r] = acc
+            r += 1
     for a in range(f):
         j = idx[a]
         acc = c[j]
@@ -435,6 +609,15 @@ def _warm_start(
         x[j] = v
     for i in range(nt):
         lam[i] = rhs[f + i]
+    r = f + nt
+    for i in range(ng):
+        if gwork[i]:
+            nu[i] = rhs[r]
+            r += 1
+        else:
+            nu[i] = 0.0
+            if _row_value(G, i, x) - h[i] > 1e-13 * (1.0 + abs(h[i])):
+                return False
     gmax = 0.0
     for j in range(n):
         acc = c[j]
@@ -444,6 +627,8 @@ def _warm_start(
         if work[j] != 0:
             for i in range(nt):
                 acc -= A[i, j] * lam[i]
+            for i in range(ng):
+                acc += G[i, j] * nu[i]
             mu[j] = acc
         else:
             mu[j] = 0.0
@@ -451,17 +636,26 @@ def _warm_start(
     for j in range(n):
         if (work[j] == -1 and mu[j] < -tol) or (work[j] == 1 and mu[j] > tol):
             return False
-    kkt_residuals(P, c, A, b, lb, ub, x, lam, mu, out)
+    for i in range(ng):
+        if nu[i] < -tol:
+            return False
+    kkt_residuals(P, c, A, b, G, h, lb, ub, x, lam, mu, nu, out)
     return bool(max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL)
 
 
 @kernel
+def _row_active(G: F64, h: F64, i: int, x: F64) -> bool:
+    return bool(h[i] - _row_value(G, i, x) <= ACTIVE_TOL * (1.0 + abs(h[i])))
+
+
+@kernel
 def _cold_start(
-    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
     """The primal active-set method from an exact feasible point (see :func:`active_set`)."""
-    work, snap, g, p, idx, K, rhs, lam, mu = (
+    work, gwork, snap, g, p, idx, K, rhs, lam, mu, nu = (
         w.work,
+        w.gwork,
         w.snap,
         w.g,
         w.p,
@@ -470,15 +664,17 @@ def _cold_start(
         w.rhs,
         w.lam,
         w.mu,
+        w.nu,
     )
     free = w.feas.free
     n = x.size
     nt = A.shape[0]
-    code, unique = feasible_point_rows(A, b, lb, ub, x, w.feas)
+    ng = G.shape[0]
+    code, unique = feasible_point_rows(A, b, G, h, lb, ub, x, w.feas)
     if code != OK:
         return code, 0
     if unique:  # the (scaled) task leaves one feasible point: it is the optimum
-        certify(P, c, A, b, lb, ub, x, w, out)
+        certify(P, c, A, b, G, h, lb, ub, x, w, out)
         if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
             return OK, 0
         return NEEDS_REFERENCE, 0  # a degenerate zonotope (parallel columns) fooled the test
@@ -488,6 +684,9 @@ def _cold_start(
         snap[j] = 1e-13 * (1.0 + max(a, bb))
         work[j] = 0
         free[j] = True
+    for i in range(ng):
+        gwork[i] = 0
+        nu[i] = 0.0
     for j in range(n):
         at_lo = x[j] - lb[j] <= snap[j]
         at_hi = ub[j] - x[j] <= snap[j]
@@ -497,11 +696,14 @@ def _cold_start(
             x[j] = ub[j]
         if at_lo or at_hi:
             free[j] = False
-            if free_rank(A, free, w.feas) == nt:
+            if _independent(A, G, gwork, -1, free, w):
                 work[j] = -1 if at_lo else 1
             else:
                 free[j] = True
-    limit = 10 * (n + 2) + 20
+    for i in range(ng):
+        if _row_active(G, h, i, x) and _independent(A, G, gwork, i, free, w):
+            gwork[i] = 1
+    limit = 10 * (n + ng + 2) + 20
     zero_step = False
     for iteration in range(1, limit + 1):
         f = 0
@@ -514,7 +716,10 @@ def _cold_start(
             if work[j] == 0:
                 idx[f] = j
                 f += 1
-        if f == 2 and nt == 2:  # no null space: p = 0, A_F^T lam = g_F
+        nw = 0
+        for i in range(ng):
+            nw += gwork[i]
+        if f == 2 and nt == 2 and nw == 0:  # no null space: p = 0, A_F^T lam = g_F
             i0, i1 = idx[0], idx[1]
             det = A[0, i0] * A[1, i1] - A[1, i0] * A[0, i1]
             size = math.hypot(A[0, i0], A[1, i0]) * math.hypot(A[0, i1], A[1, i1])
@@ -523,18 +728,24 @@ def _cold_start(
             lam[0] = (g[i0] * A[1, i1] - g[i1] * A[1, i0]) / det
             lam[1] = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
         else:
-            size = f + nt
-            _kkt_matrix(P, A, idx, f, K)
+            size = _kkt_matrix(P, A, G, gwork, idx, f, K)
             for a in range(f):
                 rhs[a] = -g[idx[a]]
-            for i in range(nt):
-                rhs[f + i] = 0.0
+            for i in range(f, size):
+                rhs[i] = 0.0
             if not solve_in_place(K, rhs, size):
                 return NEEDS_REFERENCE, iteration
             for a in range(f):
                 p[idx[a]] = rhs[a]
             for i in range(nt):
                 lam[i] = rhs[f + i]
+            r = f + nt
+            for i in range(ng):
+                if gwork[i]:
+                    nu[i] = rhs[r]
+                    r += 1
+                else:
+                    nu[i] = 0.0
         pmax = xmax = 0.0
         for j in range(n):
             pmax = max(pmax, abs(p[j]))
@@ -542,6 +753,8 @@ def _cold_start(
         finite = math.isfinite(pmax)
         for i in range(nt):
             finite = finite and math.isfinite(lam[i])
+        for i in range(ng):
+            finite = finite and math.isfinite(nu[i])
         if not finite:
             return NEEDS_REFERENCE, iteration
         if pmax <= 1e-12 * (1.0 + xmax):
@@ -556,17 +769,26 @@ def _cold_start(
                     acc = g[j]
                     for i in range(nt):
                         acc -= A[i, j] * lam[i]
+                    for i in range(ng):
+                        acc += G[i, j] * nu[i]
                     mu[j] = acc
                     wrong = -mu[j] if work[j] == -1 else mu[j]
                     if wrong > tol and first < 0:
                         first = j
                     if wrong > worst:
                         worst, drop = wrong, j
+            for i in range(ng):
+                if gwork[i]:
+                    wrong = -nu[i]
+                    if wrong > tol and first < 0:
+                        first = n + i
+                    if wrong > worst:
+                        worst, drop = wrong, n + i
             if drop < 0:
-                kkt_residuals(P, c, A, b, lb, ub, x, lam, mu, out)
+                kkt_residuals(P, c, A, b, G, h, lb, ub, x, lam, mu, nu, out)
                 return OK, iteration
-            # a bound active at x outside the working set makes the vertex degenerate: the
-            # multipliers are not unique, and the certificate settles optimality over all of them
+            # a bound or row active at x outside the working set makes the vertex degenerate:
+            # the multipliers are not unique, and the certificate settles optimality over all
             degenerate = False
             for j in range(n):
                 if work[j] == 0 and (
@@ -574,11 +796,18 @@ def _cold_start(
                     or (math.isfinite(ub[j]) and ub[j] - x[j] <= ACTIVE_TOL * (1.0 + abs(ub[j])))
                 ):
                     degenerate = True
+            for i in range(ng):
+                if gwork[i] == 0 and _row_active(G, h, i, x):
+                    degenerate = True
             if degenerate:
-                certify(P, c, A, b, lb, ub, x, w, out)
+                certify(P, c, A, b, G, h, lb, ub, x, w, out)
                 if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
                     return OK, iteration
-            work[first if zero_step else drop] = 0
+            leave = first if zero_step else drop
+            if leave < n:
+                work[leave] = 0
+            else:
+                gwork[leave - n] = 0
             continue
         step = 1.0
         block = -1
@@ -588,6 +817,19 @@ def _cold_start(
             r = (lb[j] - x[j]) / p[j] if p[j] < 0 else (ub[j] - x[j]) / p[j]
             if r < step:
                 step, block = r, j
+        for i in range(ng):
+            if gwork[i]:
+                continue
+            rate = 0.0
+            row_size = 0.0
+            for j in range(n):
+                rate += G[i, j] * p[j]
+                row_size += abs(G[i, j])
+            if rate <= 1e-13 * pmax * row_size:
+                continue
+            r = (h[i] - _row_value(G, i, x)) / rate
+            if r < step:
+                step, block = r, n + i
         step = max(0.0, step)
         for j in range(n):
             x[j] += step * p[j]
@@ -597,25 +839,43 @@ def _cold_start(
                 elif x[j] > ub[j] and x[j] - ub[j] <= snap[j]:
                     x[j] = ub[j]
         zero_step = step == 0.0
-        if block >= 0:
+        if 0 <= block < n:
             side = -1 if p[block] < 0 else 1
             x[block] = lb[block] if side < 0 else ub[block]
             for j in range(n):
                 free[j] = work[j] == 0 and j != block
-            if free_rank(A, free, w.feas) == nt:
+            if _independent(A, G, gwork, -1, free, w):
                 work[block] = side
+        elif block >= n:
+            for j in range(n):
+                free[j] = work[j] == 0
+            if _independent(A, G, gwork, block - n, free, w):
+                gwork[block - n] = 1
     return MAX_ITER_EXCEEDED, limit
 
 
 @kernel
 def active_set_of(
-    P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, out: F64
 ) -> tuple[int, int]:
     """:func:`active_set` with its own buffers (the entry point for callers in Python)."""
-    return active_set(P, c, A, b, lb, ub, x, qp_work(x.size, A.shape[0]), out)
+    return active_set(P, c, A, b, G, h, lb, ub, x, qp_work(x.size, A.shape[0], G.shape[0]), out)
 
 
 @kernel
-def certify_of(P: F64, c: F64, A: F64, b: F64, lb: F64, ub: F64, x: F64, out: F64) -> None:
+def multipliers_of(
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, out: F64
+) -> tuple[F64, F64, F64]:
+    """:func:`certify` with its own buffers, returning the multipliers ``(lam, mu, nu)`` it
+    found (signed ``mu``: > 0 at the lower bound; ``nu >= 0`` of the rows ``G x <= h``)."""
+    w = qp_work(x.size, A.shape[0], G.shape[0])
+    certify(P, c, A, b, G, h, lb, ub, x, w, out)
+    return w.lam.copy(), w.mu.copy(), w.nu.copy()
+
+
+@kernel
+def certify_of(
+    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, out: F64
+) -> None:
     """:func:`certify` with its own buffers (the entry point for callers in Python)."""
-    certify(P, c, A, b, lb, ub, x, qp_work(x.size, A.shape[0]), out)
+    certify(P, c, A, b, G, h, lb, ub, x, qp_work(x.size, A.shape[0], G.shape[0]), out)

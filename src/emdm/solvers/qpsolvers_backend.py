@@ -65,7 +65,8 @@ def solve_qpsolvers(qp: QP, backend: str, *, history: bool = False) -> SolverRes
         # quadprog cannot take infinite bounds: free variables get none
         lb = np.where(np.isfinite(qp.lb), qp.lb, -1e30)
         ub = np.where(np.isfinite(qp.ub), qp.ub, 1e30)
-    problem = Problem(qp.P, qp.c, None, None, qp.A, qp.b, lb, ub)
+    G, h = (qp.G, qp.h) if qp.n_rows else (None, None)
+    problem = Problem(qp.P, qp.c, G, h, qp.A, qp.b, lb, ub)
     start = time.perf_counter()
     with warnings.catch_warnings():  # dense to sparse conversion notices for sparse backends
         warnings.simplefilter("ignore")
