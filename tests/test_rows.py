@@ -193,3 +193,28 @@ def test_qp_checks_the_shape_of_its_rows():
     qp = QP(np.eye(3), np.zeros(3), np.ones((1, 3)), np.ones(1), -np.ones(3), np.ones(3), 3)
     assert qp.G.shape == (0, 3) and qp.n_rows == 0
     assert core.rows_hold(np.ones((1, 2)), np.array([1.0]), np.array([0.5, 0.5]))
+
+
+def test_every_solver_answers_rows_or_declines_them():
+    """Each available solver either answers a program with rows (checked by the certificate, to
+    its family's accuracy) or declines it with UNSUPPORTED_ROWS: none ignores the rows."""
+    from emdm.solvers import Family, available_solvers, get_solver
+    from emdm.solvers.base import UNSUPPORTED_ROWS
+
+    rng = np.random.default_rng(21)
+    qp = random_program(rng, 2, 4, 4)
+    exact = quadprog(qp).x
+    declined = []
+    for name in available_solvers():
+        spec = get_solver(name)
+        result = spec.solve(qp)
+        if result.status == UNSUPPORTED_ROWS:
+            declined.append(name)
+            continue
+        assert result.x is not None, name
+        if spec.family is Family.EXACT:
+            assert kkt_report(qp, result.x).residual <= 1e-6, name
+            np.testing.assert_allclose(result.x, exact, atol=1e-5, err_msg=name)
+        elif spec.family is Family.GRADIENT:
+            assert qp.violation(result.x) <= 1e-4, name
+    assert set(declined) <= {"interior-point", "admm", "kkt"}

@@ -28,7 +28,7 @@ from ..core.arm import Matrix, Vector
 from ..core.feasibility import RANK_TOL, feasible_point
 from ..core.problem import QP
 from . import kernels
-from .base import SolverResult, kkt_report
+from .base import UNSUPPORTED_ROWS, SolverResult, kkt_report
 
 
 def independent_rows(A: Matrix, b: Vector) -> tuple[Matrix, Vector]:
@@ -67,6 +67,8 @@ def _eqp(P: Matrix, A: Matrix, g: Vector) -> tuple[Vector, Vector]:
 def solve_kkt(qp: QP, *, history: bool = False) -> SolverResult:
     """The equality-constrained optimum in one KKT solve (bounds are not enforced, only checked)."""
     start = time.perf_counter()
+    if qp.n_rows:
+        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     try:
         A, b = independent_rows(qp.A, qp.b)
         n, m = qp.n, A.shape[0]
@@ -107,12 +109,7 @@ def solve_active_set(qp: QP, *, max_iter: int | None = None, history: bool = Fal
             return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
         start = time.perf_counter()  # the kernel left this program to the numpy method
     if qp.n_rows:  # the numpy method knows bounds only: the chain's next solver takes the rows
-        return SolverResult(
-            None,
-            "unsupported: inequality rows outside the compiled kernel",
-            0,
-            time.perf_counter() - start,
-        )
+        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     x0 = feasible_point(qp.A, qp.b, qp.lb, qp.ub)
     if x0 is None:
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)

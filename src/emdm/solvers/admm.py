@@ -22,7 +22,7 @@ import scipy.linalg
 
 from ..core.problem import QP
 from .active_set import independent_rows
-from .base import SolverResult, infeasible
+from .base import UNSUPPORTED_ROWS, SolverResult, infeasible
 
 
 def solve_admm(
@@ -35,6 +35,8 @@ def solve_admm(
 ) -> SolverResult:
     """Solve ``qp`` by ADMM; ``status`` is ``"optimal"`` on convergence, else ``"max_iter"``."""
     start = time.perf_counter()
+    if qp.n_rows:  # this method is written for bounds only: it declines rather than ignore rows
+        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
     P, c = qp.P, qp.c

@@ -28,6 +28,9 @@ from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
 from .kernels import BOUND_TOL, KKT_TOL, certify_of, multipliers_of
 
+UNSUPPORTED_ROWS = "unsupported: inequality rows G x <= h"
+"""Status of a solver written for bounds only, given a program with inequality rows."""
+
 
 @dataclass(frozen=True, slots=True)
 class SolverResult:
@@ -177,14 +180,15 @@ def get_solver(name: str) -> SolverSpec:
 
 
 def infeasible(qp: QP) -> bool:
-    """True when no point satisfies ``A x = b`` within the bounds (exact test, emdm.feasibility).
+    """True when no point satisfies ``A x = b`` and ``G x <= h`` within the bounds (exact test,
+    emdm.feasibility).
 
     The iterative and general-purpose solvers call this first (their phase 1), so an infeasible
     program is reported infeasible, never answered with a wrong point.
     """
     from ..core.feasibility import feasible_point
 
-    return feasible_point(qp.A, qp.b, qp.lb, qp.ub) is None
+    return feasible_point(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h) is None
 
 
 # ------------------------------------------------------------------------------ the chain

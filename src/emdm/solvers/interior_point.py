@@ -29,7 +29,7 @@ import numpy as np
 from ..core.arm import Matrix, Vector
 from ..core.problem import QP
 from .active_set import independent_rows
-from .base import SolverResult, infeasible
+from .base import UNSUPPORTED_ROWS, SolverResult, infeasible
 
 
 class _Newton(NamedTuple):
@@ -68,6 +68,8 @@ def solve_interior_point(
 ) -> SolverResult:
     """Solve ``qp`` by Mehrotra's predictor-corrector interior-point method."""
     start = time.perf_counter()
+    if qp.n_rows:  # this method is written for bounds only: it declines rather than ignore rows
+        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
     P, c = qp.P, qp.c

@@ -93,6 +93,9 @@ def reduce(qp: QP) -> Reduced:
         finite = np.isfinite(bound)
         rows.append(sign * Z[finite])
         rhs.append(sign * (bound[finite] - x0[finite]))
+    if qp.n_rows:  # the program's own rows G x <= h, in the reduced variables
+        rows.append(qp.G @ Z)
+        rhs.append(qp.h - qp.G @ x0)
     G = np.vstack(rows) if rows else np.zeros((0, Z.shape[1]))
     return Reduced(x0, Z, G, np.concatenate(rhs), qp)
 
@@ -259,6 +262,12 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
 
     x0 = np.clip(np.linalg.lstsq(qp.A, qp.b, rcond=None)[0], qp.lb, qp.ub)
     bounds = Bounds(qp.lb, qp.ub) if qp.bounded else None
+    rows: list[Any] = []
+    if method == "SLSQP":
+        if qp.n_rows:
+            rows = [{"type": "ineq", "fun": lambda x: qp.h - qp.G @ x, "jac": lambda x: -qp.G}]
+    elif qp.n_rows:
+        rows = [LinearConstraint(qp.G, -np.inf, qp.h)]
     if method == "SLSQP":
         res = minimize(
             f,
@@ -266,7 +275,10 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
             jac=grad,
             method="SLSQP",
             bounds=bounds,
-            constraints=[{"type": "eq", "fun": lambda x: qp.A @ x - qp.b, "jac": lambda x: qp.A}],
+            constraints=[
+                {"type": "eq", "fun": lambda x: qp.A @ x - qp.b, "jac": lambda x: qp.A},
+                *rows,
+            ],
             options={"maxiter": max_iter, "ftol": 1e-14},
             callback=callback if history else None,
         )
@@ -278,7 +290,7 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
             hess=lambda x: qp.P,
             method="trust-constr",
             bounds=bounds,
-            constraints=[LinearConstraint(qp.A, qp.b, qp.b)],
+            constraints=[LinearConstraint(qp.A, qp.b, qp.b), *rows],
             options={"maxiter": max_iter, "gtol": 1e-12, "xtol": 1e-14},
             callback=(lambda x, state: callback(x)) if history else None,
         )
