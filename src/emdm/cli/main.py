@@ -24,6 +24,7 @@ import numpy as np
 from .. import __version__
 from ..core.controllers import BASELINES, CONTROLLERS, get_controller
 from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
+from ..core.terms import TermKind
 from ..errors import EmdmError, NoSolution
 from ..outputs.records import (
     atomic_output,
@@ -364,7 +365,7 @@ def cmd_pareto(args: argparse.Namespace) -> int:
 
     controllers = _unique(args.controller) or ["UC-EMDM"]
     for name in controllers:
-        if get_controller(name).method != "EMDM":
+        if not get_controller(name).has(TermKind.MANIPULABILITY):
             raise UsageError(
                 f"--controller must weigh manipulability (UC-EMDM, C-EMDM, PARK, MMC), got {name}"
             )

@@ -37,66 +37,124 @@ import numpy as np
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
 from .feasibility import task_scale
-from .kernels import ERROR_FLOOR, ProgramData, build_program, task_kinematics_of
-from .kernels import joint_bounds as _joint_bounds
+from .kernels import task_kinematics_of
 from .limits import Bounds
 from .problem import QP
 from .scenario import Scenario, Weights
+from .terms import CODE, ProgramData, ProgramOut, StepInput, TermKind, build_program
+from .terms.damper import joint_bounds as _joint_bounds
+from .terms.slack import ERROR_FLOOR
 
 
-class Method(StrEnum):
-    """The objective of a controller: inverse velocity kinematics or effort/dexterity (EMDM)."""
+class When(StrEnum):
+    """When a term is part of the program: always, or only on an arm that is not redundant
+    (no more joints than task rows: the brief's slack program)."""
 
-    IVKC = "IVKC"
-    EMDM = "EMDM"
+    ALWAYS = "always"
+    NON_REDUNDANT = "non-redundant"
+
+
+@dataclass(frozen=True)
+class Term:
+    """A term of a controller: its kind (a module of :mod:`emdm.core.terms`), its weight (a key of
+    ``[weights]`` or a number), when it applies, and whether a zero weight leaves it out."""
+
+    kind: TermKind
+    weight: str | float = 1.0
+    when: When = When.ALWAYS
+    optional: bool = False
 
 
 @dataclass(frozen=True)
 class Controller:
-    """One of the four controllers: ``IVKC`` or ``EMDM``, constrained (``C-``) or not (``UC-``).
+    """A controller is data: a name and the terms of its per-step program.
 
-    A controller is data: :meth:`program_data` turns it and a scenario into the numbers of the
-    compiled program builder (:func:`emdm.core.kernels.build_program`), so adding a controller
-    means adding a :class:`Method` and its line in :meth:`program_data`, in this module only.
+    :meth:`program_data` turns it and a scenario into the input of the compiled program builder
+    (:func:`emdm.core.terms.build_program`), so adding a controller means adding its list of
+    terms below, in this module only.
     """
 
     name: str
-    method: Method
-    constrained: bool
-    slack: bool | None = None
-    """Whether the program has task slack; ``None``: the brief's rule (EMDM on an arm that is not
-    redundant)."""
+    terms: tuple[Term, ...]
+
+    def has(self, kind: TermKind) -> bool:
+        """Whether the controller holds a term of ``kind`` (on some arm)."""
+        return any(t.kind is kind for t in self.terms)
+
+    @property
+    def constrained(self) -> bool:
+        """Whether the joint bounds (velocity box and dampers) apply: the ``C-`` controllers."""
+        return self.has(TermKind.VELOCITY_BOX)
+
+    def applies(self, term: Term, scenario: Scenario) -> bool:
+        """Whether ``term`` is part of this controller's program on ``scenario``'s arm."""
+        return term.when is When.ALWAYS or not scenario.redundant
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
-        """The weights, slack and bounds of this controller's program on ``scenario``."""
+        """The terms, weights and numbers of this controller's program on ``scenario``."""
         w = weights or scenario.weights
-        if self.method is Method.IVKC:  # min E s.t. J qd = v (= J^+ v)
-            w_e, w_m, slack = 1.0, 0.0, False
-        else:  # min w_E E - w_M M s.t. J qd = v; the slack program on a non-redundant arm
-            w_e, w_m, slack = w.effort, w.manipulability, not scenario.redundant
-        if self.slack is not None:
-            slack = self.slack
+        codes: list[int] = []
+        values: list[float] = []
+        data: list[float] = []
+        start = [0]
+        slack = False
+        for term in self.terms:
+            if not self.applies(term, scenario):
+                continue
+            weight = float(getattr(w, term.weight) if isinstance(term.weight, str) else term.weight)
+            if term.optional and weight == 0.0:
+                continue
+            codes.append(CODE[term.kind])
+            values.append(weight)
+            if term.kind is TermKind.SLACK:
+                data += [*map(float, scenario.slack.min), *map(float, scenario.slack.max)]
+                slack = True
+            start.append(len(data))
         return ProgramData(
-            float(w_e),
-            float(w_m),
-            float(w.slack),
+            np.array(codes, dtype=np.int64),
+            np.array(values, dtype=float),
+            np.array(start, dtype=np.int64),
+            np.array(data, dtype=float),
             slack,
-            self.constrained,
-            np.asarray(scenario.slack.min, dtype=float),
-            np.asarray(scenario.slack.max, dtype=float),
+            0,
         )
 
 
+_TASK = Term(TermKind.TASK)
+_EFFORT = Term(TermKind.EFFORT)  # weight 1: the IVKC objective E alone
+_EFFORT_W = Term(TermKind.EFFORT, "effort")
+_MANIP = Term(TermKind.MANIPULABILITY, "manipulability")
+_CENTRING = Term(TermKind.CENTRING, "centring", optional=True)
+_SLACK = Term(TermKind.SLACK, "slack", When.NON_REDUNDANT)
+_SLACK_ALWAYS = Term(TermKind.SLACK, "slack")
+_JOINTS = (Term(TermKind.VELOCITY_BOX), Term(TermKind.DAMPER))
+
+
+class Name(StrEnum):
+    """The controllers' names: the brief's four and the baselines."""
+
+    UC_IVKC = "UC-IVKC"
+    C_IVKC = "C-IVKC"
+    UC_EMDM = "UC-EMDM"
+    C_EMDM = "C-EMDM"
+    RRMC = "RRMC"
+    PARK = "PARK"
+    MMC = "MMC"
+
+
 CONTROLLERS: dict[str, Controller] = {
-    name: Controller(name, Method(name.split("-")[1]), name.startswith("C-"))
-    for name in ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM")
+    Name.UC_IVKC: Controller(Name.UC_IVKC, (_TASK, _EFFORT)),
+    Name.C_IVKC: Controller(Name.C_IVKC, (_TASK, _EFFORT, *_JOINTS)),
+    Name.UC_EMDM: Controller(Name.UC_EMDM, (_TASK, _EFFORT_W, _MANIP, _CENTRING, _SLACK)),
+    Name.C_EMDM: Controller(Name.C_EMDM, (_TASK, _EFFORT_W, _MANIP, _CENTRING, _SLACK, *_JOINTS)),
 }
+"""The brief's four controllers (module docstring)."""
 
 
 BASELINES: dict[str, Controller] = {
-    "RRMC": Controller("RRMC", Method.IVKC, False, slack=False),
-    "PARK": Controller("PARK", Method.EMDM, False, slack=False),
-    "MMC": Controller("MMC", Method.EMDM, True, slack=True),
+    Name.RRMC: Controller(Name.RRMC, (_TASK, _EFFORT)),
+    Name.PARK: Controller(Name.PARK, (_TASK, _EFFORT_W, _MANIP)),
+    Name.MMC: Controller(Name.MMC, (_TASK, _EFFORT_W, _MANIP, _SLACK_ALWAYS, *_JOINTS)),
 }
 """The controllers of the manipulability benchmark besides the brief's four (module docstring)."""
 
@@ -137,24 +195,25 @@ def step_program(
     data = controller.program_data(scenario, weights)
     n, nt = scenario.n, scenario.nt
     nx = n + nt if data.slack else n
-    P, c, A = np.empty((nx, nx)), np.empty(nx), np.zeros((nt, nx))
-    b, lb, ub = np.empty(nt), np.empty(nx), np.empty(nx)
-    build_program(
-        scenario.arm_data,
-        data,
+    out = ProgramOut(
+        np.empty((nx, nx)),
+        np.empty(nx),
+        np.zeros((nt, nx)),
+        np.empty(nt),
+        np.zeros((data.rows, nx)),
+        np.zeros(data.rows),
+        np.empty(nx),
+        np.empty(nx),
+    )
+    state = StepInput(
         np.asarray(q, dtype=float),
-        kin.J,
-        kin.Jm,
+        np.ascontiguousarray(kin.J, dtype=float),
+        np.ascontiguousarray(kin.Jm, dtype=float),
         np.asarray(v, dtype=float),
         float(error_norm),
-        P,
-        c,
-        A,
-        b,
-        lb,
-        ub,
     )
-    return QP(P, c, A, b, lb, ub, n_joints=n)
+    rows = build_program(scenario.arm_data, data, state, out)
+    return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])
 
 
 @dataclass(frozen=True, eq=False)

@@ -402,33 +402,6 @@ def task_kinematics_of(
     return task_kinematics(lengths, geo, task, goal, q, p, e, J, Jm, kin_work(n), spatial_work(n))
 
 
-# ------------------------------------------------------------------------------ joint bounds
-@kernel
-def joint_bounds(arm: ArmData, q: F64, lo: F64, hi: F64) -> None:
-    """The velocity box intersected with the position dampers at ``q`` (brief eq. 10, 11)."""
-    for j in range(q.size):
-        d_up = arm.q_max[j] - q[j]
-        d_dn = q[j] - arm.q_min[j]
-        span = arm.gain[j] * (arm.influence[j] - arm.stop[j])
-        h = (d_up - arm.stop[j]) / span if d_up < arm.influence[j] else math.inf
-        low = -(d_dn - arm.stop[j]) / span if d_dn < arm.influence[j] else -math.inf
-        lo[j] = max(arm.qd_min[j], low)
-        hi[j] = min(arm.qd_max[j], h)
-
-
-@kernel
-def damper_bounds(
-    q: F64, q_min: F64, q_max: F64, influence: F64, stop: F64, gain: F64, lo: F64, hi: F64
-) -> None:
-    """The position-damper bounds alone (+-inf outside the influence zones)."""
-    for j in range(q.size):
-        d_up = q_max[j] - q[j]
-        d_dn = q[j] - q_min[j]
-        span = gain[j] * (influence[j] - stop[j])
-        hi[j] = (d_up - stop[j]) / span if d_up < influence[j] else math.inf
-        lo[j] = -(d_dn - stop[j]) / span if d_dn < influence[j] else -math.inf
-
-
 # ------------------------------------------------------------------------ feasibility (2-D)
 @kernel
 def _ray_interval(
@@ -930,78 +903,6 @@ def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tup
     if max(abs(r0), abs(r1)) > FEASIBILITY_TOL * (1.0 + max(abs(b[0]), abs(b[1])) + amax * xsum):
         return INFEASIBLE, False
     return OK, unique
-
-
-# ------------------------------------------------------------------------------ the program
-class ProgramData(NamedTuple):
-    """What a controller's program needs besides the state (see :mod:`emdm.core.controllers`).
-
-    ``w_e`` and ``w_m`` weigh effort and manipulability rate (IVKC: 1 and 0); ``slack`` adds the
-    task slack ``delta`` with weight ``c_s / max(||e||, 1e-9 m)`` and bounds ``[s_min, s_max]``
-    (m/s); ``constrained`` applies the joint bounds (velocity box and dampers).
-    """
-
-    w_e: float
-    w_m: float
-    c_s: float
-    slack: bool
-    constrained: bool
-    s_min: F64
-    s_max: F64
-
-
-ERROR_FLOOR = 1e-9
-"""Smallest ``||e||`` (m) used in ``w_S = c_S / ||e||``."""
-
-
-@kernel
-def build_program(
-    arm: ArmData,
-    prog: ProgramData,
-    q: F64,
-    J: F64,
-    Jm: F64,
-    v: F64,
-    error_norm: float,
-    P: F64,
-    c: F64,
-    A: F64,
-    b: F64,
-    lb: F64,
-    ub: F64,
-) -> None:
-    """The program ``min 1/2 x^T P x + c^T x  s.t.  A x = b, lb <= x <= ub`` of a controller.
-
-    ``x = (qd, delta)``: ``P = diag(w_e, ..., w_S, ..., w_S)``, ``c = (-w_m Jm, 0, ..., 0)``,
-    ``A = [J, I]``, ``b = v``; without slack ``x = qd``, ``P = w_e I``, ``c = -w_m Jm``, ``A = J``.
-    ``J`` has one row per task dimension (2 planar, 3 position, 6 pose).
-    """
-    n = q.size
-    nx = c.size
-    nt = b.size
-    for i in range(nx):
-        for j in range(nx):
-            P[i, j] = 0.0
-    if prog.constrained:
-        joint_bounds(arm, q, lb, ub)
-    else:
-        for j in range(n):
-            lb[j], ub[j] = -math.inf, math.inf
-    for j in range(n):
-        for i in range(nt):
-            A[i, j] = J[i, j]
-        P[j, j] = prog.w_e
-        c[j] = -prog.w_m * Jm[j]
-    if prog.slack:
-        w_s = prog.c_s / max(error_norm, ERROR_FLOOR)
-        for i in range(nt):
-            P[n + i, n + i] = w_s
-            c[n + i] = 0.0
-            for r in range(nt):
-                A[r, n + i] = 1.0 if r == i else 0.0
-            lb[n + i], ub[n + i] = prog.s_min[i], prog.s_max[i]
-    for i in range(nt):
-        b[i] = v[i]
 
 
 @kernel

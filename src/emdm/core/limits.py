@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arm import Vector
-from .kernels import damper_bounds
+from .terms.damper import bounds as damper_bounds
 
 
 @dataclass(frozen=True, eq=False, slots=True)
@@ -48,7 +48,7 @@ def position_damper(
     q: Vector, *, q_min: Vector, q_max: Vector, influence: Vector, stop: Vector, gain: Vector
 ) -> Bounds:
     """Velocity bounds from the joint-position dampers (brief eq. 11), both sides independently
-    (the compiled :func:`emdm.core.kernels.damper_bounds`)."""
+    (the compiled :func:`emdm.core.terms.damper.bounds`)."""
     q_arr = np.ascontiguousarray(q, dtype=float)
     lo, hi = np.empty(q_arr.size), np.empty(q_arr.size)
     q_lo, q_hi, inf, stp, gn = (

@@ -100,6 +100,7 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "effort": _Key("number", 0.1),
         "manipulability": _Key("number", 5.0),
         "slack": _Key("number", 10.0),
+        "centring": _Key("number", 0.0),
     },
     "slack": {"min": _Key("task", -1.0), "max": _Key("task", 1.0)},
     "damper": {
@@ -152,11 +153,13 @@ class Motion:
 
 @dataclass(frozen=True)
 class Weights:
-    """``w_E`` (effort), ``w_M`` (manipulability rate) and ``c_S`` (slack: ``w_S = c_S / ||e||``)."""
+    """``w_E`` (effort), ``w_M`` (manipulability rate), ``c_S`` (slack: ``w_S = c_S / ||e||``) and
+    ``w_C`` (joint centring, 0: off; :mod:`emdm.core.terms.centring`)."""
 
     effort: float
     manipulability: float
     slack: float
+    centring: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -582,6 +585,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "weights.effort": (1e-8, 1e8, ""),
     "weights.manipulability": (0.0, 1e8, ""),
     "weights.slack": (1e-8, 1e8, ""),
+    "weights.centring": (0.0, 1e8, ""),
     "slack.min": (-1e6, 1e6, " m/s"),
     "slack.max": (-1e6, 1e6, " m/s"),
     "damper.influence": (0.0, 1e6, " rad"),

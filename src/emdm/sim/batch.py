@@ -18,8 +18,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core.controllers import Controller, get_controller
 from ..core.jit import ensure_compiled, kernel
-from ..core.kernels import ArmData, Geometry, ProgramData
+from ..core.kernels import ArmData, Geometry
 from ..core.scenario import Policy, Scenario
+from ..core.terms import ProgramData
 from ..errors import NoSolution
 from .loop import (
     REACHED,
@@ -57,7 +58,7 @@ def run_share(
     nt = goals.shape[1]
     nx = nt + n if prog.slack else n
     rec = new_record(motion.n_steps, n, nt)
-    work = step_work(n, nx, nt, 0)
+    work = step_work(n, nx, nt, prog.rows)
     for r in range(first, runs, stride):
         task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps, motion.task)
         for j in range(n):

@@ -36,9 +36,7 @@ from ..core.kernels import (
     ArmData,
     Geometry,
     KinWork,
-    ProgramData,
     SpatialWork,
-    build_program,
     kin_work,
     kinematics,
     spatial_work,
@@ -48,6 +46,7 @@ from ..core.kernels import (
 )
 from ..core.problem import QP
 from ..core.scenario import Policy, Scenario
+from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
 from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, certify, qp_work
@@ -124,6 +123,7 @@ class StepWork(NamedTuple):
     ub: F64
     x: F64
     res: F64
+    rows: NDArray[np.int64]
 
 
 @kernel
@@ -170,6 +170,7 @@ def step_work(n: int, nx: int, nt: int, ng: int) -> StepWork:
         np.empty(nx),
         np.empty(nx),
         np.empty(4),
+        np.zeros(1, dtype=np.int64),
     )
 
 
@@ -208,6 +209,7 @@ def run_kernel(
         w.qp.warm[0] = False
     scaled = False
     cap = rec.qd.shape[0]
+    out = ProgramOut(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub)
     for k in range(k0, cap + 1):
         if nt == 2:  # the planar kinematics directly: the hot path carries no spatial code
             m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
@@ -239,31 +241,31 @@ def run_kernel(
             return TIMEOUT, k
         if k == cap:
             return FULL, k
-        build_program(arm, prog, rec.q[k], w.J, w.Jm, rec.v[k], err, w.P, w.c, w.A, w.b, w.lb, w.ub)
+        ng = build_program(arm, prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err), out)
+        G, h = w.G[:ng], w.h[:ng]
+        w.rows[0] = ng
         for j in range(n):
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
             return HANDOFF, k
-        if nt == 2 and w.G.shape[0] == 0:  # the exact 2-D task scale first (cheap), then the solve
+        if nt == 2 and ng == 0:  # the exact 2-D task scale first (cheap), then the solve
             alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
             if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                 return HANDOFF, k
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = active_set(
-                w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
-            )
+            code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
                 code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
+                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
                 )
             if code == INFEASIBLE:
-                alpha = task_scale_rows(w.A, w.b, w.G, w.h, w.lb, w.ub, w.qp.feas)
+                alpha = task_scale_rows(w.A, w.b, G, h, w.lb, w.ub, w.qp.feas)
                 if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                     return HANDOFF, k
                 if alpha < 1.0:
@@ -273,12 +275,12 @@ def run_kernel(
                     # that vertex is the optimum when its certificate says so (else the method)
                     for j in range(w.x.size):
                         w.x[j] = w.qp.feas.centre[j]
-                    certify(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
+                    certify(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
                     if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
                         code, iterations = OK, 0
                 if code != OK:
                     code, iterations = active_set(
-                        w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res
+                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
                     )
             scaled = alpha < 1.0
         stop = ticks()
@@ -447,7 +449,7 @@ def simulate(
     cap = min(motion.n_steps, FIRST_CHUNK)
     rec = plain(new_record)(cap, n, nt)
     rec.q[0] = scenario.motion.q0
-    work = _work(n, nx, nt)
+    work = _work(n, nx, nt, prog.rows)
     steps = _Steps()
     k = 0
     while True:
@@ -490,8 +492,8 @@ def _chain_step(
         w.lb.copy(),
         w.ub.copy(),
         n,
-        G=w.G.copy(),
-        h=w.h.copy(),
+        G=w.G[: w.rows[0]].copy(),
+        h=w.h[: w.rows[0]].copy(),
     )
     error_norm = float(np.linalg.norm(rec.e[k]))
     t = k * scenario.motion.dt

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..core.controllers import Controller, get_controller, program_at, state_at
-from ..core.scenario import Scenario, Weights
+from ..core.scenario import Scenario
 from ..errors import NoSolution
 from ..sim.loop import Run, simulate
 from ..sim.metrics import metrics
@@ -45,7 +45,7 @@ def front_at(
     Jm = state_at(scenario, q).kin.Jm
     points = []
     for ratio in [0.0, *sweep]:
-        weights = Weights(effort=w0.effort, manipulability=ratio * w0.effort, slack=w0.slack)
+        weights = replace(w0, manipulability=ratio * w0.effort)
         program = program_at(controller, scenario, q, weights=weights)
         result = solve_chain(program.qp, [DEFAULT_SOLVER, *DEFAULT_FALLBACK])
         qd = result.x[: scenario.n]
@@ -110,9 +110,7 @@ def weight_grid(
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     rows = []
     for w_e, w_m in grid:
-        sc = replace(
-            scenario, weights=Weights(effort=w_e, manipulability=w_m, slack=scenario.weights.slack)
-        )
+        sc = replace(scenario, weights=replace(scenario.weights, effort=w_e, manipulability=w_m))
         try:
             mt = metrics(simulate(sc, ctrl))
         except NoSolution as exc:

@@ -1,0 +1,78 @@
+"""The program of a controller at a state, built by its terms in one compiled pass.
+
+A controller is a list of terms (:mod:`emdm.core.controllers`); :class:`ProgramData` is that list
+as kernel input: per term its integer (:data:`emdm.core.terms.base.CODE`), weight and numbers.
+:func:`build_program` starts from the empty program (``P = 0``, ``c = 0``, ``lb = -inf``,
+``ub = +inf``, no rows) and lets each term write its part; it is the only place that lists the
+terms' writers, so adding a term means adding its module and one line below.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..jit import kernel
+from ..kernels import ArmData
+from . import centring, damper, effort, manipulability, slack, task, velocity_box
+from .base import (
+    CENTRING,
+    DAMPER,
+    EFFORT,
+    F64,
+    MANIPULABILITY,
+    SLACK,
+    TASK,
+    VELOCITY_BOX,
+    ProgramOut,
+    StepInput,
+)
+
+
+class ProgramData(NamedTuple):
+    """A controller's terms as kernel input: ``codes`` (one integer per term, in order),
+    ``weights``, and each term's numbers ``data[start[k]:start[k + 1]]``; ``slack`` says whether
+    the program has the task slack (``x = (qd, delta)``), ``rows`` how many inequality rows its
+    terms may write at most."""
+
+    codes: NDArray[np.int64]
+    weights: F64
+    start: NDArray[np.int64]
+    data: F64
+    slack: bool
+    rows: int
+
+
+@kernel
+def build_program(arm: ArmData, prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
+    """Write the program of ``prog`` at the state ``s`` into ``out``; returns the number of
+    inequality rows written (``G[:rows]``, ``h[:rows]``)."""
+    nx = out.c.size
+    for i in range(nx):
+        for j in range(nx):
+            out.P[i, j] = 0.0
+        out.c[i] = 0.0
+        out.lb[i] = -math.inf
+        out.ub[i] = math.inf
+    rows = 0
+    for k in range(prog.codes.size):
+        code, weight = prog.codes[k], prog.weights[k]
+        data = prog.data[prog.start[k] : prog.start[k + 1]]
+        if code == TASK:
+            rows = task.write(arm, weight, data, s, out, rows)
+        elif code == EFFORT:
+            rows = effort.write(arm, weight, data, s, out, rows)
+        elif code == MANIPULABILITY:
+            rows = manipulability.write(arm, weight, data, s, out, rows)
+        elif code == SLACK:
+            rows = slack.write(arm, weight, data, s, out, rows)
+        elif code == VELOCITY_BOX:
+            rows = velocity_box.write(arm, weight, data, s, out, rows)
+        elif code == DAMPER:
+            rows = damper.write(arm, weight, data, s, out, rows)
+        elif code == CENTRING:
+            rows = centring.write(arm, weight, data, s, out, rows)
+    return rows
