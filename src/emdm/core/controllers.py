@@ -41,7 +41,7 @@ from .kernels import task_kinematics_of
 from .limits import Bounds
 from .problem import QP
 from .scenario import Scenario, Weights
-from .terms import CODE, ProgramData, ProgramOut, StepInput, TermKind, build_program
+from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, build_program
 from .terms.damper import joint_bounds as _joint_bounds
 from .terms.slack import ERROR_FLOOR
 
@@ -106,9 +106,8 @@ class Controller:
                 continue
             codes.append(CODE[term.kind])
             values.append(weight)
-            if term.kind is TermKind.SLACK:
-                data += [*map(float, scenario.slack.min), *map(float, scenario.slack.max)]
-                slack = True
+            data += PACK[term.kind](scenario)
+            slack = slack or term.kind is TermKind.SLACK
             start.append(len(data))
         return ProgramData(
             np.array(codes, dtype=np.int64),
@@ -212,7 +211,7 @@ def step_program(
         np.asarray(v, dtype=float),
         float(error_norm),
     )
-    rows = build_program(scenario.arm_data, data, state, out)
+    rows = build_program(data, state, out)
     return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])
 
 

@@ -88,8 +88,9 @@ class SpatialWork(NamedTuple):
 class FeasWork(NamedTuple):
     """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables, ``nt`` task
     rows and ``ng`` inequality rows): the 2-D zonotope geometry, the simplex method of programs
-    with other row counts, and the program with its inequality rows made equalities
-    (:func:`_augment`: ``Ag``, ``bg``, ``lg``, ``ug``, answer ``xg``)."""
+    with other row counts, and at the end of ``lpf`` the program with its inequality rows made
+    equalities (:func:`_augment`, :class:`AugViews`). No array is added for the rows: a kernel
+    call pays for every array of the tuples it is passed."""
 
     cand: F64
     base: F64
@@ -98,11 +99,40 @@ class FeasWork(NamedTuple):
     centre: F64
     lpf: F64
     lpi: NDArray[np.int64]
-    Ag: F64
-    bg: F64
-    lg: F64
-    ug: F64
-    xg: F64
+
+
+class AugViews(NamedTuple):
+    """The augmented program of :func:`_augment` (views of the end of ``FeasWork.lpf``): ``A``
+    and ``b`` of ``A x = alpha b``, bounds ``lb``, ``ub`` and the answer ``x``."""
+
+    A: F64
+    b: F64
+    lb: F64
+    ub: F64
+    x: F64
+
+
+@kernel
+def _lp_size(nx: int, nt: int) -> int:
+    """Length of the simplex method's part of ``lpf`` for ``nx`` variables and ``nt`` rows."""
+    nv = nx + 1 + nt
+    return 4 * nv + 3 * nt + nt * nt + nt * nx
+
+
+@kernel
+def _aug_views(w: FeasWork, nx: int, nt: int, ng: int) -> AugViews:
+    """Views of the augmented program (``nx + ng + 1`` variables, ``nt + ng`` rows)."""
+    nxa, nta = nx + ng + 1, nt + ng
+    f = w.lpf
+    a = _lp_size(nxa, nta)
+    b = a + nta * nxa
+    return AugViews(
+        f[a:b].reshape((nta, nxa)),
+        f[b : b + nta],
+        f[b + nta : b + nta + nxa],
+        f[b + nta + nxa : b + nta + 2 * nxa],
+        f[b + nta + 2 * nxa : b + nta + 3 * nxa],
+    )
 
 
 class LPViews(NamedTuple):
@@ -151,19 +181,15 @@ def feas_work(nx: int, nt: int, ng: int) -> FeasWork:
     nxa = nx + ng + 1 if ng > 0 else nx
     nta = nt + ng
     nv = nxa + 1 + nta
+    aug = nta * nxa + nta + 3 * nxa if ng > 0 else 0
     return FeasWork(
         np.empty((4 * (nx + 3), 2)),
         np.empty((nx + 3, 2)),
         np.empty(nxa, dtype=np.bool_),
         np.empty(nx, dtype=np.bool_),
         np.empty(nxa),
-        np.empty(4 * nv + 3 * nta + nta * nta + nta * nxa),
+        np.empty(_lp_size(nxa, nta) + aug),
         np.empty(nv + nta, dtype=np.int64),
-        np.empty((nta if ng > 0 else 0, nxa if ng > 0 else 0)),
-        np.empty(nta if ng > 0 else 0),
-        np.empty(nxa if ng > 0 else 0),
-        np.empty(nxa if ng > 0 else 0),
-        np.empty(nxa if ng > 0 else 0),
     )
 
 
@@ -768,14 +794,15 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
 
 @kernel
 def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> bool:
-    """The program with its inequality rows made equalities, in ``w.Ag``, ``w.bg``, ``w.lg``,
-    ``w.ug``: variables ``(x, s, t)``, rows ``A x = alpha b`` and ``G x + s - h t = 0``, with
+    """The program with its inequality rows made equalities, in :func:`_aug_views`: variables
+    ``(x, s, t)``, rows ``A x = alpha b`` and ``G x + s - h t = 0``, with
     ``0 <= s <= s_max``, ``t = 1``. ``s_max_i = max(0, h_i - min over the box of G_i x)`` bounds
     the slack without cutting off any feasible ``x``. False when a variable of ``x`` is unbounded
     (``s_max`` would be infinite; the caller hands the case to the reference)."""
     nt, nx = A.shape
     ng = G.shape[0]
-    Ag, bg, lg, ug = w.Ag, w.bg, w.lg, w.ug
+    aug = _aug_views(w, nx, nt, ng)
+    Ag, bg, lg, ug = aug.A, aug.b, aug.lb, aug.ub
     for j in range(nx):
         if math.isinf(lb[j]) or math.isinf(ub[j]):
             return False
@@ -824,9 +851,10 @@ def task_scale_rows(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWor
     if G.shape[0] > 0:
         if not _augment(A, b, G, h, lb, ub, w):
             return -2.0
-        code, alpha = _lp(w.Ag, w.bg, w.lg, w.ug, True, w.xg, w)
+        aug = _aug_views(w, nx, A.shape[0], G.shape[0])
+        code, alpha = _lp(aug.A, aug.b, aug.lb, aug.ub, True, aug.x, w)
         for j in range(nx):
-            w.centre[j] = w.xg[j]
+            w.centre[j] = aug.x[j]
         return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
     if A.shape[0] == 2:
         return task_scale(A, b, lb, ub, w)
@@ -922,9 +950,10 @@ def feasible_point_rows(
         return code, unique
     if not _augment(A, b, G, h, lb, ub, w):
         return NEEDS_REFERENCE, False
-    code, _ = _lp(w.Ag, w.bg, w.lg, w.ug, False, w.xg, w)
+    aug = _aug_views(w, x.size, A.shape[0], G.shape[0])
+    code, _ = _lp(aug.A, aug.b, aug.lb, aug.ub, False, aug.x, w)
     for j in range(x.size):
-        x[j] = w.xg[j]
+        x[j] = aug.x[j]
     return code, False
 
 

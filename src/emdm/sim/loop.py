@@ -241,7 +241,7 @@ def run_kernel(
             return TIMEOUT, k
         if k == cap:
             return FULL, k
-        ng = build_program(arm, prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err), out)
+        ng = build_program(prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err), out)
         G, h = w.G[:ng], w.h[:ng]
         w.rows[0] = ng
         for j in range(n):

@@ -62,8 +62,9 @@ __all__ = ["INFEASIBLE", "NEEDS_REFERENCE", "OK"]
 
 class QPWork(NamedTuple):
     """Scratch buffers of the solver kernels for programs of ``nx`` variables, ``nt`` equality and
-    ``ng`` inequality rows: ``nu`` holds the rows' multipliers, ``gwork`` the rows held in the
-    working set (1) and ``R`` the rank test's copy of the working rows."""
+    ``ng`` inequality rows. ``lam`` holds the task rows' multipliers, then the inequality rows'
+    (``nu = lam[nt:]``); ``work`` the working set's bounds (-1 / +1 per variable), then its rows
+    (1 when held). The rows add no array: a kernel call pays for every array it is passed."""
 
     feas: FeasWork
     work: NDArray[np.int8]
@@ -84,9 +85,6 @@ class QPWork(NamedTuple):
     skip: NDArray[np.bool_]
     B: F64
     warm: NDArray[np.bool_]
-    nu: F64
-    gwork: NDArray[np.int8]
-    R: F64
 
 
 @kernel
@@ -96,14 +94,14 @@ def qp_work(nx: int, nt: int, ng: int) -> QPWork:
     size = nx + nt + ng
     return QPWork(
         feas_work(nx, nt, ng),  # compiled here; a Python caller of qp_work.py_func gets it boxed
-        np.empty(nx, dtype=np.int8),
+        np.zeros(nx + ng, dtype=np.int8),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx),
         np.empty(nx, dtype=np.int64),
         np.empty((size, size)),
         np.empty(size),
-        np.empty(nt),
+        np.zeros(nt + ng),
         np.empty(nx),
         np.empty((nx, cols)),
         np.empty(cols),
@@ -113,10 +111,7 @@ def qp_work(nx: int, nt: int, ng: int) -> QPWork:
         np.empty(cols, dtype=np.bool_),
         np.empty(cols, dtype=np.bool_),
         np.empty((nx, cols + 1)),
-        np.zeros(1, dtype=np.bool_),  # work and gwork hold the last optimum's working set
-        np.zeros(ng),
-        np.zeros(ng, dtype=np.int8),
-        np.empty((nt + ng if ng > 0 else 0, nx)),
+        np.zeros(1, dtype=np.bool_),  # work holds the last optimum's working set
     )
 
 
@@ -401,8 +396,9 @@ def certify(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> None:
     """The KKT residuals of ``x`` with the best sign-feasible multipliers (solver-independent)."""
-    best_multipliers(P, c, A, G, h, lb, ub, x, w.lam, w.mu, w.nu, w)
-    kkt_residuals(P, c, A, b, G, h, lb, ub, x, w.lam, w.mu, w.nu, out)
+    nu = w.lam[A.shape[0] :]
+    best_multipliers(P, c, A, G, h, lb, ub, x, w.lam, w.mu, nu, w)
+    kkt_residuals(P, c, A, b, G, h, lb, ub, x, w.lam, w.mu, nu, out)
 
 
 # ---------------------------------------------------------------------------- active set
@@ -412,13 +408,14 @@ def active_set(
 ) -> tuple[int, int]:
     """Exact optimum of the program by the primal active-set method: ``(code, iterations)``.
 
-    On ``OK``, ``x`` is the optimum, ``w.lam``, ``w.mu`` and ``w.nu`` its multipliers and ``out``
+    On ``OK``, ``x`` is the optimum, ``w.lam`` (task rows, then inequality rows), ``w.mu`` its
+    multipliers and ``out``
     the KKT residuals of :func:`kkt_residuals` for them. ``NEEDS_REFERENCE`` leaves a case this
     kernel does not settle (dependent equality rows) to the numpy method; ``INFEASIBLE`` means no
     point satisfies the constraints.
 
-    The working set holds bounds (``w.work``: -1 at lb, +1 at ub) and inequality rows
-    (``w.gwork``: 1 when ``G_i x = h_i`` is held). In a control loop the optimum's working set
+    The working set holds bounds (``w.work[:n]``: -1 at lb, +1 at ub) and inequality rows
+    (``w.work[n:]``: 1 when ``G_i x = h_i`` is held). In a control loop the optimum's working set
     rarely changes from one step to the next, so the previous one is tried first
     (:func:`_warm_start`, one iteration); the method starts from an exact feasible point only when
     that guess fails its exact optimality conditions.
@@ -479,7 +476,7 @@ def _independent(
     if G.shape[0] == 0:
         return bool(free_rank(A, free, w.feas) == A.shape[0])
     nt, n = A.shape
-    M = w.R
+    M = w.K  # free between two KKT solves: (n + nt + ng)^2 >= (nt + ng) x n
     rows = 0
     for i in range(nt + G.shape[0]):
         if i < nt:
@@ -532,24 +529,24 @@ def _warm_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
     """Solve the equality-constrained program with the bounds of ``w.work`` and the rows of
-    ``w.gwork`` held, and accept its answer only where it is the optimum: every other variable
+    ``w.work[n:]`` held, and accept its answer only where it is the optimum: every other variable
     within its bounds and every other row kept, every held bound's and row's multiplier of the
     right sign (the tolerances of the cold method), KKT residuals within :data:`KKT_TOL`. ``x``
     is overwritten either way."""
+    n = x.size
+    nt = A.shape[0]
+    ng = G.shape[0]
     work, gwork, snap, idx, K, rhs, lam, mu, nu = (
         w.work,
-        w.gwork,
+        w.work[n:],
         w.snap,
         w.idx,
         w.K,
         w.rhs,
         w.lam,
         w.mu,
-        w.nu,
+        w.lam[nt:],
     )
-    n = x.size
-    nt = A.shape[0]
-    ng = G.shape[0]
     f = 0
     for j in range(n):
         a = abs(lb[j]) if math.isfinite(lb[j]) else 0.0
@@ -653,9 +650,13 @@ def _cold_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
     """The primal active-set method from an exact feasible point (see :func:`active_set`)."""
+    free = w.feas.free
+    n = x.size
+    nt = A.shape[0]
+    ng = G.shape[0]
     work, gwork, snap, g, p, idx, K, rhs, lam, mu, nu = (
         w.work,
-        w.gwork,
+        w.work[n:],
         w.snap,
         w.g,
         w.p,
@@ -664,12 +665,8 @@ def _cold_start(
         w.rhs,
         w.lam,
         w.mu,
-        w.nu,
+        w.lam[nt:],
     )
-    free = w.feas.free
-    n = x.size
-    nt = A.shape[0]
-    ng = G.shape[0]
     code, unique = feasible_point_rows(A, b, G, h, lb, ub, x, w.feas)
     if code != OK:
         return code, 0
@@ -870,7 +867,8 @@ def multipliers_of(
     found (signed ``mu``: > 0 at the lower bound; ``nu >= 0`` of the rows ``G x <= h``)."""
     w = qp_work(x.size, A.shape[0], G.shape[0])
     certify(P, c, A, b, G, h, lb, ub, x, w, out)
-    return w.lam.copy(), w.mu.copy(), w.nu.copy()
+    nt = A.shape[0]
+    return w.lam[:nt].copy(), w.mu.copy(), w.lam[nt:].copy()
 
 
 @kernel

@@ -19,7 +19,30 @@ program at a state in one compiled pass. docs/architecture.md shows how to add o
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
+from ..scenario import Scenario
+from . import centring, damper, effort, manipulability, slack, task, velocity_box
 from .base import CODE, ProgramOut, StepInput, TermKind
 from .program import ProgramData, build_program
 
-__all__ = ["CODE", "ProgramData", "ProgramOut", "StepInput", "TermKind", "build_program"]
+PACK: dict[TermKind, Callable[[Scenario], list[float]]] = {
+    TermKind.TASK: task.pack,
+    TermKind.EFFORT: effort.pack,
+    TermKind.MANIPULABILITY: manipulability.pack,
+    TermKind.SLACK: slack.pack,
+    TermKind.VELOCITY_BOX: velocity_box.pack,
+    TermKind.DAMPER: damper.pack,
+    TermKind.CENTRING: centring.pack,
+}
+"""Each term's numbers from the scenario, as its writer reads them (``data``)."""
+
+__all__ = [
+    "CODE",
+    "PACK",
+    "ProgramData",
+    "ProgramOut",
+    "StepInput",
+    "TermKind",
+    "build_program",
+]

@@ -8,8 +8,8 @@ out of the program). Reads ``[arm] q_min, q_max``."""
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
@@ -27,8 +27,13 @@ def gradient(q: F64, q_min: F64, q_max: F64, out: F64) -> None:
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
-    """``c[j] += weight grad(H)_j`` for every joint."""
-    for j in range(s.q.size):
-        out.c[j] += weight * slope(s.q[j], arm.q_min[j], arm.q_max[j])
-    return rows
+def write(weight: float, data: F64, q: F64, c: F64) -> None:
+    """``c[j] += weight grad(H)_j`` for every joint (``data = [q_min, q_max]``)."""
+    n = q.size
+    for j in range(n):
+        c[j] += weight * slope(q[j], data[j], data[n + j])
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """``[arm] q_min`` then ``q_max`` (rad, per joint)."""
+    return [*map(float, scenario.arm.q_min), *map(float, scenario.arm.q_max)]

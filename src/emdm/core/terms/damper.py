@@ -10,7 +10,8 @@ import math
 
 from ..jit import kernel
 from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
@@ -27,15 +28,16 @@ def sides(
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
-    """``lb_j = max(lb_j, low_j)``, ``ub_j = min(ub_j, high_j)`` (:func:`sides`)."""
-    for j in range(s.q.size):
+def write(data: F64, q: F64, lb: F64, ub: F64) -> None:
+    """``lb_j = max(lb_j, low_j)``, ``ub_j = min(ub_j, high_j)`` (:func:`sides`; ``data =
+    [q_min, q_max, influence, stop, gain]``, per joint)."""
+    n = q.size
+    for j in range(n):
         low, high = sides(
-            s.q[j], arm.q_min[j], arm.q_max[j], arm.influence[j], arm.stop[j], arm.gain[j]
+            q[j], data[j], data[n + j], data[2 * n + j], data[3 * n + j], data[4 * n + j]
         )
-        out.lb[j] = max(out.lb[j], low)
-        out.ub[j] = min(out.ub[j], high)
-    return rows
+        lb[j] = max(lb[j], low)
+        ub[j] = min(ub[j], high)
 
 
 @kernel
@@ -57,3 +59,10 @@ def joint_bounds(arm: ArmData, q: F64, lo: F64, hi: F64) -> None:
         )
         lo[j] = max(arm.qd_min[j], low)
         hi[j] = min(arm.qd_max[j], high)
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """``[arm] q_min, q_max`` and ``[damper] influence, stop, gain``, per joint."""
+    d = scenario.damper
+    arrays = (scenario.arm.q_min, scenario.arm.q_max, d.influence, d.stop, d.gain)
+    return [float(v) for a in arrays for v in a]

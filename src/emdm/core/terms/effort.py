@@ -4,13 +4,17 @@ w_E``. Weight: ``[weights] effort`` (1 for IVKC, whose objective is E alone)."""
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
-    """``P[j, j] += weight`` for every joint."""
-    for j in range(s.q.size):
-        out.P[j, j] += weight
-    return rows
+def write(weight: float, n: int, P: F64) -> None:
+    """``P[j, j] += weight`` for the ``n`` joints."""
+    for j in range(n):
+        P[j, j] += weight
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """No numbers of its own."""
+    return []

@@ -5,13 +5,17 @@ Jm_j``, so minimising the program maximises the rate of change of manipulability
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
+def write(weight: float, Jm: F64, c: F64) -> None:
     """``c[j] += -weight Jm_j`` for every joint."""
-    for j in range(s.q.size):
-        out.c[j] += -weight * s.Jm[j]
-    return rows
+    for j in range(Jm.size):
+        c[j] += -weight * Jm[j]
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """No numbers of its own."""
+    return []

@@ -16,7 +16,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..jit import kernel
-from ..kernels import ArmData
 from . import centring, damper, effort, manipulability, slack, task, velocity_box
 from .base import (
     CENTRING,
@@ -47,7 +46,7 @@ class ProgramData(NamedTuple):
 
 
 @kernel
-def build_program(arm: ArmData, prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
+def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
     """Write the program of ``prog`` at the state ``s`` into ``out``; returns the number of
     inequality rows written (``G[:rows]``, ``h[:rows]``)."""
     nx = out.c.size
@@ -58,21 +57,24 @@ def build_program(arm: ArmData, prog: ProgramData, s: StepInput, out: ProgramOut
         out.lb[i] = -math.inf
         out.ub[i] = math.inf
     rows = 0
+    n = s.q.size
     for k in range(prog.codes.size):
         code, weight = prog.codes[k], prog.weights[k]
         data = prog.data[prog.start[k] : prog.start[k + 1]]
+        # each writer takes what it reads and the parts of the program it writes (a call passes
+        # every array's shape and strides: the fewer arrays, the cheaper the step)
         if code == TASK:
-            rows = task.write(arm, weight, data, s, out, rows)
+            task.write(s.J, s.v, out.A, out.b)
         elif code == EFFORT:
-            rows = effort.write(arm, weight, data, s, out, rows)
+            effort.write(weight, n, out.P)
         elif code == MANIPULABILITY:
-            rows = manipulability.write(arm, weight, data, s, out, rows)
+            manipulability.write(weight, s.Jm, out.c)
         elif code == SLACK:
-            rows = slack.write(arm, weight, data, s, out, rows)
+            slack.write(weight, data, s.error_norm, n, out.P, out.A, out.lb, out.ub)
         elif code == VELOCITY_BOX:
-            rows = velocity_box.write(arm, weight, data, s, out, rows)
+            velocity_box.write(data, n, out.lb, out.ub)
         elif code == DAMPER:
-            rows = damper.write(arm, weight, data, s, out, rows)
+            damper.write(data, s.q, out.lb, out.ub)
         elif code == CENTRING:
-            rows = centring.write(arm, weight, data, s, out, rows)
+            centring.write(weight, data, s.q, out.c)
     return rows

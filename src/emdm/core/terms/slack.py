@@ -6,23 +6,29 @@ then ``[slack] max`` (m/s, one per task row)."""
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 ERROR_FLOOR = 1e-9
 """Smallest ``||e||`` (m) used in ``w_S = c_S / ||e||``."""
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
-    """The slack's block of ``P``, its columns of ``A`` and its bounds (``data = [min, max]``)."""
-    n = s.q.size
-    nt = out.b.size
-    w_s = weight / max(s.error_norm, ERROR_FLOOR)
+def write(
+    weight: float, data: F64, error_norm: float, n: int, P: F64, A: F64, lb: F64, ub: F64
+) -> None:
+    """The slack's block of ``P``, its columns of ``A`` and its bounds (``data = [min, max]``),
+    after the ``n`` joints."""
+    nt = A.shape[0]
+    w_s = weight / max(error_norm, ERROR_FLOOR)
     for i in range(nt):
-        out.P[n + i, n + i] += w_s
+        P[n + i, n + i] += w_s
         for r in range(nt):
-            out.A[r, n + i] = 1.0 if r == i else 0.0
-        out.lb[n + i] = max(out.lb[n + i], data[i])
-        out.ub[n + i] = min(out.ub[n + i], data[nt + i])
-    return rows
+            A[r, n + i] = 1.0 if r == i else 0.0
+        lb[n + i] = max(lb[n + i], data[i])
+        ub[n + i] = min(ub[n + i], data[nt + i])
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """``[slack] min`` then ``[slack] max`` (m/s, one per task row)."""
+    return [*map(float, scenario.slack.min), *map(float, scenario.slack.max)]

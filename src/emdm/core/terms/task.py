@@ -5,17 +5,20 @@ but the task itself ([motion]); mathematics: "The four programs"."""
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
+def write(J: F64, v: F64, A: F64, b: F64) -> None:
     """``A[:, :n] = J``, ``b = v``."""
-    n = s.q.size
-    for j in range(n):
-        for i in range(out.b.size):
-            out.A[i, j] = s.J[i, j]
-    for i in range(out.b.size):
-        out.b[i] = s.v[i]
-    return rows
+    for j in range(J.shape[1]):
+        for i in range(b.size):
+            A[i, j] = J[i, j]
+    for i in range(b.size):
+        b[i] = v[i]
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """No numbers of its own."""
+    return []

@@ -4,14 +4,19 @@ ub`` of the joints. Reads ``[arm] qd_min, qd_max`` (rad/s)."""
 from __future__ import annotations
 
 from ..jit import kernel
-from ..kernels import ArmData
-from .base import F64, ProgramOut, StepInput
+from ..scenario import Scenario
+from .base import F64
 
 
 @kernel
-def write(arm: ArmData, weight: float, data: F64, s: StepInput, out: ProgramOut, rows: int) -> int:
-    """``lb_j = max(lb_j, qd_min_j)``, ``ub_j = min(ub_j, qd_max_j)``."""
-    for j in range(s.q.size):
-        out.lb[j] = max(out.lb[j], arm.qd_min[j])
-        out.ub[j] = min(out.ub[j], arm.qd_max[j])
-    return rows
+def write(data: F64, n: int, lb: F64, ub: F64) -> None:
+    """``lb_j = max(lb_j, qd_min_j)``, ``ub_j = min(ub_j, qd_max_j)`` for the ``n`` joints
+    (``data = [qd_min, qd_max]``)."""
+    for j in range(n):
+        lb[j] = max(lb[j], data[j])
+        ub[j] = min(ub[j], data[n + j])
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """``[arm] qd_min`` then ``qd_max`` (rad/s, per joint)."""
+    return [*map(float, scenario.arm.qd_min), *map(float, scenario.arm.qd_max)]
