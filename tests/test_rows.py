@@ -10,7 +10,7 @@ import reference
 from qpsolvers import Problem, solve_problem
 from scipy.optimize import linprog
 
-from emdm.core import kernels as core
+from emdm.core import simplex as core
 from emdm.core.feasibility import feasible_point, task_scale
 from emdm.core.problem import QP
 from emdm.solvers import kernels, kkt_report, solve_chain

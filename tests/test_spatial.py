@@ -13,7 +13,8 @@ from scipy.spatial.transform import Rotation
 from test_sim import assert_same_run
 
 import emdm
-from emdm.core import kernels
+from emdm.core import kernels as core_kernels
+from emdm.core import simplex as kernels
 from emdm.core.controllers import get_controller, program_at, state_at
 from emdm.errors import ScenarioError
 from emdm.solvers import solve_active_set
@@ -109,10 +110,10 @@ def test_rotation_vector_and_matrix_agree_with_scipy(rng):
     vectors += [axis * angle for angle in (0.0, 1e-9, np.pi - 1e-7, np.pi - 1e-3, np.pi, 2.5)]
     for rv in vectors:
         R = np.empty((3, 3))
-        kernels.rotation_matrix(*rv, R)
+        core_kernels.rotation_matrix(*rv, R)
         np.testing.assert_allclose(R, Rotation.from_rotvec(rv).as_matrix(), atol=1e-14)
         out = np.empty(3)
-        kernels.rotation_vector(R, out, 0)
+        core_kernels.rotation_vector(R, out, 0)
         expected = Rotation.from_matrix(R).as_rotvec()
         if np.linalg.norm(expected) > np.pi - 1e-6:  # theta = pi: u and -u are the same rotation
             assert np.allclose(out, expected, atol=1e-6) or np.allclose(out, -expected, atol=1e-6)

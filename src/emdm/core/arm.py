@@ -114,11 +114,11 @@ class PlanarArm:
         return points
 
     def forward(self, q: ArrayLike) -> Vector:
-        """End-effector position ``p = f(q)`` (m), brief eq. (1)."""
+        """End-effector position ``p = f(q)`` (m), mathematics.md eq. (1)."""
         return self.kinematics(q).p
 
     def jacobian(self, q: ArrayLike) -> Matrix:
-        """Manipulator Jacobian ``J = dp/dq`` (2 x n, m/rad), brief eq. (3)."""
+        """Manipulator Jacobian ``J = dp/dq`` (2 x n, m/rad), mathematics.md eq. (3)."""
         return self.kinematics(q).J
 
     def hessian(self, q: ArrayLike) -> NDArray[np.float64]:
@@ -127,11 +127,12 @@ class PlanarArm:
         return np.transpose(-r[:, self._max_jk], (1, 0, 2))
 
     def manipulability(self, q: ArrayLike) -> float:
-        """Manipulability ``m(q) = sqrt(det(J J^T))``, brief eq. (6)."""
+        """Manipulability ``m(q) = sqrt(det(J J^T))``, mathematics.md eq. (6)."""
         return self.kinematics(q).m
 
     def manipulability_jacobian(self, q: ArrayLike) -> Vector:
-        """Manipulability Jacobian ``Jm = dm/dq`` (n,), brief eq. (8); see the module notes at m = 0."""
+        """Manipulability Jacobian ``Jm = dm/dq`` (n,), mathematics.md eq. (8); see the module
+        notes at m = 0."""
         return self.kinematics(q).Jm
 
     def kinematics(self, q: ArrayLike) -> Kinematics:

@@ -9,7 +9,7 @@ UC-EMDM       min w_E E - w_M M  s.t. J qd = v           slack program, no joint
 C-EMDM        same + lo(q) <= qd <= hi(q)                slack program + joint bounds
 ============  =========================================  ==========================================
 
-Slack program (brief section 4): variables ``(qd, delta)``, minimise
+Slack program (mathematics.md eq. 12-14): variables ``(qd, delta)``, minimise
 ``w_E E(qd) - w_M M(qd) + 1/2 w_S ||delta||^2`` subject to ``J qd + delta = v`` and
 ``delta_min <= delta <= delta_max``, with ``w_S = c_S / max(||e||, 1e-9 m)``.
 
@@ -43,7 +43,7 @@ from .problem import QP
 from .scenario import Scenario, Weights
 from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, build_program
 from .terms.damper import joint_bounds as _joint_bounds
-from .terms.slack import ERROR_FLOOR
+from .tolerances import ERROR_FLOOR
 
 
 class When(StrEnum):

@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kernels
+from . import simplex
 from .arm import Matrix, Vector
-from .kernels import FEASIBILITY_TOL, RANK_TOL
+from .tolerances import FEASIBILITY_TOL, RANK_TOL
+from .zonotope import NEEDS_REFERENCE, OK
 
 __all__ = ["FEASIBILITY_TOL", "RANK_TOL", "feasible_point", "task_scale"]
 
@@ -132,7 +133,7 @@ def task_scale(
     """
     Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-    alpha = kernels.task_scale_of(Ac, bc, Gc, hc, lbc, ubc)
+    alpha = simplex.task_scale_of(Ac, bc, Gc, hc, lbc, ubc)
     if alpha != -2.0:
         return None if alpha == -1.0 else alpha
     if A.shape[0] != 2 or hc.size:
@@ -161,9 +162,9 @@ def feasible_point(
     x = np.empty(A.shape[1])
     Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
-    code, _ = kernels.feasible_point_of(Ac, bc, Gc, hc, lbc, ubc, x)
-    if code != kernels.NEEDS_REFERENCE:
-        return x if code == kernels.OK else None
+    code, _ = simplex.feasible_point_of(Ac, bc, Gc, hc, lbc, ubc, x)
+    if code != NEEDS_REFERENCE:
+        return x if code == OK else None
     if A.shape[0] != 2 or hc.size:
         alpha_x = _linprog(A, b, lb, ub, scale=False, G=Gc, h=hc)
         return None if alpha_x is None else alpha_x[1]
@@ -252,6 +253,6 @@ def _linprog(
     size = 1.0 + float(np.abs(b).max()) + float(np.abs(A).max() * np.abs(x).sum())
     if np.max(np.abs(A @ x - alpha * b)) > FEASIBILITY_TOL * size:
         return None
-    if rows and not kernels.rows_hold(*_contiguous(G, h, x)):  # type: ignore[arg-type]
+    if rows and not simplex.rows_hold(*_contiguous(G, h, x)):  # type: ignore[arg-type]
         return None
     return alpha, x

@@ -42,13 +42,14 @@ PACKAGE = Path(__file__).resolve().parent.parent
 def _cache_folder() -> str | None:
     """``$XDG_CACHE_HOME/emdm/kernels-<hash of the compiled sources>``, or None when
     ``NUMBA_CACHE_DIR`` is set (numba's own choice then stands). The compiled sources are the
-    modules that define kernels (they mention ``@kernel``), this one included."""
+    modules that define kernels (they mention ``@kernel``), this one and the tolerances they read
+    (``tolerances.py``) included."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
     digest = hashlib.sha256()
     for path in sorted(PACKAGE.rglob("*.py")):
         text = path.read_bytes()
-        if b"@kernel" in text or path.name == "jit.py":
+        if b"@kernel" in text or path.name in ("jit.py", "tolerances.py"):
             digest.update(path.relative_to(PACKAGE).as_posix().encode())
             digest.update(text)
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")

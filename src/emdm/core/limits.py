@@ -1,4 +1,4 @@
-"""Joint limits as velocity bounds: the velocity box and the position dampers (brief eq. 10, 11).
+"""Joint limits as velocity bounds: the velocity box and the position dampers (mathematics.md eq. 10, 11).
 
 For joint ``j`` with distances ``d+ = q_max - q`` and ``d- = q - q_min`` to its limits, the damper
 bounds are applied on each side independently, only inside the influence zone:
@@ -40,14 +40,14 @@ class Bounds:
 
 
 def velocity_box(qd_min: Vector, qd_max: Vector) -> Bounds:
-    """``qd_min <= qd <= qd_max`` (brief eq. 10)."""
+    """``qd_min <= qd <= qd_max`` (mathematics.md eq. 10)."""
     return Bounds(np.array(qd_min, dtype=float), np.array(qd_max, dtype=float))
 
 
 def position_damper(
     q: Vector, *, q_min: Vector, q_max: Vector, influence: Vector, stop: Vector, gain: Vector
 ) -> Bounds:
-    """Velocity bounds from the joint-position dampers (brief eq. 11), both sides independently
+    """Velocity bounds from the joint-position dampers (mathematics.md eq. 11), both sides independently
     (the compiled :func:`emdm.core.terms.damper.bounds`)."""
     q_arr = np.ascontiguousarray(q, dtype=float)
     lo, hi = np.empty(q_arr.size), np.empty(q_arr.size)

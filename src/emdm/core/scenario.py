@@ -26,6 +26,13 @@ from .arm import PlanarArm, Vector
 from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry
 from .serial import SerialArm
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
+from .validation import (
+    Policy,
+    _check_consistency,
+    _Checker,
+    _name,
+    _show,
+)
 
 PLANAR_PRESETS = ("task1", "task2")
 """The brief's planar tasks (Tables 1 and 2)."""
@@ -47,17 +54,6 @@ TASK_CODES = {Task.PLANAR: TASK_PLANAR, Task.POSITION: TASK_POSITION, Task.POSE:
 AXES = ("all", "trans", "rot")
 SPATIAL_ONLY = ("arm.dh", "arm.convention", "arm.tool", "motion.task", "motion.axes")
 """Keys of spatial arms only (a planar scenario neither needs nor writes them)."""
-
-
-class Policy(StrEnum):
-    """What a step does when its task is infeasible under the joint bounds."""
-
-    SCALE = "scale"  # the largest feasible task scale alpha in [0, 1] (SNS task scaling)
-    SLACK = "slack"  # an unbounded task slack, weighted like the slack program's
-    ERROR = "error"  # stop the run, naming the step
-
-
-POLICIES = tuple(Policy)
 
 
 class ScenarioWarning(UserWarning):
@@ -110,12 +106,6 @@ SCHEMA: dict[str, dict[str, _Key]] = {
     },
     "controller": {"on_infeasible": _Key("str", "scale")},
 }
-
-
-def _frozen(values: Any) -> Vector:
-    arr = np.array(values, dtype=float)
-    arr.setflags(write=False)
-    return arr
 
 
 # ---------------------------------------------------------------------------------- sections
@@ -172,7 +162,8 @@ class SlackBounds:
 
 @dataclass(frozen=True, eq=False)
 class Damper:
-    """Joint-position damper (brief eq. 11), per joint: influence ``i`` and stop ``s`` (rad), gain."""
+    """Joint-position damper (mathematics.md eq. 11), per joint: influence ``i`` and stop ``s``
+    (rad), gain."""
 
     influence: Vector
     stop: Vector
@@ -418,60 +409,6 @@ def _toml_value(value: Any) -> str:
 
 
 # ------------------------------------------------------------------------------ validation
-class _Checker:
-    """Reads one raw section value at a time, raising ScenarioError with the source and the key."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def fail(self, key: str, problem: str) -> ScenarioError:
-        return ScenarioError(self.source, key, problem)
-
-    def number(self, key: str, value: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(key, f"must be a number, got {_show(value)}")
-        try:
-            number = float(value)
-        except OverflowError:  # an integer beyond the float range
-            digits = len(str(abs(value)))
-            raise self.fail(key, f"must be finite, got an integer of {digits} digits") from None
-        if not math.isfinite(number):
-            raise self.fail(key, f"must be finite, got {value}")
-        return number
-
-    def table(self, key: str, value: Any, rows: int, cols: int) -> Vector:
-        if not isinstance(value, list) or len(value) != rows:
-            raise self.fail(key, f"must be a list of {rows} rows of {cols} numbers")
-        out = []
-        for i, row in enumerate(value):
-            if not isinstance(row, list) or len(row) != cols:
-                raise self.fail(f"{key}[{i}]", f"must be a row of {cols} numbers, got {_show(row)}")
-            out.append([self.number(f"{key}[{i}][{j}]", v) for j, v in enumerate(row)])
-        return _frozen(out)
-
-    def vector(self, key: str, value: Any, size: int, scalar_ok: bool) -> Vector:
-        if isinstance(value, list):
-            if len(value) != size:
-                raise self.fail(key, f"must have {size} values, got {len(value)}")
-            return _frozen([self.number(f"{key}[{i}]", v) for i, v in enumerate(value)])
-        if scalar_ok:
-            return _frozen(np.full(size, self.number(key, value)))
-        raise self.fail(key, f"must be a list of {size} numbers, got {_show(value)}")
-
-
-def _name(key: Any) -> str:
-    """A key as written in messages: plain when it looks like one, else quoted (repr)."""
-    text = str(key)
-    return text if text.isidentifier() else repr(key)
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _fmt(values: Vector) -> str:
-    return "[" + ", ".join(f"{v:g}" for v in values) + "]"
 
 
 def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> Scenario:
@@ -569,181 +506,6 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     name = data.get("name") or Path(source).stem or "scenario"
     sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
     return Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
-
-
-RANGES: dict[str, tuple[float, float, str]] = {
-    "arm.lengths": (1e-6, 1e6, " m"),
-    "arm.dh": (-1e6, 1e6, " (m or rad)"),
-    "arm.tool": (-1e6, 1e6, " m"),
-    "arm.q_min": (-1e6, 1e6, " rad"),
-    "arm.q_max": (-1e6, 1e6, " rad"),
-    "arm.qd_min": (-1e6, 1e6, " rad/s"),
-    "arm.qd_max": (-1e6, 1e6, " rad/s"),
-    "motion.goal": (-1e9, 1e9, " m"),
-    "motion.dt": (1e-6, 3600.0, " s"),
-    "motion.tolerance": (1e-12, 1e9, " m"),
-    "weights.effort": (1e-8, 1e8, ""),
-    "weights.manipulability": (0.0, 1e8, ""),
-    "weights.slack": (1e-8, 1e8, ""),
-    "weights.centring": (0.0, 1e8, ""),
-    "slack.min": (-1e6, 1e6, " m/s"),
-    "slack.max": (-1e6, 1e6, " m/s"),
-    "damper.influence": (0.0, 1e6, " rad"),
-    "damper.gain": (0.0, 1e6, ""),
-}
-"""Where each value means something (beyond them: overflowing numbers, or a meaningless run)."""
-MAX_STEPS = 1e12
-"""At most this many control steps (``max_time / dt``)."""
-MAX_RATIO = 1e10
-"""At most this ``w_M / w_E``: beyond it the unconstrained EMDM command exceeds 1e10 rad/s."""
-
-
-def _check_ranges(check: _Checker, p: dict[str, dict[str, Any]]) -> None:
-    """Values that are valid in sign but make the program meaningless, with their valid range."""
-    for dotted, (low, high, unit) in RANGES.items():
-        section, key = dotted.split(".")
-        if p[section][key] is None:
-            continue
-        values = np.atleast_1d(p[section][key]).ravel()
-        bad = (values < low) | (values > high)
-        if np.any(bad):
-            value = values[int(np.argmax(bad))]
-            raise check.fail(dotted, f"must be between {low:g} and {high:g}{unit}, got {value:g}")
-    motion, weights = p["motion"], p["weights"]
-    steps = motion["max_time"] / motion["dt"]
-    if steps > MAX_STEPS:
-        raise check.fail(
-            "motion.max_time",
-            f"must be at most {MAX_STEPS:g} steps of motion.dt ({MAX_STEPS * motion['dt']:g} s), "
-            f"got {motion['max_time']:g} s",
-        )
-    kp_dt = np.atleast_1d(motion["kp"]) * motion["dt"]
-    if np.any(kp_dt >= 2.0):
-        raise check.fail(
-            "motion.kp",
-            f"must be < 2 / motion.dt = {2.0 / motion['dt']:g} 1/s, or the loop diverges, "
-            f"got {_fmt(np.atleast_1d(motion['kp']))}",
-        )
-    ratio = weights["manipulability"] / weights["effort"]
-    if ratio > MAX_RATIO:
-        raise check.fail(
-            "weights.manipulability",
-            f"must be at most {MAX_RATIO:g} x weights.effort (the command would exceed "
-            f"{MAX_RATIO:g} rad/s), got {ratio:g} x",
-        )
-
-
-def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
-    """Cross-field rules; returns the warnings (valid but suspicious settings)."""
-    arm, motion, weights, slack, damper = (
-        p[s] for s in ("arm", "motion", "weights", "slack", "damper")
-    )
-
-    def positive(dotted: str, values: Any) -> None:
-        arr = np.atleast_1d(values)
-        if np.any(arr <= 0):
-            raise check.fail(
-                dotted, f"must be > 0, got {_fmt(arr) if arr.size > 1 else f'{arr[0]:g}'}"
-            )
-
-    if arm["lengths"] is not None:
-        positive("arm.lengths", arm["lengths"])
-    if np.any(arm["q_min"] >= arm["q_max"]):
-        j = int(np.argmax(arm["q_min"] >= arm["q_max"]))
-        raise check.fail(
-            "arm.q_min",
-            f"must be < arm.q_max (joint {j + 1}: {arm['q_min'][j]:g} >= {arm['q_max'][j]:g})",
-        )
-    if np.any(arm["qd_min"] >= 0):
-        raise check.fail(
-            "arm.qd_min", f"must be < 0 (the arm must be able to stop), got {_fmt(arm['qd_min'])}"
-        )
-    if np.any(arm["qd_max"] <= 0):
-        raise check.fail(
-            "arm.qd_max", f"must be > 0 (the arm must be able to stop), got {_fmt(arm['qd_max'])}"
-        )
-    for key in ("dt", "tolerance", "max_time"):
-        positive(f"motion.{key}", motion[key])
-    positive("motion.kp", motion["kp"])
-    if motion["max_time"] < motion["dt"]:
-        raise check.fail("motion.max_time", f"must be >= motion.dt ({motion['dt']:g} s)")
-    positive("weights.effort", weights["effort"])
-    positive("weights.slack", weights["slack"])
-    if weights["manipulability"] < 0:
-        raise check.fail(
-            "weights.manipulability", f"must be >= 0, got {weights['manipulability']:g}"
-        )
-    if np.any(slack["min"] >= slack["max"]):
-        raise check.fail(
-            "slack.min", f"must be < slack.max, got {_fmt(slack['min'])} and {_fmt(slack['max'])}"
-        )
-    if np.any(damper["stop"] < 0):
-        raise check.fail("damper.stop", f"must be >= 0, got {_fmt(damper['stop'])}")
-    if np.any(damper["stop"] >= damper["influence"]):
-        raise check.fail(
-            "damper.stop",
-            f"must be < damper.influence, got stop {_fmt(damper['stop'])} "
-            f"and influence {_fmt(damper['influence'])}",
-        )
-    positive("damper.gain", damper["gain"])
-    _check_ranges(check, p)
-    if p["controller"]["on_infeasible"] not in POLICIES:
-        raise check.fail(
-            "controller.on_infeasible",
-            f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}",
-        )
-
-    q0 = motion["q0"]
-    outside = (q0 < arm["q_min"]) | (q0 > arm["q_max"])
-    if np.any(outside):
-        j = int(np.argmax(outside))
-        raise check.fail(
-            "motion.q0",
-            f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
-            f"[{arm['q_min'][j]:g}, {arm['q_max'][j]:g}]",
-        )
-    margin = np.minimum(arm["q_max"] - q0, q0 - arm["q_min"])
-    inside_stop = margin < damper["stop"]
-    if np.any(inside_stop):
-        j = int(np.argmax(inside_stop))
-        raise check.fail(
-            "motion.q0",
-            f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
-            f"damper's stop zone ({damper['stop'][j]:g} rad), which the dampers forbid",
-        )
-
-    found: list[str] = []
-    overshoot = motion["dt"] >= damper["gain"] * (damper["influence"] - damper["stop"])
-    if np.any(overshoot):
-        found.append(
-            "damper: dt >= gain * (influence - stop): the position damper can overshoot into the "
-            "stop zone in one step"
-        )
-    step = np.maximum(arm["qd_max"], -arm["qd_min"]) * motion["dt"]
-    if np.any(step > damper["influence"] - damper["stop"]):
-        found.append(
-            "damper: max |qd| * dt > influence - stop: a joint outside its influence zone can "
-            "cross the zone and the stop distance in one step"
-        )
-    if arm["lengths"] is not None:
-        lengths = arm["lengths"]
-        radius = float(np.hypot(*motion["goal"]))
-        reach, inner = float(lengths.sum()), max(0.0, float(2 * lengths.max() - lengths.sum()))
-        if radius > reach or radius < inner:
-            found.append(
-                f"motion.goal: {_fmt(motion['goal'])} is {radius:g} m from the base, outside the "
-                f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached"
-            )
-    else:
-        dh = arm["dh"]
-        reach = float(np.sum(np.abs(dh[:, 0]) + np.abs(dh[:, 2])) + np.linalg.norm(arm["tool"]))
-        radius = float(np.linalg.norm(motion["goal"][:3]))
-        if radius > reach:
-            found.append(
-                f"motion.goal: {_fmt(motion['goal'][:3])} is {radius:g} m from the base, beyond "
-                f"the arm's reach ({reach:g} m, the sum of its links): the goal cannot be reached"
-            )
-    return found
 
 
 # ----------------------------------------------------------------------------------- loading

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
+from .tolerances import CHOLESKY_PIVOT
 
 F64 = NDArray[np.float64]
 
@@ -106,15 +107,6 @@ def serial_hessian(J: F64, H: F64) -> None:
                 H[i, 3, k] = 0.0
                 H[i, 4, k] = 0.0
                 H[i, 5, k] = 0.0
-
-
-CHOLESKY_PIVOT = 1e-3
-"""Smallest pivot of the Cholesky factor of ``Ja Ja^T`` (m), relative to the square root of its
-largest diagonal entry, for which :func:`manipulability_gradient` uses the factor; nearer a
-singularity it takes the SVD. Forming ``Ja Ja^T`` squares the condition number: a pivot ``s`` of
-relative size ``r`` carries a relative rounding error of about ``eps / r^2``, so ``r = 1e-3`` keeps
-``m`` and ``Jm`` within about 1e-10 of the SVD form (at 1e-8, the old cut-off, the pivot is pure
-rounding and ``m`` was off by up to 40x within 1e-9 rad of the UR5's wrist singularity)."""
 
 
 @kernel

@@ -4,7 +4,7 @@ A planar arm is drawn in its plane; a spatial arm in three orthogonal projection
 frame (top x-y, front x-z, side y-z), each with the projection of the translational
 manipulability ellipsoid ``{J_v qd : ||qd|| <= 1}`` (the ellipse of ``P J_v`` for the projection
 ``P``). The ellipse at the end effector is ``{x : x^T (J J^T)^-1 x <= 1}``, the set of end-effector
-velocities reachable with ``||qd|| <= 1`` (brief eq. 7): its semi-axes are the square roots of the
+velocities reachable with ``||qd|| <= 1`` (mathematics.md eq. 7): its semi-axes are the square roots of the
 eigenvalues of ``J J^T`` along its eigenvectors. It is drawn ``scale`` times its size in m/s, so that
 it reads at the arm's scale; the factor is stated on screen.
 

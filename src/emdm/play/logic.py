@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from ..core.controllers import Controller, get_controller
-from ..core.scenario import POLICIES, Scenario, parse_override, scenario_from_dict
+from ..core.scenario import Scenario, parse_override, scenario_from_dict
+from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
 from ..sim.loop import Run, simulate
 from ..studies.pareto import front_at, ratios
@@ -304,18 +305,10 @@ def ellipses(points: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, 
     return 2 * scale * major, 2 * scale * minor, angle
 
 
-BOUND_TOL = 1e-12
-"""A command within this (rad/s) of a bound counts as at the bound (a damper closing to 0 leaves
-the command a few 1e-16 inside it)."""
-
-
 def at_bounds(run: Run) -> np.ndarray:
-    """Per command and joint: -1 at the lower bound, +1 at the upper, 0 free; ``(K, n)``."""
-    up = run.active > 0
-    up |= np.isfinite(run.hi) & (run.qd >= run.hi - BOUND_TOL)
-    down = run.active < 0
-    down |= np.isfinite(run.lo) & (run.qd <= run.lo + BOUND_TOL)
-    return np.where(up, 1, np.where(down, -1, 0)).astype(np.int8)
+    """Per command and joint: -1 at the lower bound, +1 at the upper, 0 free; ``(K, n)``: the
+    record's ``active`` column, the one definition of a joint at a bound (``sim.loop.mark_active``)."""
+    return np.asarray(run.active, dtype=np.int8)
 
 
 def joint_states(run: Run) -> np.ndarray:

@@ -34,7 +34,8 @@ from bokeh.models.annotations import BoxAnnotation, Label, Span, Title
 from bokeh.models.widgets import Button, Div, RadioButtonGroup, Select, Slider, Spinner, Toggle
 from bokeh.plotting import figure
 
-from ..core.scenario import POLICIES, Scenario
+from ..core.scenario import Scenario
+from ..core.validation import POLICIES
 from ..errors import EmdmError
 from ..outputs.style import CONTROLLER_STYLE, OKABE_ITO
 from . import logic

@@ -19,8 +19,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..core.controllers import Controller, get_controller
 from ..core.jit import ensure_compiled, kernel
 from ..core.kernels import ArmData, Geometry
-from ..core.scenario import Policy, Scenario
+from ..core.scenario import Scenario
 from ..core.terms import ProgramData
+from ..core.validation import Policy
 from ..errors import NoSolution
 from .loop import (
     REACHED,

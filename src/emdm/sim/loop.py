@@ -41,12 +41,14 @@ from ..core.kernels import (
     kinematics,
     spatial_work,
     task_kinematics,
-    task_scale,
-    task_scale_rows,
 )
 from ..core.problem import QP
-from ..core.scenario import Policy, Scenario
+from ..core.scenario import Scenario
+from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
+from ..core.tolerances import AT_BOUND
+from ..core.validation import Policy
+from ..core.zonotope import task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
 from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, certify, qp_work
@@ -174,17 +176,15 @@ def step_work(n: int, nx: int, nt: int, ng: int) -> StepWork:
     )
 
 
-ACTIVE_TOL = 1e-12
-"""A joint is recorded at a bound when within ``ACTIVE_TOL (1 + |bound|)`` of it (rad/s)."""
-
-
 @kernel
 def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
-    """``active_j`` = -1 when ``qd_j`` is at its lower bound, +1 at its upper bound, else 0."""
+    """``active_j`` = -1 when ``qd_j`` is at its lower bound, +1 at its upper bound, else 0: the
+    one definition of "at a bound" (:data:`emdm.core.tolerances.AT_BOUND`), recorded in
+    ``Run.active`` and read from there by the report and the playground."""
     for j in range(qd.size):
-        if qd[j] <= lo[j] + ACTIVE_TOL * (1.0 + abs(lo[j])):
+        if qd[j] <= lo[j] + AT_BOUND * (1.0 + abs(lo[j])):
             active[j] = -1
-        elif qd[j] >= hi[j] - ACTIVE_TOL * (1.0 + abs(hi[j])):
+        elif qd[j] >= hi[j] - AT_BOUND * (1.0 + abs(hi[j])):
             active[j] = 1
         else:
             active[j] = 0

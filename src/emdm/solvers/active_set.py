@@ -5,7 +5,7 @@
     [ P   A^T ] [  x   ]   [ -c ]
     [ A    0  ] [ -lam ] = [  b ]
 
-which for ``min 1/2 ||qd||^2 s.t. J qd = v`` gives ``qd = J^+ v`` (brief eq. 4, 5). It ignores bounds
+which for ``min 1/2 ||qd||^2 s.t. J qd = v`` gives ``qd = J^+ v`` (mathematics.md eq. 4, 5). It ignores bounds
 and returns no point (status ``"unsupported"``) when its answer leaves them.
 
 ``active-set``: a primal active-set method (Nocedal & Wright, Algorithm 16.3) specialised to

@@ -1,4 +1,4 @@
-"""The joint-position dampers (constraint; brief eq. 11): with ``d+ = q_max - q``, ``d- = q -
+"""The joint-position dampers (constraint; mathematics.md eq. 11): with ``d+ = q_max - q``, ``d- = q -
 q_min``, inside the influence zone ``qd_j <= (d+ - s) / (K (i - s))`` and ``qd_j >= -(d- - s) /
 (K (i - s))``, each side independently; they tighten ``lb, ub``. Reads ``[arm] q_min, q_max``
 and ``[damper] influence, stop, gain`` (rad, rad, -). A joint that starts outside its stop zone
@@ -52,7 +52,7 @@ def bounds(
 @kernel
 def joint_bounds(arm: ArmData, q: F64, lo: F64, hi: F64) -> None:
     """The velocity box intersected with the dampers at ``q``: what a constrained controller's
-    joints may do (brief eq. 10, 11)."""
+    joints may do (mathematics.md eq. 10, 11)."""
     for j in range(q.size):
         low, high = sides(
             q[j], arm.q_min[j], arm.q_max[j], arm.influence[j], arm.stop[j], arm.gain[j]

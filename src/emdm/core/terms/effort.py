@@ -1,5 +1,6 @@
-"""Joint-velocity effort ``w_E E(qd) = w_E/2 ||qd||^2`` (objective; brief eq. 6): ``P[j, j] +=
-w_E``. Weight: ``[weights] effort`` (1 for IVKC, whose objective is E alone)."""
+"""Joint-velocity effort ``w_E E(qd) = w_E/2 ||qd||^2`` (objective; mathematics.md, "Effort and
+manipulability rate"): ``P[j, j] += w_E``. Weight: ``[weights] effort`` (1 for IVKC, whose
+objective is E alone)."""
 
 from __future__ import annotations
 

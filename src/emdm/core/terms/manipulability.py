@@ -1,4 +1,4 @@
-"""Manipulability rate ``-w_M M(qd) = -w_M Jm^T qd`` (objective; brief eq. 7): ``c[j] -= w_M
+"""Manipulability rate ``-w_M M(qd) = -w_M Jm^T qd`` (objective; mathematics.md eq. 8): ``c[j] -= w_M
 Jm_j``, so minimising the program maximises the rate of change of manipulability. Weight:
 ``[weights] manipulability``."""
 

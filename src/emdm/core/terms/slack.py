@@ -1,4 +1,4 @@
-"""Task slack ``delta`` (objective and bounds; brief section 4): ``1/2 w_S ||delta||^2`` with
+"""Task slack ``delta`` (objective and bounds; mathematics.md eq. 12-14, 27): ``1/2 w_S ||delta||^2`` with
 ``w_S = c_S / max(||e||, ERROR_FLOOR)``, the identity columns of the task rows (``J qd + delta =
 v``) and ``s_min <= delta <= s_max``. Weight: ``[weights] slack`` (``c_S``); data: ``[slack] min``
 then ``[slack] max`` (m/s, one per task row)."""
@@ -7,10 +7,8 @@ from __future__ import annotations
 
 from ..jit import kernel
 from ..scenario import Scenario
+from ..tolerances import ERROR_FLOOR
 from .base import F64
-
-ERROR_FLOOR = 1e-9
-"""Smallest ``||e||`` (m) used in ``w_S = c_S / ||e||``."""
 
 
 @kernel

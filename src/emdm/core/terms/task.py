@@ -1,4 +1,4 @@
-"""The task equality ``J qd + delta = v`` (constraint; brief eq. 13): rows ``A = [J, I]``,
+"""The task equality ``J qd + delta = v`` (constraint; mathematics.md eq. 12): rows ``A = [J, I]``,
 ``b = v`` (the slack's identity columns are the slack term's). Reads nothing from the scenario
 but the task itself ([motion]); mathematics: "The four programs"."""
 

@@ -1,4 +1,4 @@
-"""The joint-velocity box ``qd_min <= qd <= qd_max`` (constraint; brief eq. 10): tightens ``lb,
+"""The joint-velocity box ``qd_min <= qd <= qd_max`` (constraint; mathematics.md eq. 10): tightens ``lb,
 ub`` of the joints. Reads ``[arm] qd_min, qd_max`` (rad/s)."""
 
 from __future__ import annotations

@@ -28,8 +28,6 @@ SAME = 1e-9
 """Two commands coincide when they differ by at most this (rad/s)."""
 STALL_BAND = 1e-3
 """A run has stalled from the time after which its error stays within this band (m) of its end."""
-BOUND_TOL = 1e-9
-"""A joint is at a bound when its command is within this of it (rad/s)."""
 
 
 def _episodes(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -90,7 +88,7 @@ def pinned(run: Run) -> list[dict[str, Any]]:
             ("upper", run.hi[:, j], sc.arm.qd_max[j]),
             ("lower", run.lo[:, j], sc.arm.qd_min[j]),
         ):
-            at = np.isfinite(bound) & (np.abs(run.qd[:, j] - bound) <= BOUND_TOL)
+            at = run.active[:, j] == (1 if side == "upper" else -1)  # the record's definition
             for kind, mask in (
                 ("velocity", at & np.isclose(bound, limit, rtol=0, atol=1e-12)),
                 ("damper", at & ~np.isclose(bound, limit, rtol=0, atol=1e-12)),
@@ -291,8 +289,7 @@ def pair_events(a: Run, b: Run) -> dict[str, Any]:
     gap = np.linalg.norm(a.p[:states] - b.p[:states], axis=1)
     determined = 0
     if same and np.isfinite(a.hi[:same]).any():
-        lo, hi = a.lo[:same], a.hi[:same]
-        at = (np.abs(a.qd[:same] - hi) <= BOUND_TOL) | (np.abs(a.qd[:same] - lo) <= BOUND_TOL)
+        at = a.active[:same] != 0  # the record's definition of a joint at a bound
         free = a.scenario.n - at.sum(axis=1)
         determined = int(np.count_nonzero(free <= 2))  # two task equations fix two free joints
     return {

@@ -1,0 +1,44 @@
+"""Every named tolerance of emdm, once, with its meaning and unit.
+
+The compiled kernels read these at compile time (numba freezes module-level numbers), so this
+module is part of the kernel cache's key (:func:`emdm.core.jit._cache_folder`): a changed value
+is never served from a stale cache.
+"""
+
+from __future__ import annotations
+
+SINGULAR_RELATIVE = 1e-14
+"""Planar arm: ``m <= SINGULAR_RELATIVE (sum l)^2`` counts as an exact singularity (the minors
+are rounding); there ``Jm`` is the steepest one-sided ascent (docs/mathematics.md (21))."""
+
+CHOLESKY_PIVOT = 1e-3
+"""Spatial arm: smallest Cholesky pivot of ``Ja Ja^T`` (relative to the square root of its largest
+diagonal entry) for which the manipulability gradient uses the factor; nearer a singularity it
+takes the SVD. Forming ``Ja Ja^T`` squares the condition number: a pivot of relative size ``r``
+carries a relative rounding error of about ``eps / r^2``, so ``1e-3`` keeps ``m`` and ``Jm`` within
+about 1e-10 of the SVD form."""
+
+RANK_TOL = 1e-12
+"""Columns (or rows) count as independent when a pivot or 2x2 minor exceeds this, relative to
+their size."""
+
+FEASIBILITY_TOL = 1e-10
+"""A feasibility kernel's point must satisfy ``A x = alpha b`` and ``G x <= h`` to this, relative
+to the size of the terms."""
+
+KKT_TOL = 1e-9
+"""Largest relative KKT residual (stationarity, equality, complementarity) accepted as optimal."""
+
+BOUND_TOL = 1e-12
+"""Largest bound or row excess accepted in an answer (rad/s or m/s, absolute)."""
+
+ACTIVE_TOL = 1e-9
+"""The certificate counts a bound as active when ``|x_j - bound| <= ACTIVE_TOL (1 + |bound|)``, an
+inequality row when ``h_i - G_i x <= ACTIVE_TOL (1 + |h_i|)``: only those get multipliers."""
+
+AT_BOUND = 1e-12
+"""The record's one definition of a joint at a bound (the ``active`` column, read by the report
+and the playground): its command within ``AT_BOUND (1 + |bound|)`` rad/s of it."""
+
+ERROR_FLOOR = 1e-9
+"""Smallest ``||e||`` (m) in the slack weight ``w_S = c_S / ||e||``."""
