@@ -43,7 +43,11 @@ def test_bench_quick_reports_every_figure(tmp_path, capsys):
         "Panda pose C-EMDM <= 10 us/step",
         "Panda vs robotics-toolbox-python + qpsolvers >= 50x",
         "Panda batch >= 2e5 steps/s",
+        "20 inequality rows: extra cost <= 1 us/step",
     }
+    rows = data["rows"]
+    assert rows["rows_per_step"] == 20 and rows["us_per_step"] > 0
+    assert rows["max_command_difference"] <= 1e-12  # loose rows change no command
     spatial = data["spatial"]
     assert spatial["simulate_us_per_step"] > 0 and spatial["batch"]["steps"] > 0
     assert spatial["rtb_stack"]["failed_steps"] == 0 and spatial["ratio"] > 1

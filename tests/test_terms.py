@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import reference
 
 import emdm
 from emdm.core.controllers import BASELINES, CONTROLLERS, get_controller, step_program
@@ -105,3 +106,86 @@ def test_slack_follows_the_arm():
 def test_bad_centring_weight_is_one_clear_error():
     with pytest.raises(emdm.ScenarioError, match=r"weights\.centring"):
         emdm.load_scenario("task1", {"weights.centring": -1.0})
+
+
+def _with_plane(name, offset, **more):
+    sc = emdm.load_scenario(name)
+    return sc.with_overrides({"planes.normals": [[0.0, 1.0]], "planes.offsets": [offset], **more})
+
+
+def test_plane_rows_through_the_loop_equal_an_independent_program():
+    """A plane within reach adds one row ``-n^T J qd <= gain (d - stop) / (influence - stop)``
+    to the constrained programs: every recorded command is the optimum of that program written
+    out here and solved by quadprog, and the UC- controllers ignore the plane."""
+    from qpsolvers import Problem, solve_problem
+
+    sc = _with_plane("task1", 0.45)
+    pl = sc.planes
+    compared = 0
+    for name in ("C-EMDM", "C-IVKC", "MMC"):
+        run = emdm.simulate(sc, name)
+        assert run.reached and run.rows.max() == 1
+        for k in np.flatnonzero(run.rows)[::5]:
+            kin = sc.planar_arm.kinematics(run.q[k])
+            e = sc.motion.goal - kin.p
+            qp = step_program(
+                get_controller(name), sc, run.q[k], kin, sc.motion.kp * e, float(np.linalg.norm(e))
+            )
+            d = float(pl.normals[0] @ kin.p - pl.offsets[0])
+            row = np.zeros(qp.n)
+            row[: sc.n] = -pl.normals[0] @ kin.J
+            np.testing.assert_allclose(qp.G, row[None, :], atol=1e-15)
+            assert qp.h[0] == pytest.approx(pl.gain * (d - pl.stop) / (pl.influence - pl.stop))
+            b = qp.b * run.alpha[k]
+            ref = solve_problem(
+                Problem(qp.P, qp.c, qp.G, qp.h, qp.A, b, qp.lb, qp.ub), solver="quadprog"
+            )
+            x = np.concatenate((run.qd[k], run.delta[k])) if qp.n_slack else run.qd[k]
+            args = (qp.P, qp.c, qp.A, b, qp.lb, qp.ub, x)
+            assert reference.kkt_residual(*args, G=qp.G, h=qp.h) <= 1e-9
+            if ref.found:  # quadprog declines some scaled steps, whose feasible set is a point
+                np.testing.assert_allclose(run.qd[k], ref.x[: sc.n], atol=1e-8)
+                compared += 1
+    assert compared > 20
+    assert emdm.simulate(sc, "UC-EMDM").rows.max() == 0
+
+
+def test_a_plane_before_the_goal_stops_the_slack_controller_at_the_stop_distance():
+    """The goal lies 0.01 m from the plane, inside its stop distance (0.02 m): MMC, whose task has
+    slack, ends on the plane's damper with the row active, within the Euler step's second-order
+    overshoot of the stop distance; without the plane it reaches the goal."""
+    sc = _with_plane("task1", 0.49)
+    run = emdm.simulate(sc, "MMC")
+    d = np.array([sc.plane_distances(q)[0] for q in run.q])
+    assert not run.reached
+    assert run.rows_active.sum() > 100
+    assert d.min() > sc.planes.stop - 1e-3
+    assert d[-1] == pytest.approx(sc.planes.stop, abs=1e-4)
+    assert np.all(run.kkt <= 1e-9)
+
+
+def test_bad_planes_are_one_clear_error():
+    sc = emdm.load_scenario("task1")
+    cases = [
+        ({"planes.normals": [[0.0, 0.0]], "planes.offsets": [0.0]}, r"planes\.normals\[0\]"),
+        ({"planes.normals": [[0.0, 1.0]], "planes.offsets": [0.0, 1.0]}, r"planes\.offsets"),
+        ({"planes.normals": [[0.0, 1.0, 0.0]], "planes.offsets": [0.0]}, r"planes\.normals\[0\]"),
+        ({"planes.normals": [[0.0, 1.0]], "planes.offsets": [0.55]}, r"stop distance"),
+        (
+            {"planes.normals": [[0.0, 1.0]], "planes.offsets": [0.0], "planes.stop": 0.2},
+            r"planes\.stop",
+        ),
+    ]
+    for overrides, message in cases:
+        with pytest.raises(emdm.ScenarioError, match=message):
+            sc.with_overrides(overrides)
+
+
+def test_planes_round_trip_through_toml():
+    import tomllib
+
+    sc = _with_plane("task2", 0.1)
+    again = emdm.scenario_from_dict(tomllib.loads(sc.to_toml()))
+    np.testing.assert_array_equal(again.planes.normals, sc.planes.normals)
+    np.testing.assert_array_equal(again.planes.offsets, sc.planes.offsets)
+    assert "[planes]" not in emdm.load_scenario("task2").to_toml()

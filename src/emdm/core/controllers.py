@@ -98,12 +98,16 @@ class Controller:
         data: list[float] = []
         start = [0]
         slack = False
+        kinds: set[TermKind] = set()
         for term in self.terms:
             if not self.applies(term, scenario):
                 continue
             weight = float(getattr(w, term.weight) if isinstance(term.weight, str) else term.weight)
             if term.optional and weight == 0.0:
                 continue
+            if term.kind is TermKind.PLANE and not scenario.planes.count:
+                continue
+            kinds.add(term.kind)
             codes.append(CODE[term.kind])
             values.append(weight)
             data += PACK[term.kind](scenario)
@@ -115,7 +119,7 @@ class Controller:
             np.array(start, dtype=np.int64),
             np.array(data, dtype=float),
             slack,
-            0,
+            scenario.planes.count if TermKind.PLANE in kinds else 0,
         )
 
 
@@ -126,7 +130,9 @@ _MANIP = Term(TermKind.MANIPULABILITY, "manipulability")
 _CENTRING = Term(TermKind.CENTRING, "centring", optional=True)
 _SLACK = Term(TermKind.SLACK, "slack", When.NON_REDUNDANT)
 _SLACK_ALWAYS = Term(TermKind.SLACK, "slack")
-_JOINTS = (Term(TermKind.VELOCITY_BOX), Term(TermKind.DAMPER))
+_JOINTS = (Term(TermKind.VELOCITY_BOX), Term(TermKind.DAMPER), Term(TermKind.PLANE))
+"""What the constrained controllers add: the joint limits, and the planes of a scenario that has
+some (the unconstrained ones ignore planes as they ignore joint limits)."""
 
 
 class Name(StrEnum):
@@ -210,6 +216,7 @@ def step_program(
         np.ascontiguousarray(kin.Jm, dtype=float),
         np.asarray(v, dtype=float),
         float(error_norm),
+        np.ascontiguousarray(kin.p, dtype=float),
     )
     rows = build_program(data, state, out)
     return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])

@@ -62,8 +62,10 @@ class ScenarioWarning(UserWarning):
 
 # ---------------------------------------------------------------------------------------- schema
 # kind: "joints" (n values, scalar allowed), "task" (one value per task row: 2 planar, 3 position,
-# 6 pose), "dh" (n rows of 4), "vec3", "number", "str". Missing optional keys take the default
-# (the brief's values); "" marks a key that is optional without a default.
+# 6 pose), "dh" (n rows of 4), "vec3", "number", "str", "rows" (any number of rows of one
+# value per axis of the workspace: 2 planar, 3 spatial), "list" (any number of values). Missing
+# optional keys take the default (the brief's values); "" marks a key that is optional without a
+# default.
 @dataclass(frozen=True)
 class _Key:
     kind: str
@@ -105,6 +107,13 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "gain": _Key("joints", 1.0),
     },
     "controller": {"on_infeasible": _Key("str", "scale")},
+    "planes": {
+        "normals": _Key("rows", []),
+        "offsets": _Key("list", []),
+        "influence": _Key("number", 0.1),
+        "stop": _Key("number", 0.02),
+        "gain": _Key("number", 1.0),
+    },
 }
 
 
@@ -170,6 +179,25 @@ class Damper:
     gain: Vector
 
 
+@dataclass(frozen=True, eq=False)
+class Planes:
+    """Planes the end effector keeps away from (the ``plane`` term): unit ``normals`` (one row per
+    plane, pointing to the free side) and ``offsets`` (m), so that the distance of the tip ``p`` is
+    ``d = n . p - offset``; the velocity damper keeps ``d`` above ``stop`` from within
+    ``influence`` (m), with ``gain`` (1/s)."""
+
+    normals: Vector
+    offsets: Vector
+    influence: float
+    stop: float
+    gain: float
+
+    @property
+    def count(self) -> int:
+        """Number of planes."""
+        return int(self.offsets.size)
+
+
 @dataclass(frozen=True)
 class ControllerSettings:
     """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (docs/mathematics.md)."""
@@ -188,8 +216,15 @@ class Scenario:
     slack: SlackBounds
     damper: Damper
     controller: ControllerSettings
+    planes: Planes
     source: str = "<python>"
     warnings: tuple[str, ...] = field(default=())
+
+    def plane_distances(self, q: Vector) -> Vector:
+        """``d_i = n_i . p - offset_i`` (m): the end effector's distance to each plane at ``q``."""
+        q = np.asarray(q, dtype=float)
+        p = self.planar_arm.forward(q) if not self.spatial else self.serial_arm.forward(q)[:3, 3]
+        return np.asarray(self.planes.normals @ p - self.planes.offsets, dtype=float)
 
     @property
     def n(self) -> int:
@@ -292,6 +327,8 @@ class Scenario:
         """The scenario as plain data (the TOML layout), every per-joint value written out."""
         out: dict[str, Any] = {"name": self.name}
         for section in SCHEMA:
+            if section == "planes" and not self.planes.count:
+                continue  # no planes: the file stays as it was before planes existed
             obj = getattr(self, section)
             out[section] = {
                 key: _plain(getattr(obj, key))
@@ -335,7 +372,7 @@ class Scenario:
                     else dotted,
                     f"unknown key (known: name, {known})",
                 )
-            data[section][key] = value
+            data.setdefault(section, {})[key] = value
         for key in ("arm.lengths", "arm.dh"):
             rows = overrides.get(key)
             if (key == "arm.dh") != self.spatial:
@@ -391,6 +428,7 @@ _SECTION_TYPES: dict[str, Callable[..., Any]] = {
     "slack": SlackBounds,
     "damper": Damper,
     "controller": ControllerSettings,
+    "planes": Planes,
 }
 
 
@@ -483,6 +521,17 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                 parsed[section][key] = check.vector(dotted, value, 3, False)
             elif spec.kind == "dh":
                 parsed[section][key] = check.table(dotted, value, n, 4)
+            elif spec.kind == "rows":
+                dim = 3 if spatial else 2
+                rows = value if isinstance(value, list) else None
+                if rows is None:
+                    raise check.fail(dotted, f"must be a list of rows of {dim} numbers")
+                table = check.table(dotted, rows, len(rows), dim)
+                parsed[section][key] = table.reshape(len(rows), dim)
+            elif spec.kind == "list":
+                if not isinstance(value, list):
+                    raise check.fail(dotted, f"must be a list of numbers, got {_show(value)}")
+                parsed[section][key] = check.vector(dotted, value, len(value), False)
             elif spec.kind == "number":
                 parsed[section][key] = check.number(dotted, value)
             else:
@@ -505,7 +554,18 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
     name = data.get("name") or Path(source).stem or "scenario"
     sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
-    return Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
+    scenario = Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
+    if scenario.planes.count:
+        d = scenario.plane_distances(scenario.motion.q0)
+        inside = np.flatnonzero(~(d > scenario.planes.stop))
+        if inside.size:
+            i = int(inside[0])
+            raise check.fail(
+                f"planes.offsets[{i}]",
+                f"the end effector starts {d[i]:g} m from plane {i + 1}, within its stop distance "
+                f"({scenario.planes.stop:g} m), which the plane damper forbids",
+            )
+    return scenario
 
 
 # ----------------------------------------------------------------------------------- loading

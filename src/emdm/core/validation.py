@@ -151,8 +151,39 @@ def _check_ranges(check: _Checker, p: dict[str, dict[str, Any]]) -> None:
         )
 
 
+def _check_planes(check: _Checker, planes: dict[str, Any]) -> None:
+    """One offset per normal, non-zero normals (made unit), ``influence > stop >= 0``, ``gain > 0``."""
+    normals, offsets = planes["normals"], planes["offsets"]
+    if normals.shape[0] != offsets.size:
+        raise check.fail(
+            "planes.offsets",
+            f"must have one value per row of planes.normals ({normals.shape[0]}), got {offsets.size}",
+        )
+    for i, row in enumerate(normals):
+        size = float(np.linalg.norm(row))
+        if not size > 1e-12 or not math.isfinite(size):
+            raise check.fail(f"planes.normals[{i}]", "must be a non-zero direction")
+    if normals.size:
+        unit = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        unit.setflags(write=False)
+        planes["normals"] = unit
+    for key in ("influence", "stop", "gain"):
+        if not 0.0 <= planes[key] <= 1e6:
+            raise check.fail(f"planes.{key}", f"must be in [0, 1e6], got {planes[key]:g}")
+    if not planes["stop"] < planes["influence"]:
+        raise check.fail(
+            "planes.stop",
+            f"must be below planes.influence ({planes['influence']:g} m), got {planes['stop']:g}",
+        )
+    if not planes["gain"] > 0.0:
+        raise check.fail("planes.gain", f"must be positive, got {planes['gain']:g}")
+    if np.any(np.abs(offsets) > 1e9):
+        raise check.fail("planes.offsets", "must be within [-1e9, 1e9] m")
+
+
 def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
     """Cross-field rules; returns the warnings (valid but suspicious settings)."""
+    _check_planes(check, p["planes"])
     arm, motion, weights, slack, damper = (
         p[s] for s in ("arm", "motion", "weights", "slack", "damper")
     )

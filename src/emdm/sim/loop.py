@@ -104,6 +104,8 @@ class Record(NamedTuple):
     ticks: NDArray[np.int64]
     kkt: F64
     excess: F64
+    rows: NDArray[np.int64]
+    rows_active: NDArray[np.int64]
 
 
 class StepWork(NamedTuple):
@@ -149,6 +151,8 @@ def new_record(cap: int, n: int, nt: int) -> Record:
         np.zeros(cap, dtype=np.int64),
         np.empty(cap),
         np.empty(cap),
+        np.zeros(cap, dtype=np.int64),
+        np.zeros(cap, dtype=np.int64),
     )
 
 
@@ -188,6 +192,20 @@ def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
             active[j] = 1
         else:
             active[j] = 0
+
+
+@kernel
+def count_active_rows(G: F64, h: F64, x: F64) -> int:
+    """How many rows of ``G x <= h`` hold with equality at ``x`` (within ``AT_BOUND (1 + |h_i|)``,
+    the record's definition of "at a bound")."""
+    count = 0
+    for i in range(G.shape[0]):
+        gx = 0.0
+        for j in range(x.size):
+            gx += G[i, j] * x[j]
+        if h[i] - gx <= AT_BOUND * (1.0 + abs(h[i])):
+            count += 1
+    return count
 
 
 @kernel
@@ -241,14 +259,14 @@ def run_kernel(
             return TIMEOUT, k
         if k == cap:
             return FULL, k
-        ng = build_program(prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err), out)
+        ng = build_program(prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k]), out)
         G, h = w.G[:ng], w.h[:ng]
         w.rows[0] = ng
         for j in range(n):
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
             return HANDOFF, k
-        if nt == 2 and ng == 0:  # the exact 2-D task scale first (cheap), then the solve
+        if nt == 2:  # the exact 2-D task scale first (cheap), then the solve
             alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
             if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                 return HANDOFF, k
@@ -256,6 +274,17 @@ def run_kernel(
                 w.b[i] *= alpha
             start = ticks()
             code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+            if code == INFEASIBLE and ng > 0:  # the rows cut the task the bounds allow: the
+                for i in range(nt):  # exact scale under the rows too (a linear program)
+                    w.b[i] = rec.v[k, i]
+                alpha = task_scale_rows(w.A, w.b, G, h, w.lb, w.ub, w.qp.feas)
+                if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
+                    return HANDOFF, k
+                for i in range(nt):
+                    w.b[i] *= alpha
+                code, iterations = active_set(
+                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                )
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
@@ -299,6 +328,9 @@ def run_kernel(
         rec.effort[k] = 0.5 * effort
         rec.manip[k] = manip
         mark_active(rec.qd[k], w.lb, w.ub, rec.active[k])
+        if ng > 0:
+            rec.rows[k] = ng
+            rec.rows_active[k] = count_active_rows(G, h, w.x)
         if prog.slack:
             for i in range(nt):
                 rec.delta[k, i] = w.x[n + i]
@@ -343,6 +375,10 @@ class Run:
     kkt: Vector
     bound_excess: Vector
     fallback: np.ndarray
+    rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """Per command: how many inequality rows the program had (plane dampers within reach)."""
+    rows_active: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """Per command: how many of them the command holds with equality (the record's "at a bound")."""
     solver: list[str] = field(default_factory=list)
     status: list[str] = field(default_factory=list)
     attempts: list[str] = field(default_factory=list)
@@ -511,6 +547,11 @@ def _chain_step(
     rec.effort[k] = 0.5 * float(rec.qd[k] @ rec.qd[k])
     rec.manip[k] = float(w.Jm @ rec.qd[k])
     rec.alpha[k] = program.alpha
+    qp = program.qp
+    rec.rows[k] = qp.n_rows
+    rec.rows_active[k] = count_active_rows(
+        np.ascontiguousarray(qp.G), np.ascontiguousarray(qp.h), np.ascontiguousarray(x)
+    )
     rec.iterations[k] = result.iterations
     rec.kkt[k], rec.excess[k] = result.kkt.residual, result.kkt.bound_excess
     rec.q[k + 1] = rec.q[k] + rec.qd[k] * scenario.motion.dt
@@ -558,6 +599,8 @@ def _run(
         kkt=rec.kkt[:K],
         bound_excess=rec.excess[:K],
         fallback=fallback,
+        rows=rec.rows[:K],
+        rows_active=rec.rows_active[:K],
         solver=steps.column(steps.solver, DEFAULT_SOLVER, K),
         status=steps.column(steps.status, "optimal", K),
         attempts=steps.column(steps.attempts, f"{DEFAULT_SOLVER}: optimal", K),

@@ -250,6 +250,38 @@ TARGETS = (
 )
 
 
+ROW_PLANES = 20
+"""Planes of the inequality-row benchmark: each adds one row to every step's program."""
+
+
+def _rows_bench(sc: Any, ctrl: Any, run: Any, whole: float, repeats: int) -> dict[str, Any]:
+    """The cost of ``ROW_PLANES`` inequality rows on task1 C-EMDM: planes around the arm, 5 m
+    from the base, within their influence distance (10 m) at every step, so that every program
+    carries all the rows; their gain (100 1/s) keeps them loose, so the commands stay those of
+    the run without rows (the difference is reported)."""
+    angles = np.linspace(0.0, 2.0 * np.pi, ROW_PLANES, endpoint=False)
+    planes = {
+        "planes.normals": [[float(np.cos(a)), float(np.sin(a))] for a in angles],
+        "planes.offsets": [-5.0] * ROW_PLANES,
+        "planes.influence": 10.0,
+        "planes.stop": 0.0,
+        "planes.gain": 100.0,
+    }
+    scr = sc.with_overrides(planes)
+    with_rows = simulate(scr, ctrl)
+    seconds = _median_time(lambda: simulate(scr, ctrl), max(repeats, 5) * 4)
+    same = with_rows.steps == run.steps
+    return {
+        "planes": ROW_PLANES,
+        "steps": with_rows.steps,
+        "rows_per_step": float(with_rows.rows.mean()),
+        "active_rows": int(with_rows.rows_active.sum()),
+        "us_per_step": seconds / with_rows.steps * 1e6,
+        "extra_us_per_step": float(seconds / with_rows.steps * 1e6 - whole / run.steps * 1e6),
+        "max_command_difference": float(np.abs(with_rows.qd - run.qd).max()) if same else math.inf,
+    }
+
+
 def run_bench(
     *,
     repeats: int = 5,
@@ -282,6 +314,9 @@ def run_bench(
     whole = _median_time(lambda: simulate(sc, ctrl), max(repeats, 5) * 4)
     steps[SIMULATE] = {"total": whole / run.steps}
     say("per-step split done")
+
+    rows = _rows_bench(sc, ctrl, run, whole, repeats)
+    say("inequality rows done")
 
     runs: dict[str, dict[str, Any]] = {}
     for task in ("task1", "task2"):
@@ -334,6 +369,7 @@ def run_bench(
             "ratio_to_standard_stack_daqp": {k: base / v["total"] for k, v in steps.items()},
         },
         "runs": runs,
+        "rows": rows,
         "batch": {
             "scenario": "task1 C-EMDM, random reachable goals",
             "runs": batch_runs,
@@ -349,6 +385,7 @@ def run_bench(
             "Panda pose C-EMDM <= 10 us/step": spatial["simulate_us_per_step"],
             "Panda vs robotics-toolbox-python + qpsolvers >= 50x": spatial.get("ratio", math.nan),
             "Panda batch >= 2e5 steps/s": spatial["batch"]["steps_per_second"],
+            "20 inequality rows: extra cost <= 1 us/step": rows["extra_us_per_step"],
         },
         "wall_time_s": time.perf_counter() - start,
     }
@@ -488,6 +525,14 @@ def bench_table(data: dict[str, Any]) -> str:
         + f". Batch: {sp['batch']['runs']} random tasks, {sp['batch']['steps']} steps in "
         f"{sp['batch']['seconds']:.3f} s = {sp['batch']['steps_per_second']:.3g} steps/s.",
     ]
+    rw = data["rows"]
+    lines += [
+        "",
+        f"Inequality rows (task1 C-EMDM with {rw['planes']} loose plane dampers, "
+        f"{rw['rows_per_step']:.0f} rows in every program, {rw['active_rows']} active): "
+        f"{rw['us_per_step']:.2f} us/step, {rw['extra_us_per_step']:+.2f} us/step over the run "
+        f"without rows; largest difference in a command {rw['max_command_difference']:.1e} rad/s.",
+    ]
     b, first = data["batch"], data["first_use"]
     lines += [
         "",
@@ -505,7 +550,7 @@ def bench_table(data: dict[str, Any]) -> str:
         "| target | measured |",
         "|---|---:|",
     ]
-    units = ("us/step", "x", "steps/s", "us/step", "x", "steps/s")
+    units = ("us/step", "x", "steps/s", "us/step", "x", "steps/s", "us/step")
     for (name, value), unit in zip(data["targets"].items(), units, strict=True):
         lines.append(f"| {name} | {value:.3g} {unit} |")
     m = data["machine"]

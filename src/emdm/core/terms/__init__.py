@@ -11,6 +11,7 @@ module              kind         writes                                         
 ``velocity_box``    bounds       ``qd_min <= qd <= qd_max``                     arm.qd_min, qd_max
 ``damper``          bounds       the joint-position dampers                     [damper], arm.q_*
 ``centring``        objective    ``c[j] += w_C grad(H)_j`` (joint range index)  weights.centring
+``plane``           rows         ``-n^T J_p qd <= gain (d - stop)/(i - stop)``  [planes]
 ==================  ===========  =============================================  =================
 
 A controller is a list of these (:mod:`emdm.core.controllers`); :mod:`.program` builds its
@@ -22,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..scenario import Scenario
-from . import centring, damper, effort, manipulability, slack, task, velocity_box
+from . import centring, damper, effort, manipulability, plane, slack, task, velocity_box
 from .base import CODE, ProgramOut, StepInput, TermKind
 from .program import ProgramData, build_program
 
@@ -34,6 +35,7 @@ PACK: dict[TermKind, Callable[[Scenario], list[float]]] = {
     TermKind.VELOCITY_BOX: velocity_box.pack,
     TermKind.DAMPER: damper.pack,
     TermKind.CENTRING: centring.pack,
+    TermKind.PLANE: plane.pack,
 }
 """Each term's numbers from the scenario, as its writer reads them (``data``)."""
 

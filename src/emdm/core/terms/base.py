@@ -27,13 +27,15 @@ F64 = NDArray[np.float64]
 class StepInput(NamedTuple):
     """The state a term reads: joint angles ``q`` (rad), the task Jacobian ``J`` (nt x n), the
     manipulability Jacobian ``Jm`` (n), the desired task velocity ``v`` (nt; m/s, rad/s for a
-    pose's rotation) and the task error's norm ``error_norm`` (m)."""
+    pose's rotation), the task error's norm ``error_norm`` (m) and the task's value ``p`` (its first
+    entries are the end effector's position, m)."""
 
     q: F64
     J: F64
     Jm: F64
     v: F64
     error_norm: float
+    p: F64
 
 
 class ProgramOut(NamedTuple):
@@ -60,9 +62,10 @@ class TermKind(StrEnum):
     VELOCITY_BOX = "velocity-box"
     DAMPER = "damper"
     CENTRING = "centring"
+    PLANE = "plane"
 
 
 # the compiled dispatch reads these integers (numba freezes module-level ints as constants)
-TASK, EFFORT, MANIPULABILITY, SLACK, VELOCITY_BOX, DAMPER, CENTRING = range(7)
+TASK, EFFORT, MANIPULABILITY, SLACK, VELOCITY_BOX, DAMPER, CENTRING, PLANE = range(8)
 CODE: dict[TermKind, int] = {kind: code for code, kind in enumerate(TermKind)}
 """The integer of each term in :class:`ProgramData` (the order of :class:`TermKind`)."""

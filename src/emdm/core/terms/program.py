@@ -16,13 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..jit import kernel
-from . import centring, damper, effort, manipulability, slack, task, velocity_box
+from . import centring, damper, effort, manipulability, plane, slack, task, velocity_box
 from .base import (
     CENTRING,
     DAMPER,
     EFFORT,
     F64,
     MANIPULABILITY,
+    PLANE,
     SLACK,
     TASK,
     VELOCITY_BOX,
@@ -77,4 +78,6 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
             damper.write(data, s.q, out.lb, out.ub)
         elif code == CENTRING:
             centring.write(weight, data, s.q, out.c)
+        elif code == PLANE:
+            rows = plane.write(data, s.p, s.J, out.G, out.h, rows)
     return rows
