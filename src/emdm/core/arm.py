@@ -78,6 +78,17 @@ class PlanarArm:
         return f"PlanarArm(lengths={self.lengths.tolist()})"
 
     # ----------------------------------------------------------------- geometry
+    dim = 2
+    """Axes of the workspace (the :class:`~emdm.core.robot.Robot` interface)."""
+
+    def position(self, q: ArrayLike) -> Vector:
+        """End-effector position (m): :meth:`forward` (the Robot interface)."""
+        return self.forward(q)
+
+    def position_jacobian(self, q: ArrayLike) -> Matrix:
+        """``dp/dq`` (2 x n): :meth:`jacobian` (the Robot interface)."""
+        return self.jacobian(q)
+
     @property
     def reach(self) -> float:
         """Outer radius of the reachable workspace (m): the sum of the link lengths."""

@@ -295,12 +295,9 @@ class StepState:
 
 
 def state_at(scenario: Scenario, q: Vector) -> StepState:
-    """Brief Algorithm 1, lines 5-8: ``p = f(q)``, ``e = p_goal - p``, ``v = Kp e``, ``J``, ``Jm``
-    (for a spatial arm: the task's rows, see :func:`emdm.core.kernels.task_kinematics`)."""
-    if not scenario.spatial:
-        kin = scenario.planar_arm.kinematics(q)
-        e = scenario.motion.goal - kin.p
-        return StepState(kin, e, scenario.motion.kp * e)
+    """Brief Algorithm 1, lines 5-8: ``p = f(q)``, ``e = p_goal - p``, ``v = Kp e``, ``J``, ``Jm``:
+    the task's rows of any arm, by the one compiled dispatch
+    (:func:`emdm.core.kernels.task_kinematics`)."""
     n, nt = scenario.n, scenario.nt
     p, e, J, Jm = np.empty(nt), np.empty(nt), np.empty((nt, n)), np.empty(n)
     m = task_kinematics_of(

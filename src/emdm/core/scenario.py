@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
 from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry
+from .robot import Robot
 from .serial import SerialArm
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 from .validation import (
@@ -223,7 +224,7 @@ class Scenario:
     def plane_distances(self, q: Vector) -> Vector:
         """``d_i = n_i . p - offset_i`` (m): the end effector's distance to each plane at ``q``."""
         q = np.asarray(q, dtype=float)
-        p = self.planar_arm.forward(q) if not self.spatial else self.serial_arm.forward(q)[:3, 3]
+        p = self.robot.position(q)
         return np.asarray(self.planes.normals @ p - self.planes.offsets, dtype=float)
 
     @property
@@ -272,13 +273,16 @@ class Scenario:
         return SerialArm(self.arm.dh, self.arm.convention, self.arm.tool)  # type: ignore[arg-type]
 
     @property
+    def robot(self) -> Robot:
+        """The arm's model behind the one :class:`~emdm.core.robot.Robot` interface: the planar
+        chain or the DH chain, as the ``[arm]`` section says."""
+        return self.serial_arm if self.spatial else self.planar_arm
+
+    @property
     def reach(self) -> float:
         """Farthest the end effector can be from the base (m): the sum of the link lengths, or
         of ``|a| + |d|`` over the DH rows plus the tool's length."""
-        if self.arm.dh is None:
-            return float(self.planar_arm.reach)
-        dh = self.arm.dh
-        return float(np.sum(np.abs(dh[:, 0]) + np.abs(dh[:, 2])) + np.linalg.norm(self.arm.tool))
+        return self.robot.reach
 
     @property
     def link_lengths(self) -> Vector:

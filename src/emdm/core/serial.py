@@ -97,6 +97,30 @@ class SerialArm:
     def __repr__(self) -> str:
         return f"SerialArm(dh={self.dh.tolist()}, convention={self.convention!r})"
 
+    dim = 3
+    """Axes of the workspace (the :class:`~emdm.core.robot.Robot` interface)."""
+
+    @property
+    def reach(self) -> float:
+        """Farthest the end effector can be from the base (m): ``|a| + |d|`` over the DH rows plus
+        the tool's length."""
+        return float(
+            np.sum(np.abs(self.dh[:, 0]) + np.abs(self.dh[:, 2])) + np.linalg.norm(self.tool[:3, 3])
+        )
+
+    def joint_positions(self, q: ArrayLike) -> Matrix:
+        """Origins of the base and of every link frame, then the end effector: (n + 2) x 3 (m)."""
+        origins = self.link_frames(q)[:, :3, 3]
+        return np.vstack((origins, self.forward(q)[:3, 3]))
+
+    def position(self, q: ArrayLike) -> Matrix:
+        """End-effector position (m, 3 values)."""
+        return np.asarray(self.forward(q)[:3, 3])
+
+    def position_jacobian(self, q: ArrayLike) -> Matrix:
+        """The linear rows of the geometric Jacobian (3 x n; m/rad)."""
+        return np.asarray(self.jacobian(q)[:3])
+
     def _check_q(self, q: ArrayLike) -> Matrix:
         q_arr = np.ascontiguousarray(q, dtype=float)
         if q_arr.shape != (self.n,):

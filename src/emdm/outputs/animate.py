@@ -29,7 +29,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Polygon
 from PIL import Image
 
-from ..core.arm import Matrix
+from ..core.arm import Matrix, PlanarArm
 from ..core.scenario import Scenario
 from ..sim.loop import Run
 from .style import CONTROLLER_STYLE, RC, figure_canvas
@@ -79,7 +79,7 @@ class Animator:
         biggest = max(
             float(np.sqrt(np.linalg.eigvalsh(J @ J.T)[-1]))
             for run in self.runs
-            for q in run.q[:: max(1, run.steps // 50) if sc.spatial else 1]
+            for q in run.q[:: max(1, run.steps // 50) if sc.robot.dim == 3 else 1]
             for J in (self.views.jacobian(q),)
         )
         self.box = self.views.limits(self.runs)
@@ -97,7 +97,7 @@ class Animator:
         self.fig, self.canvas = figure_canvas(width=3.3 * per_row, height=3.4 * rows)
         grid = self.fig.subplots(rows, per_row, squeeze=False)
         self._artists: list[dict[str, Any]] = []
-        goal = np.asarray(sc.motion.goal[: 3 if sc.spatial else 2])
+        goal = np.asarray(sc.motion.goal[: sc.robot.dim])
         for index, run in enumerate(self.runs):
             for v, P in enumerate(views.projections):
                 ax = grid[index, v] if cols > 1 else grid[0, index]
@@ -117,8 +117,8 @@ class Animator:
         """One view of one run: the static background and its animated artists."""
         views = self.views
         style = CONTROLLER_STYLE.get(run.controller.name, {"color": "#0072B2"})
-        if not sc.spatial:
-            arm = sc.planar_arm
+        arm = sc.robot
+        if isinstance(arm, PlanarArm):  # the reachable annulus is drawn in the plane only
             ax.add_patch(Circle((0, 0), arm.reach, color="grey", alpha=0.08, linewidth=0))
             if arm.inner_reach > 0:
                 ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.patches import Circle
 
+from ..core.arm import PlanarArm
 from ..sim.loop import Run
 from .animate import ellipse_points
 from .style import COLUMN, CONTROLLER_STYLE, DOUBLE, color, figure
@@ -205,9 +206,9 @@ def spatial_path_figure(runs: Sequence[Run], stem: Path) -> Path:
 def path_figure(runs: Sequence[Run], stem: Path) -> Path:
     """End-effector paths in the workspace, with start, goal and the reachable annulus."""
     sc = runs[0].scenario
-    if sc.spatial:
+    arm = sc.robot
+    if not isinstance(arm, PlanarArm):  # a view of each plane of the workspace
         return spatial_path_figure(runs, stem)
-    arm = sc.planar_arm
     with figure(stem, width=COLUMN, height=3.0) as (_, ax):
         ax.add_patch(
             Circle((0, 0), arm.reach, color="grey", alpha=0.10, linewidth=0, label="reachable")

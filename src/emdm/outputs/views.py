@@ -22,7 +22,7 @@ class Views:
 
     def __init__(self, sc: Scenario) -> None:
         self.scenario = sc
-        if sc.spatial:
+        if sc.robot.dim == 3:
             self.projections = [np.eye(3)[[0, 1]], np.eye(3)[[0, 2]], np.eye(3)[[1, 2]]]
             self.names = ["top (x-y)", "front (x-z)", "side (y-z)"]
             self.axes = [("x", "y"), ("x", "z"), ("y", "z")]
@@ -33,17 +33,11 @@ class Views:
 
     def joints(self, q: np.ndarray) -> Matrix:
         """Points of the arm's polyline: base, every joint, the end effector (m; 2 or 3 columns)."""
-        sc = self.scenario
-        if not sc.spatial:
-            return np.asarray(sc.planar_arm.joint_positions(q))
-        arm = sc.serial_arm
-        origins = arm.link_frames(q)[:, :3, 3]
-        return np.vstack((origins, arm.forward(q)[:3, 3]))
+        return np.asarray(self.scenario.robot.joint_positions(q))
 
     def jacobian(self, q: np.ndarray) -> Matrix:
         """The translational Jacobian (2 or 3 rows)."""
-        sc = self.scenario
-        return sc.serial_arm.jacobian(q)[:3] if sc.spatial else sc.planar_arm.jacobian(q)
+        return np.asarray(self.scenario.robot.position_jacobian(q))
 
     def position(self, run: Run) -> Matrix:
         """End-effector positions of a run's states (m; 2 or 3 columns)."""
@@ -53,8 +47,8 @@ class Views:
         """Per coordinate, the range (2 x 2 or 3 x 2, m) of a view that holds every arm, path
         and goal: the reach disc for a planar arm, the points' extent plus a margin in 3-D."""
         sc = self.scenario
-        if not sc.spatial:
-            reach = float(sc.planar_arm.reach) * 1.08
+        if sc.robot.dim == 2:
+            reach = float(sc.robot.reach) * 1.08
             return np.array([[-reach, reach], [-reach, reach]])
         points = [self.joints(q) for run in runs for q in run.q[:: max(1, run.steps // 20)]]
         points += [self.position(run) for run in runs]
