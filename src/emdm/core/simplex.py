@@ -298,8 +298,12 @@ def feasible_point_rows(
     row (an inactive row changes nothing), else a vertex of the augmented program
     (:func:`_augment`). Kept apart from the 2-D kernel, whose hot path would otherwise carry the
     simplex method's code."""
+    if G.shape[0] == 0:  # the brief's programs: straight to the task's point (the hot path)
+        if A.shape[0] == 2:
+            return feasible_point(A, b, lb, ub, x, w)
+        return _task_point(A, b, lb, ub, x, w)
     code, unique = _task_point(A, b, lb, ub, x, w)
-    if G.shape[0] == 0 or code == INFEASIBLE or (code == OK and rows_hold(G, h, x)):
+    if code == INFEASIBLE or (code == OK and rows_hold(G, h, x)):
         return code, unique
     if not _augment(A, b, G, h, lb, ub, w):
         return NEEDS_REFERENCE, False

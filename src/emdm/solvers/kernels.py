@@ -345,7 +345,11 @@ def _cold_start(
             x[j] = ub[j]
         if at_lo or at_hi:
             free[j] = False
-            if _independent(A, G, gwork, -1, free, w):
+            if (
+                (free_rank(A, free, w.feas) == nt)
+                if ng == 0
+                else _independent(A, G, gwork, -1, free, w)
+            ):
                 work[j] = -1 if at_lo else 1
             else:
                 free[j] = True
@@ -493,7 +497,11 @@ def _cold_start(
             x[block] = lb[block] if side < 0 else ub[block]
             for j in range(n):
                 free[j] = work[j] == 0 and j != block
-            if _independent(A, G, gwork, -1, free, w):
+            if (
+                (free_rank(A, free, w.feas) == nt)
+                if ng == 0
+                else _independent(A, G, gwork, -1, free, w)
+            ):
                 work[block] = side
         elif block >= n:
             for j in range(n):
