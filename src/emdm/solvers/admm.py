@@ -1,10 +1,13 @@
 """ADMM (the splitting behind OSQP), a first-order method for the per-step programs.
 
-Split ``x`` (carrying ``A x = b``) from ``z`` (carrying ``lb <= z <= ub``) with ``x = z``:
+Split ``x`` (carrying ``A x = b``) from ``z`` (carrying ``lb <= z <= ub``, and for the rows
+``G x <= h`` their values ``z_G <= h``) with ``C x = z``, ``C = [I; G]``:
 
-    x+ = argmin 1/2 x^T P x + c^T x + rho/2 ||x - z + u||^2  s.t.  A x = b   (one KKT solve, factored once)
-    z+ = clip(x+ + u, lb, ub)
-    u+ = u + x+ - z+
+    x+ = argmin 1/2 x^T P x + c^T x + rho/2 ||C x - z + u||^2  s.t.  A x = b   (one KKT solve, factored once)
+    z+ = clip(C x+ + u, [lb; -inf], [ub; h])
+    u+ = u + C x+ - z+
+
+(without rows ``C = I``, the iteration of OSQP on bounds alone).
 
 Stops when the primal residual ``||x - z||`` and the dual residual ``rho ||z - z_prev||`` fall below
 ``eps_abs + eps_rel * scale``. It returns ``z`` (inside the bounds); its equality residual is what is
@@ -22,7 +25,7 @@ import scipy.linalg
 
 from ..core.problem import QP
 from .active_set import independent_rows
-from .base import UNSUPPORTED_ROWS, SolverResult, infeasible
+from .base import SolverResult, infeasible
 
 
 def solve_admm(
@@ -35,8 +38,6 @@ def solve_admm(
 ) -> SolverResult:
     """Solve ``qp`` by ADMM; ``status`` is ``"optimal"`` on convergence, else ``"max_iter"``."""
     start = time.perf_counter()
-    if qp.n_rows:  # this method is written for bounds only: it declines rather than ignore rows
-        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
     P, c = qp.P, qp.c
@@ -44,30 +45,37 @@ def solve_admm(
     n, m = qp.n, A.shape[0]
     eig = np.linalg.eigvalsh(P)
     rho = float(np.sqrt(max(eig[0], 1e-12) * eig[-1]))
+    G, ng = qp.G, qp.n_rows
+    lo = np.concatenate((qp.lb, np.full(ng, -np.inf)))
+    hi = np.concatenate((qp.ub, qp.h))
     K = np.zeros((n + m, n + m))
     K[:n, :n], K[:n, n:], K[n:, :n] = P + rho * np.eye(n), A.T, A
+    if ng:
+        K[:n, :n] += rho * (G.T @ G)
     try:
         factor = scipy.linalg.lu_factor(K)
     except (ValueError, np.linalg.LinAlgError) as exc:
         return SolverResult(None, f"error: {exc}", 0, time.perf_counter() - start)
-    z = np.clip(np.zeros(n), qp.lb, qp.ub)
-    u = np.zeros(n)
+    z = np.clip(np.zeros(n + ng), lo, hi)
+    u = np.zeros(n + ng)
     trace: list[dict[str, float]] = []
     rhs = np.empty(n + m)
     rhs[n:] = b
     for iteration in range(1, max_iter + 1):
-        rhs[:n] = -c + rho * (z - u)
+        w = z - u
+        rhs[:n] = -c + rho * (w[:n] + G.T @ w[n:] if ng else w)
         x = scipy.linalg.lu_solve(factor, rhs)[:n]
+        cx = np.concatenate((x, G @ x)) if ng else x
         z_prev = z
-        z = np.clip(x + u, qp.lb, qp.ub)
-        u = u + x - z
-        r_prim = float(np.abs(x - z).max())
+        z = np.clip(cx + u, lo, hi)
+        u = u + cx - z
+        r_prim = float(np.abs(cx - z).max())
         r_dual = rho * float(np.abs(z - z_prev).max())
         if history:
             trace.append(
                 {
                     "iteration": float(iteration),
-                    "objective": qp.objective(z),
+                    "objective": qp.objective(z[:n]),
                     "primal_residual": r_prim,
                     "dual_residual": r_dual,
                 }
@@ -75,5 +83,7 @@ def solve_admm(
         if r_prim <= eps_abs + eps_rel * max(
             float(np.abs(x).max()), float(np.abs(z).max())
         ) and r_dual <= eps_abs + eps_rel * rho * float(np.abs(u).max()):
-            return SolverResult(z, "optimal", iteration, time.perf_counter() - start, tuple(trace))
-    return SolverResult(z, "max_iter", max_iter, time.perf_counter() - start, tuple(trace))
+            return SolverResult(
+                z[:n], "optimal", iteration, time.perf_counter() - start, tuple(trace)
+            )
+    return SolverResult(z[:n], "max_iter", max_iter, time.perf_counter() - start, tuple(trace))
