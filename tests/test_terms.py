@@ -189,3 +189,23 @@ def test_planes_round_trip_through_toml():
     np.testing.assert_array_equal(again.planes.normals, sc.planes.normals)
     np.testing.assert_array_equal(again.planes.offsets, sc.planes.offsets)
     assert "[planes]" not in emdm.load_scenario("task2").to_toml()
+
+
+def test_a_scenario_file_with_planes_runs_from_the_command_line_and_reads_back(tmp_path):
+    """`emdm run` on a file with a [planes] section writes the rows' counts in the diagnostics,
+    and the run folder reads back to the same record."""
+    from emdm.cli import main
+    from emdm.outputs.records import read_run
+
+    sc = _with_plane("task1", 0.45)
+    path = tmp_path / "plane.toml"
+    path.write_text(sc.to_toml(), encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--controller", "C-EMDM", "--out", str(out)]) == 0
+    header = (out / "diagnostics" / "C-EMDM.csv").read_text().splitlines()[0]
+    assert header.endswith("rows,rows_active")
+    back = read_run(out, "C-EMDM")
+    run = emdm.simulate(sc, "C-EMDM")
+    np.testing.assert_array_equal(back.qd, run.qd)
+    np.testing.assert_array_equal(back.rows, run.rows)
+    assert back.rows.max() == 1

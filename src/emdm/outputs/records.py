@@ -91,8 +91,10 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
         yield [cell(x) for x in (*state, *cmd, *where, *rest)]
 
 
-def diagnostics_header(n: int) -> list[str]:
-    """Columns of ``diagnostics/<controller>.csv``: how every command was obtained."""
+def diagnostics_header(n: int, rows: bool = False) -> list[str]:
+    """Columns of ``diagnostics/<controller>.csv``: how every command was obtained; with
+    ``rows`` (a scenario with planes) also how many inequality rows the program had and how many
+    the command holds with equality."""
     return [
         "step",
         "kkt_residual",
@@ -103,11 +105,13 @@ def diagnostics_header(n: int) -> list[str]:
         *[f"lo{i}" for i in range(1, n + 1)],
         *[f"hi{i}" for i in range(1, n + 1)],
         *[f"active{i}" for i in range(1, n + 1)],
+        *(["rows", "rows_active"] if rows else []),
     ]
 
 
 def diagnostics_rows(run: Run) -> Iterator[list[str]]:
-    """One row per command."""
+    """One row per command (with the rows' counts when the scenario has planes)."""
+    rows = bool(run.scenario.planes.count)
     for k in range(run.steps):
         yield [
             cell(x)
@@ -121,6 +125,7 @@ def diagnostics_rows(run: Run) -> Iterator[list[str]]:
                 *run.lo[k],
                 *run.hi[k],
                 *run.active[k],
+                *((run.rows[k], run.rows_active[k]) if rows else ()),
             )
         ]
 
@@ -631,7 +636,7 @@ def read_run(folder: Path, controller: str) -> Run:
         where = folder / "trajectories" / f"{controller}.csv"
         rows = _rows(where, trajectory_header(scenario.n, scenario.nt), steps + 1)
         where = folder / "diagnostics" / f"{controller}.csv"
-        diag = _rows(where, diagnostics_header(scenario.n), steps)
+        diag = _rows(where, diagnostics_header(scenario.n, bool(scenario.planes.count)), steps)
         where = folder / "trajectories" / f"{controller}.csv"
         return _run_from_rows(scenario, get_controller(controller), rows, diag, reached)
     except EmdmError:
@@ -698,6 +703,10 @@ def _run_from_rows(
         solve_time=column("solve_time", last=False).reshape(K),
         kkt=np.array([_float(d["kkt_residual"]) for d in diag]).reshape(K),
         bound_excess=np.array([_float(d["bound_excess"]) for d in diag]).reshape(K),
+        rows=np.array([int(d.get("rows", 0)) for d in diag], dtype=np.int64).reshape(K),
+        rows_active=np.array([int(d.get("rows_active", 0)) for d in diag], dtype=np.int64).reshape(
+            K
+        ),
         fallback=np.array([d["fallback"] == "True" for d in diag], dtype=bool).reshape(K),
         solver=[r["solver"] for r in rows[:-1]],
         status=[r["status"] for r in rows[:-1]],
@@ -731,7 +740,7 @@ def write_run_folder(
         )
         write_csv(
             folder / "diagnostics" / f"{name}.csv",
-            diagnostics_header(scenario.n),
+            diagnostics_header(scenario.n, bool(scenario.planes.count)),
             diagnostics_rows(run),
         )
     results = {name: metrics(run) for name, run in runs.items()}
