@@ -129,6 +129,32 @@ def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
 
 
 @kernel
+def matrix_rank(M: F64, rows: int, cols: int, tol: float) -> int:
+    """Rank of ``M[:rows, :cols]`` by Gaussian elimination with complete pivoting (in place), a
+    pivot counting when above ``tol``: the one rank test of the feasibility kernels and of the
+    active set's working set."""
+    rank = 0
+    for step in range(min(rows, cols)):
+        pr, pc, best = step, step, 0.0
+        for i in range(step, rows):
+            for j in range(step, cols):
+                if abs(M[i, j]) > best:
+                    best, pr, pc = abs(M[i, j]), i, j
+        if best <= tol:
+            break
+        for j in range(cols):
+            M[step, j], M[pr, j] = M[pr, j], M[step, j]
+        for i in range(rows):
+            M[i, step], M[i, pc] = M[i, pc], M[i, step]
+        for i in range(step + 1, rows):
+            f = M[i, step] / M[step, step]
+            for j in range(step, cols):
+                M[i, j] -= f * M[step, j]
+        rank += 1
+    return rank
+
+
+@kernel
 def kinematics(lengths: F64, q: F64, p: F64, J: F64, Jm: F64, w: KinWork) -> float:
     """``p = f(q)``, ``J`` and ``Jm`` in place; returns ``m`` (see :mod:`emdm.core.arm`).
 

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
+from .kernels import matrix_rank
 from .tolerances import FEASIBILITY_TOL, RANK_TOL
 
 F64 = NDArray[np.float64]
@@ -276,26 +277,7 @@ def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
             cols += 1
     if big <= 0:
         return 0
-    tol = RANK_TOL * big * nt
-    rank = 0
-    for step in range(min(nt, cols)):
-        pr, pc, best = step, step, 0.0
-        for i in range(step, nt):
-            for j in range(step, cols):
-                if abs(M[i, j]) > best:
-                    best, pr, pc = abs(M[i, j]), i, j
-        if best <= tol:
-            break
-        for j in range(cols):
-            M[step, j], M[pr, j] = M[pr, j], M[step, j]
-        for i in range(nt):
-            M[i, step], M[i, pc] = M[i, pc], M[i, step]
-        for i in range(step + 1, nt):
-            f = M[i, step] / M[step, step]
-            for j in range(step, cols):
-                M[i, j] -= f * M[step, j]
-        rank += 1
-    return rank
+    return matrix_rank(M, nt, cols, RANK_TOL * big * nt)
 
 
 @kernel

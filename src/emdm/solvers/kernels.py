@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.jit import kernel
-from ..core.kernels import solve_in_place
+from ..core.kernels import matrix_rank, solve_in_place
 from ..core.simplex import feasible_point_rows
 from ..core.tolerances import ACTIVE_TOL, BOUND_TOL, KKT_TOL, RANK_TOL
 from ..core.zonotope import INFEASIBLE, NEEDS_REFERENCE, OK, free_rank
@@ -156,24 +156,7 @@ def _independent(
             big = max(big, abs(M[r, cc]))
     if big <= 0:
         return rows == 0
-    tol = RANK_TOL * big * rows
-    for step in range(rows):
-        pr, pc, best = step, step, 0.0
-        for r in range(step, rows):
-            for cc in range(step, cols):
-                if abs(M[r, cc]) > best:
-                    best, pr, pc = abs(M[r, cc]), r, cc
-        if best <= tol:
-            return False
-        for cc in range(cols):
-            M[step, cc], M[pr, cc] = M[pr, cc], M[step, cc]
-        for r in range(rows):
-            M[r, step], M[r, pc] = M[r, pc], M[r, step]
-        for r in range(step + 1, rows):
-            f = M[r, step] / M[step, step]
-            for cc in range(step, cols):
-                M[r, cc] -= f * M[step, cc]
-    return True
+    return matrix_rank(M, rows, cols, RANK_TOL * big * rows) == rows
 
 
 @kernel
