@@ -189,6 +189,11 @@ def test_without_a_tex_engine_the_study_says_how_to_compile(tmp_path, monkeypatc
     said: list[str] = []
     assert compile_documents(tmp_path, said.append)["engine"] is None
     assert len(said) == 1 and "pdflatex paper.tex" in said[0] and str(tmp_path) in said[0]
+    # the study compiles in its staging folder, gone after the swap: the hint names the result's
+    final = tmp_path / "results" / "paper"
+    said.clear()
+    compile_documents(tmp_path / ".staging" / "paper", said.append, final=final)
+    assert str(final) in said[0] and ".staging" not in said[0]
 
 
 def test_the_page_loads_in_a_real_browser(report):

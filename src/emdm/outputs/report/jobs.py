@@ -499,7 +499,11 @@ def build_report(
         )
         write_latex(stage)
         say(f"paper and pitch written ({time.perf_counter() - start:.1f} s)")
-        compiled = compile_documents(stage / "paper", say) if compile_pdf and cfg.compile else {}
+        compiled = (
+            compile_documents(stage / "paper", say, final=Path(out) / "paper")
+            if compile_pdf and cfg.compile
+            else {}
+        )
         if compiled.get("paper", {}).get("pages", 0) > PAGE_LIMIT:  # a few lines too many
             write_latex(stage, compact=True, names=("paper",))
             again = compile_documents(stage / "paper", say, names=("paper",))

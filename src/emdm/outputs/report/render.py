@@ -164,15 +164,20 @@ def log_problems(log: str) -> dict[str, Any]:
 
 
 def compile_documents(
-    folder: Path, say: Callable[[str], None], names: Sequence[str] = ("paper", "pitch")
+    folder: Path,
+    say: Callable[[str], None],
+    names: Sequence[str] = ("paper", "pitch"),
+    *,
+    final: Path | None = None,
 ) -> dict[str, Any]:
     """Compile ``paper.tex`` and ``pitch.tex`` in ``folder`` (in parallel, each until its
-    references settle, at most three passes); without a TeX engine say how to compile."""
+    references settle, at most three passes); without a TeX engine say how to compile, in the
+    folder where the sources will be (``final``: the staging folder is gone by then)."""
     engine = tex_engine()
     if engine is None:
         hint = (
             f"no TeX engine (pdflatex) found, so no PDFs: to build them, run "
-            f"`pdflatex paper.tex` and `pdflatex pitch.tex` twice in {folder}"
+            f"`pdflatex paper.tex` and `pdflatex pitch.tex` twice in {final or folder}"
         )
         say(hint)
         return {"engine": None, "hint": hint}
