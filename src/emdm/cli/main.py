@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..core.controllers import BASELINES, CONTROLLERS, get_controller
+from ..core.controllers import BASELINES, CONTROLLERS, Name, get_controller
 from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
 from ..core.terms import TermKind
 from ..errors import EmdmError, NoSolution
@@ -190,7 +190,7 @@ def cmd_solvers(args: argparse.Namespace) -> int:
     from ..studies.lab import DEFAULT_LAB_SOLVERS, lab_header, lab_json, lab_rows, run_lab
 
     scenario = _scenario(args)
-    controllers = _unique(args.controller) or ["C-EMDM"]
+    controllers = _unique(args.controller) or [Name.C_EMDM]
     solvers = _unique(args.solver) or [n for n in DEFAULT_LAB_SOLVERS if n in available_solvers()]
     out = _out(args, f"{safe(scenario.name)}-solvers", _inputs(args))
     start = time.perf_counter()
@@ -363,7 +363,7 @@ def cmd_pareto(args: argparse.Namespace) -> int:
     from ..outputs.pareto_plots import pareto_figure, trade_off_figure
     from ..studies.pareto import default_grid, pareto_study, weight_grid
 
-    controllers = _unique(args.controller) or ["UC-EMDM"]
+    controllers = _unique(args.controller) or [Name.UC_EMDM]
     for name in controllers:
         if not get_controller(name).has(TermKind.MANIPULABILITY):
             raise UsageError(
@@ -631,7 +631,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the exact trajectory with each, against the exact optimum.",
     )
     add_scenario(lab, default="task2")
-    add_controllers(lab, "controller whose programs are solved", "C-EMDM")
+    add_controllers(lab, "controller whose programs are solved", Name.C_EMDM)
     lab.add_argument(
         "--solver",
         action="extend",

@@ -15,16 +15,17 @@ import numpy as np
 from matplotlib.patches import Circle
 
 from ..core.arm import PlanarArm
+from ..core.controllers import Name
 from ..sim.loop import Run
 from .animate import ellipse_points
 from .style import COLUMN, CONTROLLER_STYLE, DOUBLE, color, figure
 from .views import Views
 
 GROUPS = {
-    "UC": ("UC-IVKC", "UC-EMDM"),
-    "C": ("C-IVKC", "C-EMDM"),
-    "all": ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM"),
-    "baselines": ("RRMC", "PARK", "MMC", "C-EMDM"),
+    "UC": (Name.UC_IVKC, Name.UC_EMDM),
+    "C": (Name.C_IVKC, Name.C_EMDM),
+    "all": (Name.UC_IVKC, Name.C_IVKC, Name.UC_EMDM, Name.C_EMDM),
+    "baselines": (Name.RRMC, Name.PARK, Name.MMC, Name.C_EMDM),
 }
 """The overlays the brief asks for, all four together, and the manipulability benchmark's
 baselines beside C-EMDM."""

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.controllers import Name
 from ..core.scenario import Scenario
 from ..studies.montecarlo import GRID, trade_off_rows
 from .pareto_plots import trade_off_figure
@@ -43,7 +44,7 @@ def sweep_trade_off(
     scenario with at least two weight pairs and per EMDM controller."""
     stems = []
     for scenario in scenarios:
-        for controller in ("UC-EMDM", "C-EMDM"):
+        for controller in (Name.UC_EMDM, Name.C_EMDM):
             rows = trade_off_rows(results, scenario.name, controller)
             if len(rows) >= 2:
                 folder = out / f"trade_off-{scenario.name}-{controller}"

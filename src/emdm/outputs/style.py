@@ -19,6 +19,8 @@ from cycler import cycler
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from ..core.controllers import Name
+
 COLUMN = 3.5
 """IEEE single-column width (in)."""
 DOUBLE = 7.16
@@ -27,13 +29,13 @@ DOUBLE = 7.16
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000"]
 
 CONTROLLER_STYLE: dict[str, dict[str, Any]] = {
-    "UC-IVKC": {"color": "#E69F00", "linestyle": "--"},
-    "C-IVKC": {"color": "#D55E00", "linestyle": "-"},
-    "UC-EMDM": {"color": "#56B4E9", "linestyle": "--"},
-    "C-EMDM": {"color": "#0072B2", "linestyle": "-"},
-    "RRMC": {"color": "#999999", "linestyle": ":"},
-    "PARK": {"color": "#CC79A7", "linestyle": "-."},
-    "MMC": {"color": "#009E73", "linestyle": "-"},
+    Name.UC_IVKC: {"color": "#E69F00", "linestyle": "--"},
+    Name.C_IVKC: {"color": "#D55E00", "linestyle": "-"},
+    Name.UC_EMDM: {"color": "#56B4E9", "linestyle": "--"},
+    Name.C_EMDM: {"color": "#0072B2", "linestyle": "-"},
+    Name.RRMC: {"color": "#999999", "linestyle": ":"},
+    Name.PARK: {"color": "#CC79A7", "linestyle": "-."},
+    Name.MMC: {"color": "#009E73", "linestyle": "-"},
 }
 FAMILY_COLOR = {"exact": "#0072B2", "gradient": "#009E73", "gradient-free": "#D55E00"}
 

@@ -21,14 +21,17 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import Controller, get_controller
+from ..core.controllers import Controller, Name, get_controller
 from ..core.scenario import Scenario, parse_override, scenario_from_dict
 from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
 from ..sim.loop import Run, simulate
 from ..studies.pareto import front_at, ratios
 
-PAIRS: dict[str, tuple[str, str]] = {"C": ("C-EMDM", "C-IVKC"), "UC": ("UC-EMDM", "UC-IVKC")}
+PAIRS: dict[str, tuple[str, str]] = {
+    "C": (Name.C_EMDM, Name.C_IVKC),
+    "UC": (Name.UC_EMDM, Name.UC_IVKC),
+}
 """Controller pairs: EMDM and its IVKC baseline (drawn as a ghost), constrained or not."""
 
 MIN_LINKS, MAX_LINKS = 2, 8

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.controllers import Controller, get_controller
+from ..core.controllers import Controller, Name, get_controller
 from ..core.jit import ensure_compiled, kernel
 from ..core.kernels import ArmData, Geometry
 from ..core.scenario import Scenario
@@ -115,7 +115,7 @@ def _warm_up_batch() -> None:
 
     for task in WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
-        for name in ("UC-IVKC", "C-EMDM"):
+        for name in (Name.UC_IVKC, Name.C_EMDM):
             q0s = np.array([sc.motion.q0], dtype=float)
             goals = np.array([sc.motion.goal], dtype=float)
             out, codes = np.empty((1, len(OUTCOMES))), np.empty(1, dtype=np.int64)

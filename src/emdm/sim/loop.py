@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
-from ..core.controllers import Controller, admissible, get_controller, slack_weight
+from ..core.controllers import Controller, Name, admissible, get_controller, slack_weight
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
@@ -620,7 +620,7 @@ def _warm_up() -> None:
     seconds_per_tick()
     for task in WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
-        for name in ("UC-IVKC", "C-EMDM"):
+        for name in (Name.UC_IVKC, Name.C_EMDM):
             ctrl = get_controller(name)
             prog = ctrl.program_data(sc)
             nx = sc.n + sc.nt if prog.slack else sc.n

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..core.controllers import CONTROLLERS, get_controller, program_at, state_at
+from ..core.controllers import CONTROLLERS, Name, get_controller, program_at, state_at
 from ..core.scenario import load_scenario
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
@@ -206,7 +206,7 @@ def run_spatial_bench(*, repeats: int = 3, batch_runs: int = 2000) -> dict[str, 
     from ..studies.mmc import draw_tasks
 
     sc = load_scenario("panda")
-    ctrl = get_controller("C-EMDM")
+    ctrl = get_controller(Name.C_EMDM)
     run = simulate(sc, ctrl)
     whole = _median_time(lambda: simulate(sc, ctrl), max(repeats, 5) * 4)
     out: dict[str, Any] = {
@@ -299,7 +299,7 @@ def run_bench(
     say("first use measured: " + ", ".join(f"{k} {v:.1f} s" for k, v in first.items()))
 
     sc = load_scenario("task1")
-    ctrl = get_controller("C-EMDM")
+    ctrl = get_controller(Name.C_EMDM)
     run = simulate(sc, ctrl)
     states, alphas = run.q[:-1], run.alpha
     steps: dict[str, dict[str, float]] = {

@@ -30,22 +30,22 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import goal_of
+from ..core.controllers import Name, goal_of
 from ..core.scenario import load_scenario
 from ..sim.batch import simulate_batch
 
 ARMS = ("panda", "ur5")
-CONTROLLERS = ("RRMC", "PARK", "MMC", "C-EMDM")
+CONTROLLERS = (Name.RRMC, Name.PARK, Name.MMC, Name.C_EMDM)
 PUBLISHED: dict[str, dict[str, tuple[float, float, float]]] = {
     "panda": {
-        "RRMC": (0.0693, 0.0692, 12.4),
-        "PARK": (0.0799, 0.0822, 18.5),
-        "MMC": (0.0942, 0.0955, 8.0),
+        Name.RRMC: (0.0693, 0.0692, 12.4),
+        Name.PARK: (0.0799, 0.0822, 18.5),
+        Name.MMC: (0.0942, 0.0955, 8.0),
     },
     "ur5": {
-        "RRMC": (0.0433, 0.0381, 39.7),
-        "PARK": (0.0433, 0.0381, 39.7),
-        "MMC": (0.0563, 0.0460, 25.6),
+        Name.RRMC: (0.0433, 0.0381, 39.7),
+        Name.PARK: (0.0433, 0.0381, 39.7),
+        Name.MMC: (0.0563, 0.0460, 25.6),
     },
 }
 """Haviland & Corke's table (the MMC project page), per arm and controller: mean manipulability,
