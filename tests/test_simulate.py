@@ -125,3 +125,20 @@ def test_singular_starts_run_cleanly(q0, controller):
     assert np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.qd))
     if controller.endswith("EMDM"):
         assert run.m[1] > 0 or run.reached  # EMDM leaves the singularity at once
+
+
+def test_one_definition_of_scaled_and_stalled():
+    """``Run.scaled`` and ``Run.stalled_from`` are what metrics, the report and the playground read:
+    task2 C-IVKC stalls from the state after which its error stays within STALL_BAND of the end."""
+    from emdm.core.tolerances import STALL_BAND, STALL_TIME
+
+    sc = emdm.load_scenario("task2")
+    run = emdm.simulate(sc, "C-IVKC")
+    k = run.stalled_from
+    assert k is not None and run.t[-1] - run.t[k] >= STALL_TIME
+    err = run.error_norm
+    assert (
+        np.all(np.abs(err[k:] - err[-1]) <= STALL_BAND) and abs(err[k - 1] - err[-1]) > STALL_BAND
+    )
+    assert emdm.metrics(run)["scaled_steps"] == int(run.scaled.sum()) == int((run.alpha < 1).sum())
+    assert emdm.simulate(sc, "C-EMDM").stalled_from is None  # it reaches the goal

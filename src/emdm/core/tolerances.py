@@ -42,3 +42,10 @@ and the playground): its command within ``AT_BOUND (1 + |bound|)`` rad/s of it."
 
 ERROR_FLOOR = 1e-9
 """Smallest ``||e||`` (m) in the slack weight ``w_S = c_S / ||e||``."""
+
+STALL_BAND = 1e-3
+"""A run that did not reach its goal has stalled from the state after which its task error stays
+within this band (m) of its final error, for at least ``STALL_TIME``."""
+
+STALL_TIME = 1.0
+"""Shortest stall (s) that counts as one."""

@@ -141,7 +141,7 @@ def _common_scaled(runs: Sequence[Run]) -> list[tuple[float, float]]:
     n = min(r.steps for r in runs)
     if n == 0:
         return []
-    mask = np.all([r.alpha[:n] < 1.0 for r in runs], axis=0)
+    mask = np.all([r.scaled[:n] for r in runs], axis=0)
     if not mask.any() or mask.mean() > 0.6:
         return []
     dt = runs[0].scenario.motion.dt

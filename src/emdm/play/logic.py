@@ -390,7 +390,7 @@ def explain(scenario: Scenario, outcome: Outcome) -> str:
             f"{_joints(joints.tolist())} passed {'its' if joints.size == 1 else 'their'} "
             f"position limit from t = {run.t[k]:.2f} s (no limits in UC programs)"
         )
-    scaled = np.flatnonzero(run.alpha < 1.0)
+    scaled = np.flatnonzero(run.scaled)
     if scaled.size and run.reached:
         notes.append(
             f"the task was scaled down (alpha < 1) on {scaled.size} of {run.steps} steps, "
@@ -408,9 +408,8 @@ def explain(scenario: Scenario, outcome: Outcome) -> str:
             f"the goal is {radius:.3g} m from the base, outside the reachable annulus "
             f"[{arm.inner_reach:.3g}, {arm.reach:.3g}] m"
         )
-    elif run.steps and run.alpha[-1] < 0.01:
-        moving = np.flatnonzero(run.alpha >= 0.01)
-        stalled = int(moving[-1]) + 1 if moving.size else 0
+    elif run.steps and run.alpha[-1] < 0.01 and run.stalled_from is not None:
+        stalled = run.stalled_from  # the record's one definition, as in the report
         sides = at_bounds(run)[-1]
         held = [_held(run, int(j), int(sides[j])) for j in np.flatnonzero(sides)]
         who = " and ".join(held) if held else "the joint bounds close every direction"

@@ -46,7 +46,7 @@ from ..core.problem import QP
 from ..core.scenario import Scenario
 from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
-from ..core.tolerances import AT_BOUND
+from ..core.tolerances import AT_BOUND, STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
 from ..errors import NoSolution
@@ -389,6 +389,24 @@ class Run:
     def steps(self) -> int:
         """Number of commands ``K`` (the final state has index ``K``)."""
         return int(self.qd.shape[0])
+
+    @property
+    def scaled(self) -> np.ndarray:
+        """Per command: whether its task was scaled (``alpha < 1``), the one definition of a
+        scaled step (metrics, explanations and figures read it)."""
+        return np.asarray(self.alpha < 1.0)
+
+    @property
+    def stalled_from(self) -> int | None:
+        """The state from which a run that missed its goal has stalled (its error stays within
+        :data:`~emdm.core.tolerances.STALL_BAND` of the final one for at least
+        :data:`~emdm.core.tolerances.STALL_TIME`), or ``None``: the one definition of a stall."""
+        if self.reached or self.steps == 0:
+            return None
+        err = self.error_norm
+        outside = np.flatnonzero(np.abs(err - err[-1]) > STALL_BAND)
+        k = int(outside[-1] + 1) if outside.size else 0
+        return k if self.t[-1] - self.t[k] >= STALL_TIME else None
 
     @property
     def error_norm(self) -> Vector:

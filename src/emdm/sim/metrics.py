@@ -137,7 +137,7 @@ def metrics(run: Run) -> dict[str, Any]:
         "min_joint_margin": float(margin.min()),
         "min_stop_margin": float((margin - sc.damper.stop).min()),
         "path_length": float(np.linalg.norm(np.diff(run.p[:, :3], axis=0), axis=1).sum()),
-        "scaled_steps": int(np.count_nonzero(run.alpha < 1.0)),
+        "scaled_steps": int(np.count_nonzero(run.scaled)),
         "min_alpha": float(run.alpha.min()) if has_cmd else 1.0,
         "slack_steps": int(np.count_nonzero(np.any(run.delta != 0.0, axis=1))),
         "max_abs_slack": float(np.abs(run.delta).max()) if has_cmd else 0.0,

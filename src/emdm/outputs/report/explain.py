@@ -26,8 +26,6 @@ from ...sim.metrics import metrics
 
 SAME = 1e-9
 """Two commands coincide when they differ by at most this (rad/s)."""
-STALL_BAND = 1e-3
-"""A run has stalled from the time after which its error stays within this band (m) of its end."""
 
 
 def _episodes(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -47,7 +45,7 @@ def _cond(J: np.ndarray) -> float:
 def scaling(run: Run) -> dict[str, Any] | None:
     """Steps whose task was scaled (``alpha < 1``): when, how long, how deep, where it hit 0."""
     a = run.alpha
-    mask = a < 1.0
+    mask = run.scaled
     if not mask.any():
         return None
     dt = run.scenario.motion.dt
@@ -111,14 +109,11 @@ def pinned(run: Run) -> list[dict[str, Any]]:
 
 def stall(run: Run) -> dict[str, Any] | None:
     """A run that stops making progress: from when, at which error, and which joint blocks it."""
-    if run.reached or run.steps == 0:
+    k = run.stalled_from  # the record's one definition of a stall
+    if k is None:
         return None
     sc = run.scenario
     err = run.error_norm
-    outside = np.flatnonzero(np.abs(err - err[-1]) > STALL_BAND)
-    k = int(outside[-1] + 1) if outside.size else 0
-    if run.t[-1] - run.t[k] < 1.0:
-        return None
     q = run.q[-1]
     upper = sc.arm.q_max - sc.damper.stop - q
     lower = q - (sc.arm.q_min + sc.damper.stop)
