@@ -29,7 +29,7 @@ import numpy as np
 from ..core.arm import Matrix, Vector
 from ..core.problem import QP
 from .active_set import independent_rows
-from .base import UNSUPPORTED_ROWS, SolverResult, infeasible
+from .base import SolverResult, infeasible
 
 
 class _Newton(NamedTuple):
@@ -45,22 +45,35 @@ class _Newton(NamedTuple):
     su: Vector
     zl: Vector
     zu: Vector
+    G: Matrix
+    r_g: Vector
+    sg: Vector
+    zg: Vector
 
 
-def _direction(nt: _Newton, rl: Vector, ru: Vector) -> tuple[Vector, Vector, Vector, Vector]:
-    """Newton direction for complementarity targets ``rl`` (lower) and ``ru`` (upper).
+def _direction(
+    nt: _Newton, rl: Vector, ru: Vector, rg: Vector
+) -> tuple[Vector, Vector, Vector, Vector, Vector, Vector]:
+    """Newton direction for complementarity targets ``rl`` (lower), ``ru`` (upper) and ``rg``
+    (rows): ``(dx, dy, dz_l, dz_u, ds_g, dz_g)``.
 
-    ``dz_l = (rl - z_l dx) / s_l`` and ``dz_u = (ru + z_u dx) / s_u`` are eliminated, leaving
-    ``(P + Z_l/S_l + Z_u/S_u) dx - A^T dy = -r_d + rl/s_l - ru/s_u`` and ``A dx = -r_p``.
+    ``dz_l = (rl - z_l dx) / s_l``, ``dz_u = (ru + z_u dx) / s_u``, ``ds_g = -r_g - G dx`` and
+    ``dz_g = (rg - z_g ds_g) / s_g`` are eliminated, leaving ``(P + Z_l/S_l + Z_u/S_u +
+    G^T (Z_g/S_g) G) dx - A^T dy = -r_d + rl/s_l - ru/s_u - G^T (rg + z_g r_g)/s_g`` and
+    ``A dx = -r_p`` (without rows the last terms vanish).
     """
     nf = int(nt.free.sum())
     rhs_x = -nt.r_d + np.where(nt.lo, rl / nt.sl, 0.0) - np.where(nt.hi, ru / nt.su, 0.0)
+    if nt.G.shape[0]:
+        rhs_x = rhs_x - nt.G.T @ ((rg + nt.zg * nt.r_g) / nt.sg)
     sol = np.linalg.solve(nt.K, np.concatenate((rhs_x[nt.free], -nt.r_p)))
     dx = np.zeros(nt.free.size)
     dx[nt.free] = sol[:nf]
     dzl = np.where(nt.lo, (rl - nt.zl * dx) / nt.sl, 0.0)
     dzu = np.where(nt.hi, (ru + nt.zu * dx) / nt.su, 0.0)
-    return dx, sol[nf:], dzl, dzu
+    dsg = -nt.r_g - nt.G @ dx
+    dzg = (rg - nt.zg * dsg) / nt.sg
+    return dx, sol[nf:], dzl, dzu, dsg, dzg
 
 
 def solve_interior_point(
@@ -68,8 +81,6 @@ def solve_interior_point(
 ) -> SolverResult:
     """Solve ``qp`` by Mehrotra's predictor-corrector interior-point method."""
     start = time.perf_counter()
-    if qp.n_rows:  # this method is written for bounds only: it declines rather than ignore rows
-        return SolverResult(None, UNSUPPORTED_ROWS, 0, time.perf_counter() - start)
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
     P, c = qp.P, qp.c
@@ -90,7 +101,10 @@ def solve_interior_point(
     lo_act, hi_act = has_lo & ~fixed, has_hi & ~fixed
     y = np.zeros(m)
     zl, zu = lo_act.astype(float), hi_act.astype(float)
-    n_c = max(int(lo_act.sum() + hi_act.sum()), 1)
+    G, h, ng = qp.G, qp.h, qp.n_rows
+    sg, zg = np.maximum(h - G @ x, 1.0), np.ones(ng)  # the rows' slacks s_g = h - G x > 0
+    all_g = np.ones(ng, dtype=bool)
+    n_c = max(int(lo_act.sum() + hi_act.sum()) + ng, 1)
     scale_b = 1.0 + float(np.abs(b).max())
     scale_c = 1.0 + float(np.abs(c).max()) + float(np.abs(P).max())
     trace: list[dict[str, float]] = []
@@ -105,10 +119,15 @@ def solve_interior_point(
     for iteration in range(1, max_iter + 1):
         sl, su = slacks(x)
         r_d = P @ x + c - A.T @ y - zl + zu
+        if ng:
+            r_d = r_d + G.T @ zg
         r_d[fixed] = 0.0
         r_p = A @ x - b
-        mu = float((sl * zl)[lo_act].sum() + (su * zu)[hi_act].sum()) / n_c
+        r_g = G @ x + sg - h
+        mu = float((sl * zl)[lo_act].sum() + (su * zu)[hi_act].sum() + (sg * zg).sum()) / n_c
         res_p, res_d = float(np.abs(r_p).max()) / scale_b, float(np.abs(r_d).max()) / scale_c
+        if ng:
+            res_p = max(res_p, float(np.abs(r_g).max()) / (1.0 + float(np.abs(h).max())))
         if history:
             trace.append(
                 {
@@ -129,34 +148,42 @@ def solve_interior_point(
         nf = int(free_mask.sum())
         K = np.zeros((nf + m, nf + m))
         K[:nf, :nf] = P[np.ix_(free_mask, free_mask)] + np.diag((d_l + d_u)[free_mask])
+        if ng:
+            Gf = G[:, free_mask]
+            K[:nf, :nf] += Gf.T @ ((zg / sg)[:, None] * Gf)
         K[:nf, nf:] = -A[:, free_mask].T
         K[nf:, :nf] = A[:, free_mask]
-        newton = _Newton(K, free_mask, r_d, r_p, lo_act, hi_act, sl, su, zl, zu)
+        newton = _Newton(K, free_mask, r_d, r_p, lo_act, hi_act, sl, su, zl, zu, G, r_g, sg, zg)
 
         try:
-            dx, dy, dzl, dzu = _direction(newton, -sl * zl, -su * zu)
-            a_p = min(max_step(sl, dx, lo_act), max_step(su, -dx, hi_act))
-            a_d = min(max_step(zl, dzl, lo_act), max_step(zu, dzu, hi_act))
+            dx, dy, dzl, dzu, dsg, dzg = _direction(newton, -sl * zl, -su * zu, -sg * zg)
+            a_p = min(max_step(sl, dx, lo_act), max_step(su, -dx, hi_act), max_step(sg, dsg, all_g))
+            a_d = min(
+                max_step(zl, dzl, lo_act), max_step(zu, dzu, hi_act), max_step(zg, dzg, all_g)
+            )
             a = min(a_p, a_d)
             mu_aff = (
                 float(
                     ((sl + a * dx) * (zl + a * dzl))[lo_act].sum()
                     + ((su - a * dx) * (zu + a * dzu))[hi_act].sum()
+                    + ((sg + a * dsg) * (zg + a * dzg)).sum()
                 )
                 / n_c
             )
             sigma = (mu_aff / mu) ** 3 if mu > 0 else 0.0
             rl = -sl * zl + sigma * mu - dx * dzl
             ru = -su * zu + sigma * mu + dx * dzu
-            dx, dy, dzl, dzu = _direction(newton, rl, ru)
+            rg = -sg * zg + sigma * mu - dsg * dzg
+            dx, dy, dzl, dzu, dsg, dzg = _direction(newton, rl, ru, rg)
         except np.linalg.LinAlgError as exc:
             return SolverResult(
                 x, f"error: {exc}", iteration, time.perf_counter() - start, tuple(trace)
             )
-        a_p = min(max_step(sl, dx, lo_act), max_step(su, -dx, hi_act))
-        a_d = min(max_step(zl, dzl, lo_act), max_step(zu, dzu, hi_act))
+        a_p = min(max_step(sl, dx, lo_act), max_step(su, -dx, hi_act), max_step(sg, dsg, all_g))
+        a_d = min(max_step(zl, dzl, lo_act), max_step(zu, dzu, hi_act), max_step(zg, dzg, all_g))
         a = min(1.0, 0.995 * min(a_p, a_d))
         if not np.all(np.isfinite(dx)):
             return SolverResult(x, "error: non-finite step", iteration, time.perf_counter() - start)
         x, y, zl, zu = x + a * dx, y + a * dy, zl + a * dzl, zu + a * dzu
+        sg, zg = sg + a * dsg, zg + a * dzg
     return SolverResult(x, "max_iter", max_iter, time.perf_counter() - start, tuple(trace))
