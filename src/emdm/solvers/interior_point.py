@@ -1,13 +1,15 @@
 """A primal-dual interior-point method (Mehrotra predictor-corrector) for the per-step programs.
 
-Program: ``min 1/2 x^T P x + c^T x`` s.t. ``A x = b``, ``x_j >= lb_j`` (finite ``lb_j``),
-``x_j <= ub_j`` (finite ``ub_j``). With slacks ``s_l = x - lb``, ``s_u = ub - x`` and multipliers
-``y`` (equalities), ``z_l, z_u >= 0`` (bounds), the perturbed KKT conditions are
+Program: ``min 1/2 x^T P x + c^T x`` s.t. ``A x = b``, ``G x <= h``, ``x_j >= lb_j`` (finite
+``lb_j``), ``x_j <= ub_j`` (finite ``ub_j``). With slacks ``s_l = x - lb``, ``s_u = ub - x``,
+``s_g`` (rows, kept as variables: ``G x + s_g = h`` is a residual like ``A x = b``) and multipliers
+``y`` (equalities), ``z_l, z_u, z_g >= 0``, the perturbed KKT conditions are
 
-    P x + c - A^T y - z_l + z_u = 0,   A x = b,   s_l z_l = sigma mu,   s_u z_u = sigma mu.
+    P x + c - A^T y - z_l + z_u + G^T z_g = 0,   A x = b,   G x + s_g = h,
+    s_l z_l = sigma mu,   s_u z_u = sigma mu,   s_g z_g = sigma mu.
 
-Each iteration eliminates ``dz`` and solves one symmetric system in ``(dx, dy)``:
-``(P + Z_l/S_l + Z_u/S_u) dx - A^T dy = rhs``, ``A dx = -(A x - b)``. Mehrotra's predictor
+Each iteration eliminates ``dz`` and ``ds_g`` and solves one symmetric system in ``(dx, dy)``:
+``(P + Z_l/S_l + Z_u/S_u + G^T (Z_g/S_g) G) dx - A^T dy = rhs``, ``A dx = -(A x - b)``. Mehrotra's predictor
 (``sigma = 0``) sets ``sigma = (mu_aff / mu)^3``; the corrector adds the second-order term
 ``ds_aff dz_aff``. Steps keep 0.995 of the distance to the boundary. The start is infeasible
 (box centres), so no phase 1 is needed. Stops when the relative primal and dual residuals and
