@@ -257,9 +257,15 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
                     "(dt >= gain * (influence - stop) lets the damper overshoot)",
                     problem=qp,
                 )
+            limits = "the joint bounds"
+            if qp.n_rows and np.any(qp.h < 0):  # a plane damper asks to move away
+                limits = (
+                    f"the joint bounds and {qp.n_rows} plane damper row(s), one of them asking to "
+                    "move away from a plane whose stop distance the end effector has crossed"
+                )
             raise NoSolution(
                 f"{where}the program is infeasible even with the task scaled to zero "
-                "(the joint bounds exclude every motion that keeps the task direction)",
+                f"({limits} exclude every motion that keeps the task direction)",
                 problem=qp,
             )
         return Admissible(qp.with_rhs(alpha * qp.b), alpha, "scale")
