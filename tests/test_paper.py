@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import zlib
 
 import pytest
 
@@ -26,8 +27,18 @@ def _page_size(pdf):
         info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
         w, h = re.search(r"Page size:\s+([0-9.]+) x ([0-9.]+) pts", info).groups()
         return float(w), float(h)
-    box = re.search(rb"/MediaBox\s*\[\s*0 0 ([0-9.]+) ([0-9.]+)\s*\]", pdf.read_bytes())
-    return float(box.group(1)), float(box.group(2))
+    data = pdf.read_bytes()  # without pdfinfo: the MediaBox, also inside compressed streams
+    texts = [data]
+    for stream in re.finditer(rb"stream\r?\n(.*?)\r?\nendstream", data, re.S):
+        try:
+            texts.append(zlib.decompress(stream.group(1)))
+        except zlib.error:
+            continue
+    for text in texts:
+        box = re.search(rb"/MediaBox\s*\[\s*0 0 ([0-9.]+) ([0-9.]+)\s*\]", text)
+        if box:
+            return float(box.group(1)), float(box.group(2))
+    raise AssertionError(f"{pdf}: no MediaBox found")
 
 
 @pytest.mark.parametrize("name", ["paper", "pitch"])
