@@ -89,9 +89,12 @@ def test_controllers_are_lists_of_terms(name):
     ctrl = get_controller(name)
     kinds = [t.kind for t in ctrl.terms]
     assert kinds[0] is TermKind.TASK and TermKind.EFFORT in kinds
-    assert ctrl.constrained == (name.startswith("C-") or name == "MMC")
+    assert ctrl.constrained == (name.startswith("C-") or name in ("MMC", "NEO"))
     assert ctrl.constrained == ctrl.has(TermKind.DAMPER)
-    assert ctrl.has(TermKind.MANIPULABILITY) == (name.endswith("EMDM") or name in ("PARK", "MMC"))
+    assert ctrl.has(TermKind.MANIPULABILITY) == (
+        name.endswith("EMDM") or name in ("PARK", "MMC", "NEO")
+    )
+    assert ctrl.has(TermKind.OBSTACLE) == (name.startswith("C-") or name == "NEO")
 
 
 def test_slack_follows_the_arm():

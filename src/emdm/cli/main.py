@@ -565,7 +565,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 def cmd_list(args: argparse.Namespace) -> int:
     print("controllers: " + ", ".join(CONTROLLERS))
-    print("baselines (manipulability benchmark): " + ", ".join(BASELINES))
+    print("baselines (manipulability benchmark; NEO: MMC with obstacles): " + ", ".join(BASELINES))
     print("presets:     " + ", ".join(PRESETS))
     print("solvers:")
     for spec in registered_solvers().values():

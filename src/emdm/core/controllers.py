@@ -36,11 +36,13 @@ import numpy as np
 
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
+from .distance import AXIS, POINT, chain_points_of
 from .feasibility import task_scale
 from .kernels import task_kinematics_of
 from .limits import Bounds
 from .problem import QP
-from .scenario import Scenario, Weights
+from .scenario import Scenario
+from .sections import Weights
 from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, build_program
 from .terms.damper import joint_bounds as _joint_bounds
 from .tolerances import ERROR_FLOOR
@@ -107,6 +109,8 @@ class Controller:
                 continue
             if term.kind is TermKind.PLANE and not scenario.planes.count:
                 continue
+            if term.kind is TermKind.OBSTACLE and not scenario.obstacles:
+                continue
             kinds.add(term.kind)
             codes.append(CODE[term.kind])
             values.append(weight)
@@ -119,8 +123,15 @@ class Controller:
             np.array(start, dtype=np.int64),
             np.array(data, dtype=float),
             slack,
-            scenario.planes.count if TermKind.PLANE in kinds else 0,
+            (scenario.planes.count if TermKind.PLANE in kinds else 0)
+            + (2 * (scenario.n + 1) * len(scenario.obstacles) if TermKind.OBSTACLE in kinds else 0),
         )
+
+    def blind(self) -> Controller:
+        """This controller without its obstacle rows (``"<name> blind"``): what it does when it
+        does not see the obstacles, for comparisons."""
+        terms = tuple(t for t in self.terms if t.kind is not TermKind.OBSTACLE)
+        return Controller(f"{self.name} blind", terms)
 
 
 _TASK = Term(TermKind.TASK)
@@ -130,9 +141,15 @@ _MANIP = Term(TermKind.MANIPULABILITY, "manipulability")
 _CENTRING = Term(TermKind.CENTRING, "centring", optional=True)
 _SLACK = Term(TermKind.SLACK, "slack", When.NON_REDUNDANT)
 _SLACK_ALWAYS = Term(TermKind.SLACK, "slack")
-_JOINTS = (Term(TermKind.VELOCITY_BOX), Term(TermKind.DAMPER), Term(TermKind.PLANE))
-"""What the constrained controllers add: the joint limits, and the planes of a scenario that has
-some (the unconstrained ones ignore planes as they ignore joint limits)."""
+_JOINTS = (
+    Term(TermKind.VELOCITY_BOX),
+    Term(TermKind.DAMPER),
+    Term(TermKind.PLANE),
+    Term(TermKind.OBSTACLE),
+)
+"""What the constrained controllers add: the joint limits, and the planes and obstacles of a
+scenario that has some (the unconstrained ones ignore them as they ignore joint limits). The
+obstacle rows come last: their tightening reads the joint bounds."""
 
 
 class Name(StrEnum):
@@ -145,6 +162,7 @@ class Name(StrEnum):
     RRMC = "RRMC"
     PARK = "PARK"
     MMC = "MMC"
+    NEO = "NEO"
 
 
 CONTROLLERS: dict[str, Controller] = {
@@ -159,7 +177,8 @@ CONTROLLERS: dict[str, Controller] = {
 BASELINES: dict[str, Controller] = {
     Name.RRMC: Controller(Name.RRMC, (_TASK, _EFFORT)),
     Name.PARK: Controller(Name.PARK, (_TASK, _EFFORT_W, _MANIP)),
-    Name.MMC: Controller(Name.MMC, (_TASK, _EFFORT_W, _MANIP, _SLACK_ALWAYS, *_JOINTS)),
+    Name.MMC: Controller(Name.MMC, (_TASK, _EFFORT_W, _MANIP, _SLACK_ALWAYS, *_JOINTS[:3])),
+    Name.NEO: Controller(Name.NEO, (_TASK, _EFFORT_W, _MANIP, _SLACK_ALWAYS, *_JOINTS)),
 }
 """The controllers of the manipulability benchmark besides the brief's four (module docstring)."""
 
@@ -195,10 +214,17 @@ def step_program(
     error_norm: float,
     *,
     weights: Weights | None = None,
+    t: float = 0.0,
 ) -> QP:
-    """The program of ``controller`` at configuration ``q`` for the desired velocity ``v``."""
+    """The program of ``controller`` at configuration ``q`` and time ``t`` (s; where obstacles
+    move) for the desired velocity ``v``."""
     data = controller.program_data(scenario, weights)
     n, nt = scenario.n, scenario.nt
+    pts, axes = np.zeros((n + 2, POINT)), np.zeros((n, AXIS))
+    if scenario.obstacles:
+        chain_points_of(
+            scenario.arm_data.lengths, scenario.geometry, np.asarray(q, dtype=float), pts, axes
+        )
     nx = n + nt if data.slack else n
     out = ProgramOut(
         np.empty((nx, nx)),
@@ -217,6 +243,9 @@ def step_program(
         np.asarray(v, dtype=float),
         float(error_norm),
         np.ascontiguousarray(kin.p, dtype=float),
+        float(t),
+        pts,
+        axes,
     )
     rows = build_program(data, state, out)
     return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])

@@ -23,8 +23,22 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
+from .distance import pack as pack_obstacles
 from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry
+from .obstacles import Obstacle, check_damper, check_start, pack_rows, parse_obstacles
+from .obstacles import distances as obstacle_distances
 from .robot import Robot
+from .sections import (
+    ArmSpec,
+    ControllerSettings,
+    Damper,
+    Motion,
+    ObstacleDamper,
+    Planes,
+    SlackBounds,
+    Task,
+    Weights,
+)
 from .serial import SerialArm
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 from .validation import (
@@ -40,14 +54,6 @@ PLANAR_PRESETS = ("task1", "task2")
 SPATIAL_PRESETS = ("panda", "ur5")
 """Spatial arms: Franka Emika Panda (modified DH) and Universal Robots UR5 (standard DH)."""
 PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS
-
-
-class Task(StrEnum):
-    """What the controller tracks: the planar tip, or a spatial arm's position or pose."""
-
-    PLANAR = "planar"  # 2 rows: tip position in the plane
-    POSITION = "position"  # 3 rows: end-effector position
-    POSE = "pose"  # 6 rows: position and orientation (rotation vector of R_goal R^T)
 
 
 TASK_ROWS = {Task.PLANAR: 2, Task.POSITION: 3, Task.POSE: 6}
@@ -115,95 +121,13 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "stop": _Key("number", 0.02),
         "gain": _Key("number", 1.0),
     },
+    "obstacle_damper": {
+        "influence": _Key("number", 0.15),
+        "stop": _Key("number", 0.03),
+        "gain": _Key("number", 1.0),
+        "link_radius": _Key("number", 0.0),
+    },
 }
-
-
-# ---------------------------------------------------------------------------------- sections
-@dataclass(frozen=True, eq=False)
-class ArmSpec:
-    """The arm: planar link ``lengths`` (m), or spatial DH rows ``dh`` (``[a, alpha, d, offset]``;
-    m, rad) with their ``convention`` and the ``tool`` translation (m); joint limits ``q_min,
-    q_max`` (rad) and velocity limits (rad/s), per joint."""
-
-    lengths: Vector | None
-    dh: Vector | None
-    convention: str
-    tool: Vector
-    q_min: Vector
-    q_max: Vector
-    qd_min: Vector
-    qd_max: Vector
-
-
-@dataclass(frozen=True, eq=False)
-class Motion:
-    """Start ``q0`` (rad), the ``task`` and its goal (m; a pose's orientation as a rotation vector,
-    rad), the manipulability's Jacobian rows ``axes``, sampling time ``dt`` (s), gain ``kp`` (1/s,
-    diagonal), stop rules."""
-
-    q0: Vector
-    task: Task
-    axes: str
-    goal: Vector
-    dt: float
-    kp: Vector
-    tolerance: float
-    max_time: float
-
-
-@dataclass(frozen=True)
-class Weights:
-    """``w_E`` (effort), ``w_M`` (manipulability rate), ``c_S`` (slack: ``w_S = c_S / ||e||``) and
-    ``w_C`` (joint centring, 0: off; :mod:`emdm.core.terms.centring`)."""
-
-    effort: float
-    manipulability: float
-    slack: float
-    centring: float = 0.0
-
-
-@dataclass(frozen=True, eq=False)
-class SlackBounds:
-    """``delta_min <= delta <= delta_max`` (m/s) for the non-redundant slack program."""
-
-    min: Vector
-    max: Vector
-
-
-@dataclass(frozen=True, eq=False)
-class Damper:
-    """Joint-position damper (mathematics.md eq. 11), per joint: influence ``i`` and stop ``s``
-    (rad), gain."""
-
-    influence: Vector
-    stop: Vector
-    gain: Vector
-
-
-@dataclass(frozen=True, eq=False)
-class Planes:
-    """Planes the end effector keeps away from (the ``plane`` term): unit ``normals`` (one row per
-    plane, pointing to the free side) and ``offsets`` (m), so that the distance of the tip ``p`` is
-    ``d = n . p - offset``; the velocity damper keeps ``d`` above ``stop`` from within
-    ``influence`` (m), with ``gain`` (1/s)."""
-
-    normals: Vector
-    offsets: Vector
-    influence: float
-    stop: float
-    gain: float
-
-    @property
-    def count(self) -> int:
-        """Number of planes."""
-        return int(self.offsets.size)
-
-
-@dataclass(frozen=True)
-class ControllerSettings:
-    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (docs/mathematics.md)."""
-
-    on_infeasible: Policy
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,14 +142,37 @@ class Scenario:
     damper: Damper
     controller: ControllerSettings
     planes: Planes
+    obstacle_damper: ObstacleDamper
     source: str = "<python>"
     warnings: tuple[str, ...] = field(default=())
+    obstacles: tuple[Obstacle, ...] = field(default=())
+    """The ``[[obstacles]]`` (:mod:`emdm.core.obstacles`)."""
+
+    @cached_property
+    def obstacle_data(self) -> list[float]:
+        """The obstacles and their damper packed for the kernels (:mod:`emdm.core.distance`;
+        empty without obstacles)."""
+        if not self.obstacles:
+            return []
+        od = self.obstacle_damper
+        return pack_obstacles(
+            *pack_rows(self.obstacles),
+            influence=od.influence,
+            stop=od.stop,
+            gain=od.gain,
+            link_radius=od.link_radius,
+            dt=self.motion.dt,
+        )
 
     def plane_distances(self, q: Vector) -> Vector:
         """``d_i = n_i . p - offset_i`` (m): the end effector's distance to each plane at ``q``."""
         q = np.asarray(q, dtype=float)
         p = self.robot.position(q)
         return np.asarray(self.planes.normals @ p - self.planes.offsets, dtype=float)
+
+    def obstacle_distances(self, q: Vector, t: float = 0.0) -> Vector:
+        """``D[i, o]`` (m): link ``i``'s distance to obstacle ``o`` at ``q`` and time ``t`` (s)."""
+        return obstacle_distances(self, q, t)
 
     @property
     def n(self) -> int:
@@ -331,8 +278,10 @@ class Scenario:
         """The scenario as plain data (the TOML layout), every per-joint value written out."""
         out: dict[str, Any] = {"name": self.name}
         for section in SCHEMA:
-            if section == "planes" and not self.planes.count:
-                continue  # no planes: the file stays as it was before planes existed
+            if (section == "planes" and not self.planes.count) or (
+                section == "obstacle_damper" and not self.obstacles
+            ):
+                continue  # none: the file stays as it was before planes and obstacles existed
             obj = getattr(self, section)
             out[section] = {
                 key: _plain(getattr(obj, key))
@@ -347,6 +296,8 @@ class Scenario:
                     value = out[section].get(key)
                     if spec.kind == "task" and spec.scalar_ok and len(set(value)) == 1:
                         out[section][key] = value[0]
+        if self.obstacles:
+            out["obstacles"] = [o.to_dict() for o in self.obstacles]
         return out
 
     def to_toml(self) -> str:
@@ -354,6 +305,11 @@ class Scenario:
         lines = [f"name = {_toml_value(self.name)}"]
         for section, values in self.to_dict().items():
             if section == "name":
+                continue
+            if section == "obstacles":
+                for table in values:
+                    lines.append("\n[[obstacles]]")
+                    lines.extend(f"{key} = {_toml_value(v)}" for key, v in table.items())
                 continue
             lines.append(f"\n[{section}]")
             lines.extend(f"{key} = {_toml_value(value)}" for key, value in values.items())
@@ -433,6 +389,7 @@ _SECTION_TYPES: dict[str, Callable[..., Any]] = {
     "damper": Damper,
     "controller": ControllerSettings,
     "planes": Planes,
+    "obstacle_damper": ObstacleDamper,
 }
 
 
@@ -462,6 +419,8 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
         if key == "name":
             if not isinstance(value, str) or not value:
                 raise check.fail("name", f"must be a non-empty string, got {_show(value)}")
+        elif key == "obstacles":
+            continue  # a list of tables, read below
         elif key not in SCHEMA:
             raise check.fail(_name(key), f"unknown section (known: name, {', '.join(SCHEMA)})")
         elif not isinstance(value, Mapping):
@@ -558,17 +517,21 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
     name = data.get("name") or Path(source).stem or "scenario"
     sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
-    scenario = Scenario(name=str(name), source=source, warnings=tuple(warnings_found), **sections)
-    if scenario.planes.count:
-        d = scenario.plane_distances(scenario.motion.q0)
-        inside = np.flatnonzero(~(d > scenario.planes.stop))
-        if inside.size:
-            i = int(inside[0])
-            raise check.fail(
-                f"planes.offsets[{i}]",
-                f"the end effector starts {d[i]:g} m from plane {i + 1}, within its stop distance "
-                f"({scenario.planes.stop:g} m), which the plane damper forbids",
-            )
+    obstacles = (
+        parse_obstacles(check, data["obstacles"], 3 if spatial else 2)
+        if "obstacles" in data
+        else ()
+    )
+    if obstacles:
+        check_damper(check, parsed["obstacle_damper"], parsed["motion"]["dt"])
+    scenario = Scenario(
+        name=str(name),
+        source=source,
+        warnings=tuple(warnings_found),
+        obstacles=obstacles,
+        **sections,
+    )
+    check_start(check, scenario)
     return scenario
 
 

@@ -112,6 +112,10 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "planes.influence": (0.0, 1e6, " m"),
     "planes.stop": (0.0, 1e6, " m"),
     "planes.gain": (0.0, 1e6, " 1/s"),
+    "obstacle_damper.influence": (0.0, 1e6, " m"),
+    "obstacle_damper.stop": (0.0, 1e6, " m"),
+    "obstacle_damper.gain": (0.0, 1e6, " m/s"),
+    "obstacle_damper.link_radius": (0.0, 1e6, " m"),
 }
 """Where each value means something (beyond them: overflowing numbers, or a meaningless run)."""
 MAX_STEPS = 1e12

@@ -59,9 +59,17 @@ def run_share(
     nt = goals.shape[1]
     nx = nt + n if prog.slack else n
     rec = new_record(motion.n_steps, n, nt)
-    work = step_work(n, nx, nt, prog.rows)
+    work = step_work(n, nx, nt, prog.rows, int(motion.obstacles[5]) if motion.obstacles.size else 0)
     for r in range(first, runs, stride):
-        task = Motion(goals[r], motion.kp, motion.dt, motion.tolerance, motion.n_steps, motion.task)
+        task = Motion(
+            goals[r],
+            motion.kp,
+            motion.dt,
+            motion.tolerance,
+            motion.n_steps,
+            motion.task,
+            motion.obstacles,
+        )
         for j in range(n):
             rec.q[0, j] = q0s[r, j]
         code, k = run_kernel(arm, geo, task, prog, True, True, rec, 0, work)

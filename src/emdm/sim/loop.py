@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
 from ..core.controllers import Controller, Name, admissible, get_controller, slack_weight
+from ..core.distance import AXIS, POINT, chain_points, link_distances
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
@@ -82,6 +83,8 @@ class Motion(NamedTuple):
     tolerance: float
     n_steps: int
     task: int
+    obstacles: F64
+    """The scenario's obstacles, packed (:mod:`emdm.core.distance`; empty without them)."""
 
 
 class Record(NamedTuple):
@@ -106,6 +109,7 @@ class Record(NamedTuple):
     excess: F64
     rows: NDArray[np.int64]
     rows_active: NDArray[np.int64]
+    clearance: F64
 
 
 class StepWork(NamedTuple):
@@ -128,6 +132,10 @@ class StepWork(NamedTuple):
     x: F64
     res: F64
     rows: NDArray[np.int64]
+    pts: F64
+    axes: F64
+    dist: F64
+    scratch: F64
 
 
 @kernel
@@ -153,13 +161,14 @@ def new_record(cap: int, n: int, nt: int) -> Record:
         np.empty(cap),
         np.zeros(cap, dtype=np.int64),
         np.zeros(cap, dtype=np.int64),
+        np.full(cap + 1, np.inf),
     )
 
 
 @kernel
-def step_work(n: int, nx: int, nt: int, ng: int) -> StepWork:
+def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
     """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables, ``nt``
-    task rows and ``ng`` inequality rows."""
+    task rows and ``ng`` inequality rows, among ``no`` obstacles."""
     return StepWork(
         kin_work(n),
         spatial_work(n if nt != 2 else 0),
@@ -177,6 +186,10 @@ def step_work(n: int, nx: int, nt: int, ng: int) -> StepWork:
         np.empty(nx),
         np.empty(4),
         np.zeros(1, dtype=np.int64),
+        np.zeros((n + 2, POINT)),
+        np.zeros((n, AXIS)),
+        np.zeros((n + 1, no)),
+        np.zeros((4, 3)),
     )
 
 
@@ -248,6 +261,10 @@ def run_kernel(
                 w.sp,
             )
         rec.m[k] = m
+        t = k * motion.dt
+        if motion.obstacles.size:
+            chain_points(geo, rec.p[k], w.kin, w.sp, w.pts, w.axes)
+            rec.clearance[k] = link_distances(motion.obstacles, t, w.pts, w.dist, w.scratch)
         err2 = 0.0
         for i in range(nt):
             rec.v[k, i] = motion.kp[i] * rec.e[k, i]
@@ -259,7 +276,9 @@ def run_kernel(
             return TIMEOUT, k
         if k == cap:
             return FULL, k
-        ng = build_program(prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k]), out)
+        ng = build_program(
+            prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes), out
+        )
         G, h = w.G[:ng], w.h[:ng]
         w.rows[0] = ng
         for j in range(n):
@@ -379,6 +398,9 @@ class Run:
     """Per command: how many inequality rows the program had (plane dampers within reach)."""
     rows_active: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     """Per command: how many of them the command holds with equality (the record's "at a bound")."""
+    clearance: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Per state: the smallest distance (m) of any link to any obstacle (``inf`` without
+    obstacles; recorded whether or not the controller sees them)."""
     solver: list[str] = field(default_factory=list)
     status: list[str] = field(default_factory=list)
     attempts: list[str] = field(default_factory=list)
@@ -429,19 +451,20 @@ def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
         float(mo.tolerance),
         scenario.max_steps,
         scenario.task_code,
+        np.array(scenario.obstacle_data, dtype=float),
     )
 
 
 _local = threading.local()
 
 
-def _work(n: int, nx: int, nt: int, ng: int = 0) -> StepWork:
-    """This thread's step buffers for the shape ``(n, nx, nt, ng)``, built once (they hold no
+def _work(n: int, nx: int, nt: int, ng: int = 0, no: int = 0) -> StepWork:
+    """This thread's step buffers for the shape ``(n, nx, nt, ng, no)``, built once (they hold no
     result)."""
-    cache: dict[tuple[int, int, int, int], StepWork] = _local.__dict__.setdefault("work", {})
-    if (n, nx, nt, ng) not in cache:
-        cache[n, nx, nt, ng] = step_work(n, nx, nt, ng)
-    return cache[n, nx, nt, ng]
+    cache: dict[tuple[int, ...], StepWork] = _local.__dict__.setdefault("work", {})
+    if (n, nx, nt, ng, no) not in cache:
+        cache[n, nx, nt, ng, no] = step_work(n, nx, nt, ng, no)
+    return cache[n, nx, nt, ng, no]
 
 
 def _grow(rec: Record, cap: int, n: int) -> Record:
@@ -503,7 +526,7 @@ def simulate(
     cap = min(motion.n_steps, FIRST_CHUNK)
     rec = plain(new_record)(cap, n, nt)
     rec.q[0] = scenario.motion.q0
-    work = _work(n, nx, nt, prog.rows)
+    work = _work(n, nx, nt, prog.rows, len(scenario.obstacles))
     steps = _Steps()
     k = 0
     while True:
@@ -619,6 +642,7 @@ def _run(
         fallback=fallback,
         rows=rec.rows[:K],
         rows_active=rec.rows_active[:K],
+        clearance=rec.clearance[: K + 1],
         solver=steps.column(steps.solver, DEFAULT_SOLVER, K),
         status=steps.column(steps.status, "optimal", K),
         attempts=steps.column(steps.attempts, f"{DEFAULT_SOLVER}: optimal", K),
@@ -644,7 +668,7 @@ def _warm_up() -> None:
             nx = sc.n + sc.nt if prog.slack else sc.n
             rec = new_record(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
-            work = step_work(sc.n, nx, sc.nt, 0)
+            work = step_work(sc.n, nx, sc.nt, 0, 0)
             run_kernel(sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
 
 

@@ -23,7 +23,17 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..scenario import Scenario
-from . import centring, damper, effort, manipulability, plane, slack, task, velocity_box
+from . import (
+    centring,
+    damper,
+    effort,
+    manipulability,
+    obstacle,
+    plane,
+    slack,
+    task,
+    velocity_box,
+)
 from .base import CODE, ProgramOut, StepInput, TermKind
 from .program import ProgramData, build_program
 
@@ -36,6 +46,7 @@ PACK: dict[TermKind, Callable[[Scenario], list[float]]] = {
     TermKind.DAMPER: damper.pack,
     TermKind.CENTRING: centring.pack,
     TermKind.PLANE: plane.pack,
+    TermKind.OBSTACLE: obstacle.pack,
 }
 """Each term's numbers from the scenario, as its writer reads them (``data``)."""
 

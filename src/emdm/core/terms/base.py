@@ -27,8 +27,10 @@ F64 = NDArray[np.float64]
 class StepInput(NamedTuple):
     """The state a term reads: joint angles ``q`` (rad), the task Jacobian ``J`` (nt x n), the
     manipulability Jacobian ``Jm`` (n), the desired task velocity ``v`` (nt; m/s, rad/s for a
-    pose's rotation), the task error's norm ``error_norm`` (m) and the task's value ``p`` (its first
-    entries are the end effector's position, m)."""
+    pose's rotation), the task error's norm ``error_norm`` (m), the task's value ``p`` (its first
+    entries are the end effector's position, m), the time ``t`` (s), and the arm as points and
+    joint axes ``pts``, ``axes`` (:mod:`emdm.core.distance`; filled only in a scenario with
+    obstacles)."""
 
     q: F64
     J: F64
@@ -36,6 +38,9 @@ class StepInput(NamedTuple):
     v: F64
     error_norm: float
     p: F64
+    t: float
+    pts: F64
+    axes: F64
 
 
 class ProgramOut(NamedTuple):
@@ -63,9 +68,10 @@ class TermKind(StrEnum):
     DAMPER = "damper"
     CENTRING = "centring"
     PLANE = "plane"
+    OBSTACLE = "obstacle"
 
 
 # the compiled dispatch reads these integers (numba freezes module-level ints as constants)
-TASK, EFFORT, MANIPULABILITY, SLACK, VELOCITY_BOX, DAMPER, CENTRING, PLANE = range(8)
+TASK, EFFORT, MANIPULABILITY, SLACK, VELOCITY_BOX, DAMPER, CENTRING, PLANE, OBSTACLE = range(9)
 CODE: dict[TermKind, int] = {kind: code for code, kind in enumerate(TermKind)}
 """The integer of each term in :class:`ProgramData` (the order of :class:`TermKind`)."""

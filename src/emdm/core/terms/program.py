@@ -16,13 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..jit import kernel
-from . import centring, damper, effort, manipulability, plane, slack, task, velocity_box
+from . import centring, damper, effort, manipulability, obstacle, plane, slack, task, velocity_box
 from .base import (
     CENTRING,
     DAMPER,
     EFFORT,
     F64,
     MANIPULABILITY,
+    OBSTACLE,
     PLANE,
     SLACK,
     TASK,
@@ -80,4 +81,6 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
             centring.write(weight, data, s.q, out.c)
         elif code == PLANE:
             rows = plane.write(data, s.p, s.J, out.G, out.h, rows)
+        elif code == OBSTACLE:
+            rows = obstacle.write(data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, rows)
     return rows

@@ -1,0 +1,147 @@
+"""Obstacle dampers (constraint): no link enters the stop distance of an obstacle, in discrete time.
+
+For a link ``[E_0, E_1]`` within reach of an obstacle, with closest points ``x*`` (link) and ``w*``
+(obstacle) and ``n = (x* - w*) / ||x* - w*||``, the obstacle lies in the half-space
+``n . (y - w*) <= 0`` and every point of the link in ``n . (y - w*) >= ||x* - w*||``. The term
+writes one row per endpoint ``E`` of the link, with its half-space distance
+``d_E = n . (E - w*) - r - link_radius`` (>= the link's distance ``d``):
+
+    -n^T J_E qd <= gain (d_E - stop) / (influence - stop) - n . v_obs - c_E,
+
+NEO's velocity damper (Haviland and Corke, 2021) written at the endpoints, tightened by ``c_E``,
+a bound on the second-order motion of ``E`` over one step at the speeds the joint bounds allow.
+Where ``c_E`` would exceed the damper's own allowance (close to the stop distance), the joints
+that move ``E`` are slowed by ``sqrt(allowance / c_E)`` instead (``c_E`` scales with their speed
+squared), so that standing still stays admissible. After the Euler step both endpoints stay at
+least ``stop`` into the half-space, hence the whole link, whatever the curvature of the distance
+(docs/mathematics.md, "Obstacles"); a controller without joint bounds (unbounded speeds) gets the
+rows untightened. Data: the packed obstacles of
+:mod:`emdm.core.distance`. Reads the program's ``lb, ub``, so it comes after the velocity box and
+the joint dampers in a controller.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..distance import HEADER, STRIDE, closest_points, obstacle_at
+from ..jit import kernel
+from ..scenario import Scenario
+from .base import F64
+
+
+@kernel
+def _reach(pts: F64, axes: F64, lb: F64, ub: F64, dt: float) -> None:
+    """Per point ``k``: ``pts[k, 3] = c_k`` (m/s), the tightening, and ``pts[k, 4]`` (m), how far
+    the point can move in one step.
+
+    With ``u_j = max(|lb_j|, |ub_j|)`` and ``D_m`` the length of the polyline from joint ``m``'s
+    axis point to ``pts[k]`` (a bound on their distance whatever ``q``), the second derivatives
+    of the point obey ``|d2 E / dq_j dq_l| <= D_max(j,l)``, so over a step ``Delta = dt qd`` the
+    remainder of the linear prediction is at most ``1/2 dt^2 sum_jl u_j u_l D_max(j,l) = dt c_k``.
+    """
+    n = axes.shape[0]
+    for k in range(pts.shape[0]):
+        joints = min(k, n)
+        total = 0.0
+        finite = True
+        for j in range(joints):
+            u = max(abs(lb[j]), abs(ub[j]))
+            finite = finite and u < math.inf
+            total += u
+        if not finite:
+            pts[k, 3], pts[k, 4] = 0.0, math.inf
+            continue
+        # backwards over the joints: D_m from the polyline's lengths, S_m = sum_{j <= m} u_j
+        c, first = 0.0, 0.0
+        length, at = 0.0, k
+        above = total
+        for m in range(joints - 1, -1, -1):
+            stop_at = int(axes[m, 6])
+            while at > stop_at:
+                length += math.sqrt(
+                    (pts[at, 0] - pts[at - 1, 0]) ** 2
+                    + (pts[at, 1] - pts[at - 1, 1]) ** 2
+                    + (pts[at, 2] - pts[at - 1, 2]) ** 2
+                )
+                at -= 1
+            u = max(abs(lb[m]), abs(ub[m]))
+            below = above - u
+            c += length * (above * above - below * below)
+            first += length * u
+            above = below
+        pts[k, 3] = 0.5 * dt * c
+        pts[k, 4] = dt * (first + 0.5 * dt * c)
+
+
+@kernel
+def write(
+    data: F64, t: float, pts: F64, axes: F64, lb: F64, ub: F64, G: F64, h: F64, rows: int
+) -> int:
+    """Rows of ``G x <= h`` at ``G[rows:]`` for every link and obstacle within reach (module
+    notes); returns the new row count (the task slack's columns of a row are 0).
+
+    A pair is within reach when the link is closer than ``influence`` or could come within
+    ``stop`` in one step (:func:`_reach`, plus the obstacle's own motion)."""
+    influence, stop, gain, lrad, dt = data[0], data[1], data[2], data[3], data[4]
+    _reach(pts, axes, lb, ub, dt)
+    n = axes.shape[0]
+    nx = G.shape[1]
+    scratch = np.empty((4, 3))
+    A, B, x, y = scratch[0], scratch[1], scratch[2], scratch[3]
+    for o in range(int(data[5])):
+        at = HEADER + o * STRIDE
+        r = obstacle_at(data, o, t, A, B)
+        vx, vy, vz = data[at + 7], data[at + 8], data[at + 9]
+        drift = dt * math.sqrt(vx * vx + vy * vy + vz * vz)
+        for i in range(pts.shape[0] - 1):
+            span = closest_points(pts[i], pts[i + 1], A, B, x, y)
+            d = span - r - lrad
+            reach = max(pts[i, 4], pts[i + 1, 4]) + drift
+            if (d >= influence and d - stop >= reach) or span == 0.0:
+                continue
+            nx_, ny_, nz_ = (x[0] - y[0]) / span, (x[1] - y[1]) / span, (x[2] - y[2]) / span
+            approach = nx_ * vx + ny_ * vy + nz_ * vz
+            for e in (i, i + 1):
+                if e == 0:
+                    continue  # the base never moves
+                if e == i + 1 and pts[e, 0] == pts[i, 0] and pts[e, 1] == pts[i, 1]:
+                    if pts[e, 2] == pts[i, 2]:
+                        continue  # a link of length 0: one point, one row
+                d_e = (
+                    (nx_ * (pts[e, 0] - y[0]) + ny_ * (pts[e, 1] - y[1]) + nz_ * (pts[e, 2] - y[2]))
+                    - r
+                    - lrad
+                )
+                for j in range(min(e, n)):
+                    ax, ay, az = axes[j, 3], axes[j, 4], axes[j, 5]
+                    rx, ry, rz = (
+                        pts[e, 0] - axes[j, 0],
+                        pts[e, 1] - axes[j, 1],
+                        pts[e, 2] - axes[j, 2],
+                    )
+                    G[rows, j] = -(
+                        nx_ * (ay * rz - az * ry)
+                        + ny_ * (az * rx - ax * rz)
+                        + nz_ * (ax * ry - ay * rx)
+                    )
+                for j in range(min(e, n), nx):
+                    G[rows, j] = 0.0
+                damp = gain * (d_e - stop) / (influence - stop)
+                c_e = pts[e, 3]
+                if c_e > damp >= 0.0:  # the worst second-order motion exceeds the damper's
+                    scale = math.sqrt(damp / c_e)  # allowance: slow the joints that move E
+                    for j in range(min(e, n)):  # (the tightening scales with speed squared)
+                        lb[j] *= scale
+                        ub[j] *= scale
+                    c_e = damp
+                h[rows] = damp - approach - c_e
+                rows += 1
+    return rows
+
+
+def pack(scenario: Scenario) -> list[float]:
+    """The packed obstacle data of :mod:`emdm.core.distance` (empty without obstacles)."""
+    return scenario.obstacle_data
