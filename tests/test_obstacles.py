@@ -346,3 +346,50 @@ def test_without_the_tightening_a_panda_link_can_cross_the_stop_distance():
             if res.status == 0:
                 worst = min(worst, sc.obstacle_distances(q + sc.motion.dt * res.x).min())
     assert worst < sc0.obstacle_damper.stop
+
+
+@pytest.mark.parametrize("preset", ["obstacle", "panda-obstacles"])
+def test_presets_c_emdm_goes_around_where_the_blind_collide_and_c_ivkc_stalls(preset):
+    """The evidence runs of docs/mathematics.md, "Obstacles": the straight path is blocked."""
+    sc = load_scenario(preset)
+    stop = sc.obstacle_damper.stop
+    around, neo = simulate(sc, "C-EMDM"), simulate(sc, "NEO")
+    stalled = simulate(sc, "C-IVKC")
+    blind = simulate(sc, get_controller("C-EMDM").blind())
+    assert around.reached and around.clearance.min() >= stop
+    assert neo.reached and neo.clearance.min() >= stop
+    assert not stalled.reached and stalled.clearance.min() >= stop
+    assert stalled.stalled_from is not None
+    assert blind.reached and blind.clearance.min() < stop
+    assert np.all(around.kkt <= KKT_TOL) and np.all(stalled.kkt <= KKT_TOL)
+
+
+def test_clearance_objective_is_the_gradient_of_the_nearness_potential():
+    """The ``clearance`` term adds ``w_O grad(V)`` to ``c``, V = 1/2 sum ((d_i - d)/(d_i - d_s))^2
+    over the pairs within influence: against finite differences of V from the distances."""
+    sc = load_scenario("obstacle")
+    od = sc.obstacle_damper
+    rng = np.random.default_rng(5)
+
+    def potential(q):
+        D = sc.obstacle_distances(q)
+        near = np.minimum(D, od.influence)
+        return 0.5 * np.sum(((od.influence - near) / (od.influence - od.stop)) ** 2)
+
+    ctrl = get_controller("C-EMDM")
+    w = 2.0
+    with_term = sc.with_overrides({"weights.clearance": w})
+    checked = 0
+    states = simulate(sc, "C-IVKC").q  # it stalls against the obstacle: states near it
+    for k in rng.choice(len(states), 60, replace=False):
+        q = states[k]
+        if sc.obstacle_distances(q).min() <= od.stop or potential(q) == 0.0:
+            continue
+        c_on = program_at(ctrl, with_term, q).qp.c[: sc.n]
+        c_off = program_at(ctrl, sc, q).qp.c[: sc.n]
+        grad = np.array(
+            [(potential(q + 1e-6 * u) - potential(q - 1e-6 * u)) / 2e-6 for u in np.eye(sc.n)]
+        )
+        np.testing.assert_allclose(c_on - c_off, w * grad, atol=1e-6)
+        checked += 1
+    assert checked >= 10

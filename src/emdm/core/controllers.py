@@ -54,6 +54,7 @@ class When(StrEnum):
 
     ALWAYS = "always"
     NON_REDUNDANT = "non-redundant"
+    NON_REDUNDANT_OR_OBSTACLES = "non-redundant or obstacles"
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,8 @@ class Controller:
 
     def applies(self, term: Term, scenario: Scenario) -> bool:
         """Whether ``term`` is part of this controller's program on ``scenario``'s arm."""
+        if term.when is When.NON_REDUNDANT_OR_OBSTACLES and scenario.obstacles:
+            return True
         return term.when is When.ALWAYS or not scenario.redundant
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
@@ -109,7 +112,7 @@ class Controller:
                 continue
             if term.kind is TermKind.PLANE and not scenario.planes.count:
                 continue
-            if term.kind is TermKind.OBSTACLE and not scenario.obstacles:
+            if term.kind in (TermKind.OBSTACLE, TermKind.CLEARANCE) and not scenario.obstacles:
                 continue
             kinds.add(term.kind)
             codes.append(CODE[term.kind])
@@ -139,8 +142,13 @@ _EFFORT = Term(TermKind.EFFORT)  # weight 1: the IVKC objective E alone
 _EFFORT_W = Term(TermKind.EFFORT, "effort")
 _MANIP = Term(TermKind.MANIPULABILITY, "manipulability")
 _CENTRING = Term(TermKind.CENTRING, "centring", optional=True)
+_CLEARANCE = Term(TermKind.CLEARANCE, "clearance", optional=True)
 _SLACK = Term(TermKind.SLACK, "slack", When.NON_REDUNDANT)
 _SLACK_ALWAYS = Term(TermKind.SLACK, "slack")
+_SLACK_AROUND = Term(TermKind.SLACK, "slack", When.NON_REDUNDANT_OR_OBSTACLES)
+"""C-EMDM's slack: the brief's on a non-redundant arm, and on every arm in a scene with
+obstacles, where a task held exactly cannot go around an obstacle (docs/mathematics.md,
+"Obstacles")."""
 _JOINTS = (
     Term(TermKind.VELOCITY_BOX),
     Term(TermKind.DAMPER),
@@ -169,7 +177,9 @@ CONTROLLERS: dict[str, Controller] = {
     Name.UC_IVKC: Controller(Name.UC_IVKC, (_TASK, _EFFORT)),
     Name.C_IVKC: Controller(Name.C_IVKC, (_TASK, _EFFORT, *_JOINTS)),
     Name.UC_EMDM: Controller(Name.UC_EMDM, (_TASK, _EFFORT_W, _MANIP, _CENTRING, _SLACK)),
-    Name.C_EMDM: Controller(Name.C_EMDM, (_TASK, _EFFORT_W, _MANIP, _CENTRING, _SLACK, *_JOINTS)),
+    Name.C_EMDM: Controller(
+        Name.C_EMDM, (_TASK, _EFFORT_W, _MANIP, _CENTRING, _CLEARANCE, _SLACK_AROUND, *_JOINTS)
+    ),
 }
 """The brief's four controllers (module docstring)."""
 

@@ -53,7 +53,9 @@ PLANAR_PRESETS = ("task1", "task2")
 """The brief's planar tasks (Tables 1 and 2)."""
 SPATIAL_PRESETS = ("panda", "ur5")
 """Spatial arms: Franka Emika Panda (modified DH) and Universal Robots UR5 (standard DH)."""
-PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS
+OBSTACLE_PRESETS = ("obstacle", "panda-obstacles")
+"""Scenes with obstacles (docs/mathematics.md, "Obstacles")."""
+PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS + OBSTACLE_PRESETS
 
 
 TASK_ROWS = {Task.PLANAR: 2, Task.POSITION: 3, Task.POSE: 6}
@@ -106,6 +108,7 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "manipulability": _Key("number", 5.0),
         "slack": _Key("number", 10.0),
         "centring": _Key("number", 0.0),
+        "clearance": _Key("number", 0.0),
     },
     "slack": {"min": _Key("task", -1.0), "max": _Key("task", 1.0)},
     "damper": {

@@ -61,6 +61,7 @@ class Weights:
     manipulability: float
     slack: float
     centring: float = 0.0
+    clearance: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)

@@ -104,6 +104,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "weights.manipulability": (0.0, 1e8, ""),
     "weights.slack": (1e-8, 1e8, ""),
     "weights.centring": (0.0, 1e8, ""),
+    "weights.clearance": (0.0, 1e8, ""),
     "slack.min": (-1e6, 1e6, " m/s"),
     "slack.max": (-1e6, 1e6, " m/s"),
     "damper.influence": (0.0, 1e6, " rad"),

@@ -123,6 +123,7 @@ class Animator:
             if arm.inner_reach > 0:
                 ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
         ax.plot(*(P @ goal), marker="*", color="black", markersize=10, linestyle="none")
+        obstacles = views.draw_obstacles(ax, P, animated=views.moving)
         ax.set_xlim(*(P @ self.box)[0])
         ax.set_ylim(*(P @ self.box)[1])
         ax.set_aspect("equal")
@@ -181,6 +182,7 @@ class Animator:
             "text": text if v == 0 else None,
             "run": run,
             "P": P,
+            "obstacles": obstacles if views.moving else [],
         }
 
     @property
@@ -211,12 +213,18 @@ class Animator:
             art["ellipse"].set_xy(ellipse_points(J, P @ path[kk], self.scale))
             names = ["trace", "ellipse", "links"]
             if art["text"] is not None:
+                clear = run.clearance[kk] if run.clearance.size else np.inf
                 art["text"].set_text(
                     f"t = {run.t[kk]:5.2f} s\nm = {run.m[kk]:.4f}\n"
                     f"|e| = {run.error_norm[kk]:.3f} {unit}"
+                    + (f"\nclearance = {clear:.3f} m" if np.isfinite(clear) else "")
                 )
                 names.append("text")
             ax = art["ax"]
+            if art["obstacles"]:
+                views.move_obstacles(art["obstacles"], P, float(run.t[kk]))
+                for patch in art["obstacles"]:
+                    ax.draw_artist(patch)
             for name in names:
                 ax.draw_artist(art[name])
         self.canvas.blit(self.fig.bbox)

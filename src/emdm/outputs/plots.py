@@ -40,6 +40,7 @@ class Quantity(StrEnum):
     ERROR = "error"
     ALPHA = "alpha"
     SLACK = "slack"
+    CLEARANCE = "clearance"
 
 
 class Joints(StrEnum):
@@ -56,6 +57,7 @@ LABELS = {
     Quantity.ERROR: "tracking error ||e|| (m)",
     Quantity.ALPHA: "task scale alpha",
     Quantity.SLACK: "task slack ||delta|| (m/s)",
+    Quantity.CLEARANCE: "clearance to obstacles (m)",
 }
 """The y-axis label of each quantity."""
 
@@ -85,6 +87,8 @@ def series_figure(runs: Sequence[Run], quantity: Quantity, stem: Path) -> Path:
             style = _style(run, i)
             if quantity is Quantity.MANIPULABILITY:
                 ax.plot(run.t, run.m, **style)
+            elif quantity is Quantity.CLEARANCE:
+                ax.plot(run.t, run.clearance, **style)
             elif quantity is Quantity.ERROR:
                 ax.semilogy(run.t, np.maximum(run.error_norm, 1e-6), **style)
             else:
@@ -107,6 +111,10 @@ def series_figure(runs: Sequence[Run], quantity: Quantity, stem: Path) -> Path:
             )
         if quantity is Quantity.ALPHA:
             ax.set_ylim(-0.05, 1.05)
+        if quantity is Quantity.CLEARANCE:
+            od = runs[0].scenario.obstacle_damper
+            for value, text, dash in ((od.stop, "stop", "-"), (od.influence, "influence", ":")):
+                ax.axhline(value, color="grey", linestyle=dash, linewidth=0.8, label=text)
         ax.set_xlabel("time t (s)")
         label = LABELS[quantity]
         if runs[0].e.shape[1] == 6:  # a pose: the error and slack rows mix metres and radians
@@ -175,6 +183,7 @@ def spatial_path_figure(runs: Sequence[Run], stem: Path) -> Path:
                 path = views.position(run) @ P.T
                 ax.plot(path[:, 0], path[:, 1], **_style(run, i))
             pts = start @ P.T
+            views.draw_obstacles(ax, P)
             ax.fill(*ellipse_points(P @ J, P @ start[-1], scale).T, color="grey", alpha=0.2)
             ax.plot(
                 pts[:, 0],
@@ -216,6 +225,7 @@ def path_figure(runs: Sequence[Run], stem: Path) -> Path:
         )
         if arm.inner_reach > 0:
             ax.add_patch(Circle((0, 0), arm.inner_reach, color="white", linewidth=0))
+        Views(sc).draw_obstacles(ax, np.eye(2))
         for i, run in enumerate(runs):
             ax.plot(run.p[:, 0], run.p[:, 1], **_style(run, i))
         start = arm.joint_positions(sc.motion.q0)
@@ -261,6 +271,8 @@ def run_figures(runs: dict[str, Run], out: Path) -> list[Path]:
             if quantity is Quantity.SLACK and not any(np.any(r.delta != 0) for r in chosen):
                 continue
             if quantity is Quantity.ALPHA and all(np.all(r.alpha == 1.0) for r in chosen):
+                continue
+            if quantity is Quantity.CLEARANCE and not chosen[0].scenario.obstacles:
                 continue
             stems.append(series_figure(chosen, quantity, folder / quantity))
         stems.append(joints_figure(chosen, Joints.VELOCITIES, folder / "joint_velocities"))

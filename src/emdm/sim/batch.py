@@ -82,6 +82,7 @@ def run_share(
                 rec.qd,
                 rec.e,
                 rec.q,
+                rec.clearance,
                 arm.q_min,
                 arm.q_max,
                 k,
@@ -151,12 +152,18 @@ class BatchResult:
     max_abs_qd: F64
     final_manipulability: F64
     min_joint_margin: F64
+    min_clearance: F64
+    """The smallest distance of any link to any obstacle over each run (m; ``inf`` without
+    obstacles, and then left out of :meth:`outcomes`)."""
     reference_runs: NDArray[np.int64]
     stopped_runs: NDArray[np.int64]
 
     def outcomes(self) -> dict[str, np.ndarray]:
-        """The outcome arrays by name (everything but ``reference_runs``)."""
-        skip = ("reference_runs", "stopped_runs")
+        """The outcome arrays by name (everything but the run lists, and ``min_clearance`` in a
+        scene without obstacles)."""
+        skip = ["reference_runs", "stopped_runs"]
+        if np.all(np.isinf(self.min_clearance)):
+            skip.append("min_clearance")  # no obstacles
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name not in skip}
 
     def __len__(self) -> int:

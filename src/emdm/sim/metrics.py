@@ -31,6 +31,7 @@ OUTCOMES = (
     "max_abs_qd",
     "final_manipulability",
     "min_joint_margin",
+    "min_clearance",
 )
 """The outcomes :func:`outcomes` writes, in order."""
 
@@ -42,6 +43,7 @@ def outcomes(
     qd: F64,
     e: F64,
     q: F64,
+    clearance: F64,
     q_min: F64,
     q_max: F64,
     K: int,
@@ -49,12 +51,14 @@ def outcomes(
     dt: float,
     out: F64,
 ) -> None:
-    """``out[:10]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
+    """``out[:11]`` = the :data:`OUTCOMES` of states ``0..K`` and commands ``0..K-1``.
 
     ``time_to_goal = K dt`` (NaN when not reached); ``total_effort = sum_k E(qd_k) dt``
     (rad^2/s); ``final_error = ||e_K||`` (m; and rad for a pose); manipulability over the states
     ``0..K``, and at state ``K``; ``min_joint_margin``: the smallest distance of any joint to
-    its position limits over the states ``0..K`` (rad; negative where a joint left them).
+    its position limits over the states ``0..K`` (rad; negative where a joint left them);
+    ``min_clearance``: the smallest distance of any link to any obstacle over the states (m;
+    ``inf`` without obstacles).
     """
     mmin, msum = math.inf, 0.0
     for k in range(K + 1):
@@ -86,6 +90,10 @@ def outcomes(
         for j in range(q.shape[1]):
             margin = min(margin, q[k, j] - q_min[j], q_max[j] - q[k, j])
     out[9] = margin
+    least = math.inf
+    for k in range(K + 1):
+        least = min(least, clearance[k])
+    out[10] = least
 
 
 def run_outcomes(run: Run, out: F64) -> None:
@@ -97,6 +105,7 @@ def run_outcomes(run: Run, out: F64) -> None:
         run.qd,
         run.e,
         run.q,
+        run.clearance,
         arm.q_min,
         arm.q_max,
         run.steps,
@@ -120,6 +129,8 @@ def metrics(run: Run) -> dict[str, Any]:
     out = np.empty(len(OUTCOMES))
     run_outcomes(run, out)
     base = dict(zip(OUTCOMES, out.tolist(), strict=True))
+    if not sc.obstacles:
+        del base["min_clearance"]  # no obstacles: nothing to measure
     margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
     has_cmd = K > 0
     return {

@@ -25,6 +25,7 @@ from collections.abc import Callable
 from ..scenario import Scenario
 from . import (
     centring,
+    clearance,
     damper,
     effort,
     manipulability,
@@ -47,6 +48,7 @@ PACK: dict[TermKind, Callable[[Scenario], list[float]]] = {
     TermKind.CENTRING: centring.pack,
     TermKind.PLANE: plane.pack,
     TermKind.OBSTACLE: obstacle.pack,
+    TermKind.CLEARANCE: clearance.pack,
 }
 """Each term's numbers from the scenario, as its writer reads them (``data``)."""
 

@@ -69,9 +69,21 @@ class TermKind(StrEnum):
     CENTRING = "centring"
     PLANE = "plane"
     OBSTACLE = "obstacle"
+    CLEARANCE = "clearance"
 
 
 # the compiled dispatch reads these integers (numba freezes module-level ints as constants)
-TASK, EFFORT, MANIPULABILITY, SLACK, VELOCITY_BOX, DAMPER, CENTRING, PLANE, OBSTACLE = range(9)
+(
+    TASK,
+    EFFORT,
+    MANIPULABILITY,
+    SLACK,
+    VELOCITY_BOX,
+    DAMPER,
+    CENTRING,
+    PLANE,
+    OBSTACLE,
+    CLEARANCE,
+) = range(10)
 CODE: dict[TermKind, int] = {kind: code for code, kind in enumerate(TermKind)}
 """The integer of each term in :class:`ProgramData` (the order of :class:`TermKind`)."""

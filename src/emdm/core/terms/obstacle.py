@@ -10,12 +10,14 @@ writes one row per endpoint ``E`` of the link, with its half-space distance
 
 NEO's velocity damper (Haviland and Corke, 2021) written at the endpoints, tightened by ``c_E``,
 a bound on the second-order motion of ``E`` over one step at the speeds the joint bounds allow.
-Where ``c_E`` would exceed the damper's own allowance (close to the stop distance), the joints
-that move ``E`` are slowed by ``sqrt(allowance / c_E)`` instead (``c_E`` scales with their speed
-squared), so that standing still stays admissible. After the Euler step both endpoints stay at
-least ``stop`` into the half-space, hence the whole link, whatever the curvature of the distance
-(docs/mathematics.md, "Obstacles"); a controller without joint bounds (unbounded speeds) gets the
-rows untightened. Data: the packed obstacles of
+Where ``c_E`` would take more than half the damper's own allowance (close to the stop
+distance), the joints that move ``E`` are slowed by ``sqrt(allowance / (2 c_E))`` instead
+(``c_E`` scales with their speed squared), down to :data:`SLOWEST`: the row keeps half its
+allowance, and only within ``c_E (influence - stop) / (8 gain)`` of the stop distance asks the
+link to move away.
+After the Euler step both endpoints stay at least ``stop`` into the half-space, hence the whole
+link, whatever the curvature of the distance (docs/mathematics.md, "Obstacles"); a controller
+without joint bounds (unbounded speeds) gets the rows untightened. Data: the packed obstacles of
 :mod:`emdm.core.distance`. Reads the program's ``lb, ub``, so it comes after the velocity box and
 the joint dampers in a controller.
 """
@@ -30,6 +32,11 @@ from ..distance import HEADER, STRIDE, closest_points, obstacle_at
 from ..jit import kernel
 from ..scenario import Scenario
 from .base import F64
+
+SLOWEST = 0.25
+"""The obstacle rows slow a joint to no less than this fraction of its bound: below it, a row
+asks the link to move away instead (the arm hovers just outside the stop distance rather than
+freezing there)."""
 
 
 @kernel
@@ -91,6 +98,9 @@ def write(
     nx = G.shape[1]
     scratch = np.empty((4, 3))
     A, B, x, y = scratch[0], scratch[1], scratch[2], scratch[3]
+    box = np.empty((2, n))  # the joint bounds before any row slowed a joint
+    for j in range(n):
+        box[0, j], box[1, j] = lb[j], ub[j]
     for o in range(int(data[5])):
         at = HEADER + o * STRIDE
         r = obstacle_at(data, o, t, A, B)
@@ -131,12 +141,14 @@ def write(
                     G[rows, j] = 0.0
                 damp = gain * (d_e - stop) / (influence - stop)
                 c_e = pts[e, 3]
-                if c_e > damp >= 0.0:  # the worst second-order motion exceeds the damper's
-                    scale = math.sqrt(damp / c_e)  # allowance: slow the joints that move E
-                    for j in range(min(e, n)):  # (the tightening scales with speed squared)
-                        lb[j] *= scale
-                        ub[j] *= scale
-                    c_e = damp
+                if c_e > 0.5 * damp:  # the worst second-order motion takes more than half
+                    # the damper's allowance: slow the joints that move E (c_E scales with
+                    # their speed squared) until it takes half, but not below SLOWEST
+                    scale = max(SLOWEST, math.sqrt(max(0.5 * damp, 0.0) / c_e))
+                    for j in range(min(e, n)):  # the smallest scale any row asks of joint j
+                        lb[j] = max(lb[j], scale * box[0, j])
+                        ub[j] = min(ub[j], scale * box[1, j])
+                    c_e *= scale * scale
                 h[rows] = damp - approach - c_e
                 rows += 1
     return rows

@@ -16,9 +16,21 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..jit import kernel
-from . import centring, damper, effort, manipulability, obstacle, plane, slack, task, velocity_box
+from . import (
+    centring,
+    clearance,
+    damper,
+    effort,
+    manipulability,
+    obstacle,
+    plane,
+    slack,
+    task,
+    velocity_box,
+)
 from .base import (
     CENTRING,
+    CLEARANCE,
     DAMPER,
     EFFORT,
     F64,
@@ -83,4 +95,6 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
             rows = plane.write(data, s.p, s.J, out.G, out.h, rows)
         elif code == OBSTACLE:
             rows = obstacle.write(data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, rows)
+        elif code == CLEARANCE:
+            clearance.write(weight, data, s.t, s.pts, s.axes, out.c)
     return rows

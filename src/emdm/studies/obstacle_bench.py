@@ -1,0 +1,178 @@
+"""Obstacles measured: the cost of the obstacle rows per step and in batch, and random scenes.
+
+:func:`obstacle_speed` times ``emdm.simulate`` on the obstacle presets with more obstacles drawn
+around them (5 circles on task1's arm, 10 spheres on the Panda) and a batch of runs;
+:func:`random_scenes` is the benchmark of docs/mathematics.md, "Obstacles": seeded random scenes
+for C-EMDM and NEO against the same controllers blind to the obstacles.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Any
+
+import numpy as np
+
+from ..core.controllers import Controller, get_controller
+from ..core.scenario import Scenario, load_scenario, scenario_from_dict
+from ..errors import NoSolution, ScenarioError
+from ..sim.batch import simulate_batch
+from ..sim.loop import simulate
+
+
+def scene(
+    preset: str, count: int, rng: np.random.Generator, radius: tuple[float, float]
+) -> Scenario:
+    """``preset`` with obstacles added until it has ``count`` (:func:`scene_from`)."""
+    base = load_scenario(preset)
+    return scene_from(base.to_dict(), base, count, rng, radius)
+
+
+def _time(function: Any, repeats: int) -> float:
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        function()
+        out.append(time.perf_counter() - t0)
+    return statistics.median(out)
+
+
+def obstacle_speed(*, repeats: int = 20, batch_runs: int = 2000) -> dict[str, Any]:
+    """us/step of C-EMDM through ``emdm.simulate`` with 5 circles (task1's arm) and 10 spheres
+    (Panda), and planar batch steps/s with the obstacle preset's circle."""
+    rng = np.random.default_rng(0)
+    ctrl = get_controller("C-EMDM")
+    out: dict[str, Any] = {}
+    for key, preset, count, radius in (
+        ("planar_5_circles", "obstacle", 5, (0.03, 0.08)),
+        ("panda_10_spheres", "panda-obstacles", 10, (0.02, 0.05)),
+    ):
+        sc = scene(preset, count, rng, radius)
+        run = simulate(sc, ctrl)
+        seconds = _time(lambda sc=sc: simulate(sc, ctrl), repeats)
+        out[key] = {
+            "obstacles": count,
+            "steps": run.steps,
+            "reached": run.reached,
+            "rows_per_step": float(run.rows.mean()),
+            "min_clearance": float(run.clearance.min()),
+            "us_per_step": seconds / run.steps * 1e6,
+        }
+    sc = load_scenario("obstacle")
+    arm = sc.planar_arm
+    targets = rng.uniform(sc.arm.q_min + 0.8, sc.arm.q_max - 0.8, (batch_runs, sc.n))
+    goals = np.array([arm.forward(t) for t in targets])
+    simulate_batch(sc, ctrl, goals=goals[:10])
+    times, steps = [], 0
+    for _ in range(3):
+        t0 = time.perf_counter()
+        result = simulate_batch(sc, ctrl, goals=goals)
+        times.append(time.perf_counter() - t0)
+        steps = int(result.steps.sum())
+    out["batch"] = {
+        "runs": batch_runs,
+        "steps": steps,
+        "seconds": statistics.median(times),
+        "steps_per_second": steps / statistics.median(times),
+        "handed_to_the_chain": int(result.reference_runs.size),
+    }
+    return out
+
+
+def wilson(successes: int, trials: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson's 95 % interval of a proportion."""
+    if trials == 0:
+        return (float("nan"), float("nan"))
+    p = successes / trials
+    centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
+    half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / (1 + z * z / trials)
+    return float(centre - half), float(centre + half)
+
+
+def random_scenes(
+    preset: str, scenes: int, count: int, radius: tuple[float, float], seed: int = 0
+) -> dict[str, Any]:
+    """``scenes`` seeded random scenes of ``count`` obstacles around ``preset``'s start and goal
+    (:func:`scene`, the preset's own obstacles removed): per controller (C-EMDM, NEO and both
+    blind) success (reached, never inside the stop distance), collisions (a state inside the
+    stop distance), clearance, time to goal and mean manipulability, with 95 % intervals."""
+    rng = np.random.default_rng(seed)
+    base = load_scenario(preset)
+    data = base.to_dict()
+    data.pop("obstacles", None)
+    controllers: list[Controller] = []
+    for name in ("C-EMDM", "NEO"):
+        controllers += [get_controller(name), get_controller(name).blind()]
+    rows: dict[str, list[dict[str, float]]] = {c.name: [] for c in controllers}
+    stop = base.obstacle_damper.stop
+    for _ in range(scenes):
+        sc = scene_from(data, base, count, rng, radius)
+        for ctrl in controllers:
+            try:
+                run = simulate(sc, ctrl)
+                stopped = False
+            except NoSolution as exc:
+                run, stopped = exc.run, True
+            rows[ctrl.name].append(
+                {
+                    "reached": float(run.reached),
+                    "collided": float(run.clearance.min() < stop),
+                    "stopped": float(stopped),
+                    "clearance": float(run.clearance.min()),
+                    "time": float(run.t[-1]) if run.reached else float("nan"),
+                    "mean_m": float(run.m.mean()),
+                }
+            )
+    summary: dict[str, Any] = {}
+    for name, values in rows.items():
+        reached = np.array([v["reached"] for v in values])
+        collided = np.array([v["collided"] for v in values])
+        success = reached * (1 - collided)
+        times = np.array([v["time"] for v in values])
+        summary[name] = {
+            "success": float(success.mean()),
+            "success_ci": wilson(int(success.sum()), len(values)),
+            "collisions": float(collided.mean()),
+            "collisions_ci": wilson(int(collided.sum()), len(values)),
+            "stopped": float(np.mean([v["stopped"] for v in values])),
+            "min_clearance_median": float(np.median([v["clearance"] for v in values])),
+            "time_to_goal_median": float(np.nanmedian(times)) if np.any(success) else float("nan"),
+            "mean_manipulability": float(np.mean([v["mean_m"] for v in values])),
+        }
+    return {
+        "preset": preset,
+        "scenes": scenes,
+        "obstacles": count,
+        "radius": radius,
+        "seed": seed,
+        "controllers": summary,
+    }
+
+
+def scene_from(
+    data: dict[str, Any],
+    base: Scenario,
+    count: int,
+    rng: np.random.Generator,
+    radius: tuple[float, float],
+) -> Scenario:
+    """``data`` (a scenario's TOML layout) with obstacles added until it has ``count``: circles
+    (spheres in 3-D) of a radius uniform in ``radius`` (m), centres uniform in the box of the
+    arm's reach (above the base plane in 3-D), none within the stop distance of the start
+    (redrawn until so)."""
+    dim = base.robot.dim
+    shape = "circle" if dim == 2 else "sphere"
+    reach = base.reach
+    obstacles: list[dict[str, Any]] = list(data.get("obstacles", []))
+    while len(obstacles) < count:
+        centre = rng.uniform(-reach, reach, dim)
+        if dim == 3:
+            centre[2] = abs(centre[2])
+        new = {"shape": shape, "center": centre.tolist(), "radius": float(rng.uniform(*radius))}
+        try:
+            scenario_from_dict({**data, "obstacles": [*obstacles, new]})
+        except ScenarioError:
+            continue
+        obstacles.append(new)
+    return scenario_from_dict({**data, "obstacles": obstacles})
