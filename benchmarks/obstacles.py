@@ -39,7 +39,8 @@ def table(speed: dict, studies: list[dict]) -> str:
         lines += [
             f"Random scenes on `{st['preset']}` ({st['scenes']} scenes, {st['obstacles']} "
             f"obstacles each, radius uniform in {st['radius'][0]}-{st['radius'][1]} m, "
-            f"centres uniform in the reach box, seed {st['seed']}; success = reached and "
+            f"centres uniform along the straight path of the end effector plus an offset uniform "
+            f"within 0.3 of its length, seed {st['seed']}; success = reached and "
             "never inside the stop distance):",
             "",
             "| controller | success | 95 % CI | collisions | 95 % CI | stopped | "

@@ -393,3 +393,17 @@ def test_clearance_objective_is_the_gradient_of_the_nearness_potential():
         np.testing.assert_allclose(c_on - c_off, w * grad, atol=1e-6)
         checked += 1
     assert checked >= 10
+
+
+def test_random_scenes_are_seeded_and_valid():
+    from emdm.studies.obstacle_bench import random_scenes, scene, wilson
+
+    lo, hi = wilson(74, 100)
+    assert 0.64 < lo < 0.66 and 0.81 < hi < 0.83  # Wilson's interval of 74/100
+    rng = np.random.default_rng(4)
+    sc = scene("obstacle", 4, rng, (0.03, 0.05))
+    assert len(sc.obstacles) == 4 and sc.obstacle_distances(sc.motion.q0).min() > 0.03
+    first = random_scenes("obstacle", 2, 2, (0.03, 0.05), seed=7)
+    assert first == random_scenes("obstacle", 2, 2, (0.03, 0.05), seed=7)
+    assert set(first["controllers"]) == {"C-EMDM", "C-EMDM blind", "NEO", "NEO blind"}
+    assert first["controllers"]["C-EMDM"]["collisions"] == 0.0

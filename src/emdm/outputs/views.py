@@ -55,6 +55,9 @@ class Views:
         points = [self.joints(q) for run in runs for q in run.q[:: max(1, run.steps // 20)]]
         points += [self.position(run) for run in runs]
         points.append(np.asarray(sc.motion.goal[:3])[None, :])
+        for ob in sc.obstacles:  # every obstacle whole, at its start
+            for end in (ob.a, ob.b):
+                points.append(np.stack((end - ob.radius, end + ob.radius)))
         stacked = np.vstack(points)
         lo, hi = stacked.min(axis=0), stacked.max(axis=0)
         margin = 0.12 * float((hi - lo).max())

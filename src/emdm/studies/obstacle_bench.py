@@ -20,6 +20,10 @@ from ..errors import NoSolution, ScenarioError
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
 
+SPREAD = 0.3
+"""Obstacles of the random scenes lie within this fraction of the path's length of the straight
+path of the end effector."""
+
 
 def scene(
     preset: str, count: int, rng: np.random.Generator, radius: tuple[float, float]
@@ -158,17 +162,18 @@ def scene_from(
     radius: tuple[float, float],
 ) -> Scenario:
     """``data`` (a scenario's TOML layout) with obstacles added until it has ``count``: circles
-    (spheres in 3-D) of a radius uniform in ``radius`` (m), centres uniform in the box of the
-    arm's reach (above the base plane in 3-D), none within the stop distance of the start
-    (redrawn until so)."""
+    (spheres in 3-D) of a radius uniform in ``radius`` (m), centres at a point uniform along the
+    straight path of the end effector from its start to the goal, plus an offset uniform in the
+    cube of half-width :data:`SPREAD` times the path's length, none within the stop distance of
+    the start (redrawn until so)."""
     dim = base.robot.dim
     shape = "circle" if dim == 2 else "sphere"
-    reach = base.reach
+    start = base.robot.position(base.motion.q0)[:dim]
+    goal = np.asarray(base.motion.goal[:dim])
+    spread = SPREAD * float(np.linalg.norm(goal - start))
     obstacles: list[dict[str, Any]] = list(data.get("obstacles", []))
     while len(obstacles) < count:
-        centre = rng.uniform(-reach, reach, dim)
-        if dim == 3:
-            centre[2] = abs(centre[2])
+        centre = start + rng.uniform() * (goal - start) + rng.uniform(-spread, spread, dim)
         new = {"shape": shape, "center": centre.tolist(), "radius": float(rng.uniform(*radius))}
         try:
             scenario_from_dict({**data, "obstacles": [*obstacles, new]})
