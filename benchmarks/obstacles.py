@@ -12,13 +12,13 @@ import json
 import sys
 from pathlib import Path
 
-from emdm.studies.obstacle_bench import obstacle_speed, random_scenes
+from emdm.studies.obstacle_bench import never_entered, obstacle_speed, random_scenes
 
 SCENES = {"obstacle": (400, 3, (0.03, 0.10)), "panda-obstacles": (150, 4, (0.02, 0.06))}
 """Per preset: scenes, obstacles per scene, radius range (m)."""
 
 
-def table(speed: dict, studies: list[dict]) -> str:
+def table(speed: dict, studies: list[dict], guard: dict) -> str:
     lines = ["Speed (C-EMDM through emdm.simulate, medians):", ""]
     lines += ["| scene | steps | rows per step | us/step |", "|---|---:|---:|---:|"]
     for key in ("planar_5_circles", "panda_10_spheres"):
@@ -33,6 +33,15 @@ def table(speed: dict, studies: list[dict]) -> str:
         f"Batch (preset `obstacle`, C-EMDM, {b['runs']} random reachable goals): "
         f"{b['steps']} steps in {b['seconds']:.3f} s = {b['steps_per_second']:.3g} steps/s; "
         f"{b['handed_to_the_chain']} runs finished by the solver chain.",
+        "",
+    ]
+    lines += [
+        f"Never entered (`{guard['preset']}` arm, 50 random scenes x 200 random reachable goals, "
+        f"C-EMDM through the batch loop): {guard['runs']} runs, {guard['reached']} reached; "
+        f"smallest clearance {guard['min_clearance']:.5f} m against a stop distance of "
+        f"{guard['stop']} m; {guard['runs_inside_stop']} runs ever inside it; "
+        f"{guard['runs_finished_by_the_chain']} runs finished by the solver chain, "
+        f"{guard['runs_stopped']} stopped without an admissible command.",
         "",
     ]
     for st in studies:
@@ -62,10 +71,12 @@ def main() -> int:
     here = Path(__file__).resolve().parent
     speed = obstacle_speed()
     studies = [random_scenes(p, n, k, r) for p, (n, k, r) in SCENES.items()]
+    guard = never_entered()
     (here / "obstacles.json").write_text(
-        json.dumps({"speed": speed, "scenes": studies}, indent=2) + "\n", encoding="utf-8"
+        json.dumps({"speed": speed, "scenes": studies, "never_entered": guard}, indent=2) + "\n",
+        encoding="utf-8",
     )
-    text = table(speed, studies)
+    text = table(speed, studies, guard)
     (here / "obstacles.md").write_text(text + "\n", encoding="utf-8")
     print(text)
     return 0

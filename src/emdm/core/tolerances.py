@@ -49,3 +49,8 @@ within this band (m) of its final error, for at least ``STALL_TIME``."""
 
 STALL_TIME = 1.0
 """Shortest stall (s) that counts as one."""
+
+LAZY = 0.5
+"""A row ``G_i x <= h_i`` with ``h_i >= LAZY * max_box G_i x`` (it keeps at least half its
+right-hand side against the largest value the bounds allow) is solved lazily: left out of the
+first solve and checked at its answer (``sim.loop.solve_lazily``). Dimensionless."""

@@ -47,7 +47,7 @@ from ..core.problem import QP
 from ..core.scenario import Scenario
 from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
-from ..core.tolerances import AT_BOUND, STALL_BAND, STALL_TIME
+from ..core.tolerances import AT_BOUND, LAZY, STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
 from ..errors import NoSolution
@@ -222,6 +222,61 @@ def count_active_rows(G: F64, h: F64, x: F64) -> int:
 
 
 @kernel
+def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
+    """Reorder the rows ``G[:ng] x <= h[:ng]`` so that those that may bind come first; returns
+    how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
+    against the largest ``G_i x`` the bounds allow: ``h_i >= LAZY * max_box G_i x`` and ``h_i >
+    0`` (obstacles beyond their influence distance, as a rule). The order does not change the
+    program; :func:`solve_lazily` checks the lazy rows at the answer."""
+    near = 0
+    nx = G.shape[1]
+    for i in range(ng):
+        reach = 0.0
+        for j in range(nx):
+            g = G[i, j]
+            if g > 0.0:
+                reach += g * ub[j]
+            elif g < 0.0:
+                reach += g * lb[j]
+        if h[i] > 0.0 and h[i] >= LAZY * reach:
+            continue
+        if i != near:
+            for j in range(nx):
+                G[i, j], G[near, j] = G[near, j], G[i, j]
+            h[i], h[near] = h[near], h[i]
+        near += 1
+    return near
+
+
+@kernel
+def solve_lazily(w: StepWork, near: int, ng: int) -> tuple[int, int]:
+    """The active set on the rows ``G[:near]``; when its answer breaks one of the lazy rows
+    ``G[near:ng]``, again on all of them (so the answer is the optimum of the whole program)."""
+    G, h = w.G[:near], w.h[:near]
+    code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+    if code != OK or near == ng:
+        return code, iterations
+    for i in range(near, ng):
+        if _row_excess(w.G, w.h, i, w.x) > 0.0:
+            n = w.x.size
+            for r in range(near, ng):
+                w.qp.work[n + r] = 0
+            more, again = active_set(
+                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res
+            )
+            return more, iterations + again
+    return code, iterations
+
+
+@kernel
+def _row_excess(G: F64, h: F64, i: int, x: F64) -> float:
+    acc = -h[i]
+    for j in range(x.size):
+        acc += G[i, j] * x[j]
+    return float(acc)
+
+
+@kernel
 def run_kernel(
     arm: ArmData,
     geo: Geometry,
@@ -280,6 +335,7 @@ def run_kernel(
             prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes), out
         )
         G, h = w.G[:ng], w.h[:ng]
+        near = partition_rows(w.G, w.h, w.lb, w.ub, ng) if ng > 0 else 0
         w.rows[0] = ng
         for j in range(n):
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
@@ -292,7 +348,7 @@ def run_kernel(
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+            code, iterations = solve_lazily(w, near, ng)
             if code == INFEASIBLE and ng > 0:  # the rows cut the task the bounds allow: the
                 for i in range(nt):  # exact scale under the rows too (a linear program)
                     w.b[i] = rec.v[k, i]
@@ -309,9 +365,7 @@ def run_kernel(
             start = ticks()
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
-                code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
-                )
+                code, iterations = solve_lazily(w, near, ng)
             if code == INFEASIBLE:
                 alpha = task_scale_rows(w.A, w.b, G, h, w.lb, w.ub, w.qp.feas)
                 if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
