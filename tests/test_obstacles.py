@@ -408,3 +408,40 @@ def test_random_scenes_are_seeded_and_valid():
     assert repr(first) == repr(again)  # equal, NaN medians included
     assert set(first["controllers"]) == {"C-EMDM", "C-EMDM blind", "NEO", "NEO blind"}
     assert first["controllers"]["C-EMDM"]["collisions"] == 0.0
+
+
+def test_run_folder_keeps_clearance_and_rows_and_the_command_line_says_how_each_run_fared(
+    tmp_path, capsys
+):
+    from emdm.cli import main
+    from emdm.outputs.records import read_run
+
+    out = tmp_path / "out"
+    assert (
+        main(
+            [
+                "run",
+                "obstacle",
+                "--controller",
+                "C-EMDM",
+                "--controller",
+                "C-IVKC",
+                "--controller",
+                "UC-EMDM",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    printed = capsys.readouterr().out
+    assert "C-IVKC: stalled in front of an obstacle" in printed
+    assert "UC-EMDM: link" in printed and "does not see the obstacles" in printed
+    assert "clearance[m]" in printed
+    header = (out / "trajectories" / "C-EMDM.csv").read_text().splitlines()[0]
+    assert header.endswith(",clearance")
+    for name in ("C-EMDM", "C-IVKC"):
+        back, run = read_run(out, name), simulate(load_scenario("obstacle"), name)
+        np.testing.assert_array_equal(back.clearance, run.clearance)
+        np.testing.assert_array_equal(back.rows_active, run.rows_active)
+        np.testing.assert_array_equal(back.qd, run.qd)

@@ -217,9 +217,9 @@ def test_a_scenario_file_with_planes_runs_from_the_command_line_and_reads_back(t
 def test_a_crossed_stop_distance_is_named_when_the_scaled_task_cannot_go_on():
     """Plane rows are not exact in discrete time (documented): with the goal inside the stop
     distance, C-EMDM crosses it by the Euler step's second-order term (d = 0.0196 m < 0.02 m)
-    and then stops with one line naming the plane damper, keeping the partial run."""
+    and then stops with one line naming the damper rows, keeping the partial run."""
     sc = _with_plane("task1", 0.49)
-    with pytest.raises(emdm.NoSolution, match="plane damper") as caught:
+    with pytest.raises(emdm.NoSolution, match=r"damper row\(s\) of planes") as caught:
         emdm.simulate(sc, "C-EMDM")
     run = caught.value.run
     d = min(sc.plane_distances(q)[0] for q in run.q)

@@ -22,6 +22,7 @@ def summary_table(results: dict[str, dict[str, Any]], error_unit: str = "m") -> 
     """A readable table of the main metrics, one row per controller (``error_unit``: "m", or
     "m,rad" for a pose task)."""
     rows = []
+    clearance = any("min_clearance" in mt for mt in results.values())
     for name, mt in results.items():
         ttg = mt["time_to_goal"]
         rows.append(
@@ -42,6 +43,7 @@ def summary_table(results: dict[str, dict[str, Any]], error_unit: str = "m") -> 
                 str(mt["fallback_steps"]),
                 f"{mt['max_kkt_residual']:.1e}",
             ]
+            + ([f"{mt['min_clearance']:.4f}"] if clearance else [])
         )
     header = [
         "controller",
@@ -57,7 +59,7 @@ def summary_table(results: dict[str, dict[str, Any]], error_unit: str = "m") -> 
         "scaled",
         "fallback",
         "max KKT",
-    ]
+    ] + (["clearance[m]"] if clearance else [])
     return _table(rows, header)
 
 

@@ -297,10 +297,10 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
                     problem=qp,
                 )
             limits = "the joint bounds"
-            if qp.n_rows and np.any(qp.h < 0):  # a plane damper asks to move away
+            if qp.n_rows and np.any(qp.h < 0):  # a plane or obstacle damper asks to move away
                 limits = (
-                    f"the joint bounds and {qp.n_rows} plane damper row(s), one of them asking to "
-                    "move away from a plane whose stop distance the end effector has crossed"
+                    f"the joint bounds and {qp.n_rows} damper row(s) of planes or obstacles, one "
+                    "of them asking to move away from a plane or an obstacle"
                 )
             raise NoSolution(
                 f"{where}the program is infeasible even with the task scaled to zero "

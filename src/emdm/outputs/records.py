@@ -45,9 +45,10 @@ vector (the columns of the value ``p``; the error, velocity and slack take ``e``
 ``delta_`` before them)."""
 
 
-def trajectory_header(n: int, nt: int = 2) -> list[str]:
+def trajectory_header(n: int, nt: int = 2, clearance: bool = False) -> list[str]:
     """Columns of ``trajectories/<controller>.csv`` (the README lists them) for an ``n``-joint
-    arm on an ``nt``-row task."""
+    arm on an ``nt``-row task; with ``clearance`` (a scene with obstacles) a last column, the
+    smallest distance of a link to an obstacle at each state (m)."""
     axes = TASK_AXES[nt]
     return [
         "t",
@@ -65,6 +66,7 @@ def trajectory_header(n: int, nt: int = 2) -> list[str]:
         "solver",
         "iterations",
         "solve_time",
+        *(["clearance"] if clearance else []),
     ]
 
 
@@ -88,12 +90,19 @@ def trajectory_rows(run: Run) -> Iterator[list[str]]:
             ]
         else:
             cmd, rest = [""] * n, [""] * (7 + run.e.shape[1])
+        if run.scenario.obstacles:
+            rest = [*rest, run.clearance[k]]
         yield [cell(x) for x in (*state, *cmd, *where, *rest)]
+
+
+def has_rows(scenario: Any) -> bool:
+    """Whether a scenario's programs may carry inequality rows (planes or obstacles)."""
+    return bool(scenario.planes.count or scenario.obstacles)
 
 
 def diagnostics_header(n: int, rows: bool = False) -> list[str]:
     """Columns of ``diagnostics/<controller>.csv``: how every command was obtained; with
-    ``rows`` (a scenario with planes) also how many inequality rows the program had and how many
+    ``rows`` (a scenario with planes or obstacles) also how many inequality rows the program had and how many
     the command holds with equality."""
     return [
         "step",
@@ -110,8 +119,8 @@ def diagnostics_header(n: int, rows: bool = False) -> list[str]:
 
 
 def diagnostics_rows(run: Run) -> Iterator[list[str]]:
-    """One row per command (with the rows' counts when the scenario has planes)."""
-    rows = bool(run.scenario.planes.count)
+    """One row per command (with the rows' counts when the scenario has planes or obstacles)."""
+    rows = has_rows(run.scenario)
     for k in range(run.steps):
         yield [
             cell(x)
@@ -634,9 +643,13 @@ def read_run(folder: Path, controller: str) -> Run:
         steps = int(meta["controllers"][controller]["steps"])
         reached = bool(meta["controllers"][controller]["reached"])
         where = folder / "trajectories" / f"{controller}.csv"
-        rows = _rows(where, trajectory_header(scenario.n, scenario.nt), steps + 1)
+        rows = _rows(
+            where,
+            trajectory_header(scenario.n, scenario.nt, bool(scenario.obstacles)),
+            steps + 1,
+        )
         where = folder / "diagnostics" / f"{controller}.csv"
-        diag = _rows(where, diagnostics_header(scenario.n, bool(scenario.planes.count)), steps)
+        diag = _rows(where, diagnostics_header(scenario.n, has_rows(scenario)), steps)
         where = folder / "trajectories" / f"{controller}.csv"
         return _run_from_rows(scenario, get_controller(controller), rows, diag, reached)
     except EmdmError:
@@ -708,6 +721,9 @@ def _run_from_rows(
             K
         ),
         fallback=np.array([d["fallback"] == "True" for d in diag], dtype=bool).reshape(K),
+        clearance=column("clearance").reshape(K + 1)
+        if scenario.obstacles
+        else np.full(K + 1, np.inf),
         solver=[r["solver"] for r in rows[:-1]],
         status=[r["status"] for r in rows[:-1]],
         attempts=[d["attempts"] for d in diag],
@@ -735,12 +751,12 @@ def write_run_folder(
     for name, run in runs.items():
         write_csv(
             folder / "trajectories" / f"{name}.csv",
-            trajectory_header(scenario.n, scenario.nt),
+            trajectory_header(scenario.n, scenario.nt, bool(scenario.obstacles)),
             trajectory_rows(run),
         )
         write_csv(
             folder / "diagnostics" / f"{name}.csv",
-            diagnostics_header(scenario.n, bool(scenario.planes.count)),
+            diagnostics_header(scenario.n, has_rows(scenario)),
             diagnostics_rows(run),
         )
     results = {name: metrics(run) for name, run in runs.items()}

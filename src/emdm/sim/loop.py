@@ -52,7 +52,15 @@ from ..core.validation import Policy
 from ..core.zonotope import task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
-from ..solvers.kernels import INFEASIBLE, OK, QPWork, active_set, certify, qp_work
+from ..solvers.kernels import (
+    INFEASIBLE,
+    MAX_ITER_EXCEEDED,
+    OK,
+    QPWork,
+    active_set,
+    certify,
+    qp_work,
+)
 
 F64 = NDArray[np.float64]
 
@@ -254,6 +262,8 @@ def solve_lazily(w: StepWork, near: int, ng: int) -> tuple[int, int]:
     ``G[near:ng]``, again on all of them (so the answer is the optimum of the whole program)."""
     G, h = w.G[:near], w.h[:near]
     code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+    if code == MAX_ITER_EXCEEDED and near > 0:
+        code, iterations = _unravel(w, near, iterations)
     if code != OK or near == ng:
         return code, iterations
     for i in range(near, ng):
@@ -266,6 +276,37 @@ def solve_lazily(w: StepWork, near: int, ng: int) -> tuple[int, int]:
             )
             return more, iterations + again
     return code, iterations
+
+
+@kernel
+def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
+    """After the active set cycled on a degenerate vertex (more constraints active than
+    variables, ties in its ratio tests): accept the point where it stopped if the certificate
+    (best multipliers over every active constraint) says it is the optimum; else solve the
+    program with every row loosened by a distinct amount (about 1e-9 of its size;
+    deterministic), then, from the working set found there, the program itself, whose warm
+    start accepts that working set only where it is the exact optimum."""
+    G, h = w.G[:near], w.h[:near]
+    certify(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+    if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
+        return OK, iterations  # where it stopped is the optimum: a degenerate vertex (more
+        # constraints active than variables) whose multipliers the certificate finds
+    exact = w.h[:near].copy()  # a rare path: it may allocate
+    for i in range(near):
+        w.h[i] += 1e-9 * (1.0 + abs(w.h[i])) * (1.0 + (i * 7919) % 97) / 97.0
+    code, more = active_set(
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+    )
+    for i in range(near):
+        w.h[i] = exact[i]
+    iterations += more
+    if code != OK:
+        return MAX_ITER_EXCEEDED, iterations
+    w.qp.warm[0] = True
+    code, more = active_set(
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+    )
+    return code, iterations + more
 
 
 @kernel
@@ -357,9 +398,7 @@ def run_kernel(
                     return HANDOFF, k
                 for i in range(nt):
                     w.b[i] *= alpha
-                code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
-                )
+                code, iterations = solve_lazily(w, ng, ng)
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
@@ -381,9 +420,7 @@ def run_kernel(
                     if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
                         code, iterations = OK, 0
                 if code != OK:
-                    code, iterations = active_set(
-                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
-                    )
+                    code, iterations = solve_lazily(w, ng, ng)
             scaled = alpha < 1.0
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:

@@ -122,15 +122,15 @@ def metrics(run: Run) -> dict[str, Any]:
     distance of any joint to its position limit over the run (rad); ``min_stop_margin``, the same
     minus the stop distance (negative only if a joint entered its stop zone); ``scaled_steps``, the
     steps whose task was scaled (``alpha < 1``); ``fallback_steps``, the steps a fallback solver
-    answered; the solvers used, the largest KKT residual and bound excess, and solve statistics.
+    answered; the solvers used, the largest KKT residual and bound excess, and solve statistics;
+    in a scene with obstacles ``min_clearance``, the smallest distance of a link to an obstacle
+    (m).
     """
     sc = run.scenario
     K = run.steps
     out = np.empty(len(OUTCOMES))
     run_outcomes(run, out)
     base = dict(zip(OUTCOMES, out.tolist(), strict=True))
-    if not sc.obstacles:
-        del base["min_clearance"]  # no obstacles: nothing to measure
     margin = np.minimum(run.q - sc.arm.q_min, sc.arm.q_max - run.q)
     has_cmd = K > 0
     return {
@@ -159,4 +159,4 @@ def metrics(run: Run) -> dict[str, Any]:
         "median_solve_time": float(np.median(run.solve_time)) if has_cmd else 0.0,
         "median_iterations": float(np.median(run.iterations)) if has_cmd else 0.0,
         "final_q": [float(x) for x in run.q[-1]],
-    }
+    } | ({"min_clearance": base["min_clearance"]} if sc.obstacles else {})

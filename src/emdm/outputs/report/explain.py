@@ -136,6 +136,55 @@ def stall(run: Run) -> dict[str, Any] | None:
     }
 
 
+def obstacles(run: Run) -> dict[str, Any] | None:
+    """In a scene with obstacles: the smallest clearance, when, between which link and obstacle,
+    the steps with obstacle rows active, and whether a stall happened at an obstacle (the final
+    clearance within the influence distance) rather than at a joint."""
+    sc = run.scenario
+    if not sc.obstacles:
+        return None
+    k = int(np.argmin(run.clearance))
+    D = sc.obstacle_distances(run.q[k], float(run.t[k]))
+    link, o = (int(v) for v in np.unravel_index(int(np.argmin(D)), D.shape))
+    od = sc.obstacle_damper
+    final = float(run.clearance[-1])
+    stalled = run.stalled_from is not None
+    at_obstacle = stalled and final < od.influence
+    return {
+        "min_clearance": float(run.clearance[k]),
+        "t_min": float(run.t[k]),
+        "link": link + 1,
+        "obstacle": o + 1,
+        "shape": sc.obstacles[o].shape,
+        "stop": od.stop,
+        "entered": bool(run.clearance.min() < od.stop),
+        "sees_obstacles": bool(run.rows.max(initial=0) > 0) if run.steps else False,
+        "active_row_steps": int(np.count_nonzero(run.rows_active)),
+        "stalled_at_obstacle": bool(at_obstacle),
+        "final_clearance": final,
+    }
+
+
+def obstacle_sentence(name: str, event: dict[str, Any] | None) -> str | None:
+    """One line on a run among obstacles, from :func:`obstacles` (``None`` without them)."""
+    if event is None:
+        return None
+    where = (
+        f"link {event['link']} came within {event['min_clearance']:.4f} m of obstacle "
+        f"{event['obstacle']} (a {event['shape']}) at t = {event['t_min']:.2f} s"
+    )
+    if event["entered"]:
+        return f"{name}: {where}, inside the stop distance ({event['stop']:g} m): it " + (
+            "does not see the obstacles." if not event["sees_obstacles"] else "was entered."
+        )
+    if event["stalled_at_obstacle"]:
+        return (
+            f"{name}: stalled in front of an obstacle ({where}; its rows held the task back on "
+            f"{event['active_row_steps']} steps)."
+        )
+    return f"{name}: {where}, outside the stop distance ({event['stop']:g} m)."
+
+
 def singular(run: Run) -> dict[str, Any]:
     """The smallest manipulability, when, and (two-link arm) the elbow flips through ``q2 = 0``."""
     k = int(np.argmin(run.m))
@@ -246,6 +295,7 @@ def run_events(run: Run) -> dict[str, Any]:
         "scaling": scaling(run),
         "pinned": pinned(run)[:6],
         "stall": stall(run),
+        "obstacles": obstacles(run),
         "singular": singular(run),
         "conditioning": conditioning(run),
         "effort": effort(run),
