@@ -35,8 +35,9 @@ HEADER = 6
 """Numbers before the first obstacle in the packed data."""
 STRIDE = 10
 """Numbers per obstacle in the packed data: ``A (3), B (3), radius, velocity (3)``."""
-AXIS = 7
-"""Numbers per joint in ``axes``: the axis point (3), its unit direction (3), the point's index."""
+AXIS = 9
+"""Numbers per joint in ``axes``: the axis point (3), its unit direction (3), the point's index,
+then two numbers of the obstacle term's own (the joint's bounds before its rows)."""
 POINT = 5
 """Numbers per point in ``pts``: the position (3), then two numbers of the obstacle term's own
 (its tightening and reach of the point, written by :mod:`emdm.core.terms.obstacle`)."""
@@ -87,40 +88,79 @@ def chain_points_of(lengths: F64, geo: Geometry, q: F64, pts: F64, axes: F64) ->
 
 
 @kernel
-def closest_points(P: F64, Q: F64, A: F64, B: F64, x: F64, y: F64) -> float:
-    """Closest points ``x`` on segment ``[P, Q]`` and ``y`` on ``[A, B]`` (3-D; either may be a
-    point); returns ``||x - y||``. The textbook clamped solution of the 2 x 2 normal equations
-    (Ericson, Real-Time Collision Detection, sec. 5.1.9), exact for degenerate segments."""
-    d1x, d1y, d1z = Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]
-    d2x, d2y, d2z = B[0] - A[0], B[1] - A[1], B[2] - A[2]
-    rx, ry, rz = P[0] - A[0], P[1] - A[1], P[2] - A[2]
-    a = d1x * d1x + d1y * d1y + d1z * d1z
-    e = d2x * d2x + d2y * d2y + d2z * d2z
-    f = d2x * rx + d2y * ry + d2z * rz
+def segment_params(
+    px: float,
+    py: float,
+    pz: float,
+    ux: float,
+    uy: float,
+    uz: float,
+    ax: float,
+    ay: float,
+    az: float,
+    wx: float,
+    wy: float,
+    wz: float,
+) -> tuple[float, float]:
+    """``(s, t)`` in [0, 1]^2 such that ``P + s u`` and ``A + t w`` are closest points of the
+    segments ``[P, P + u]`` and ``[A, A + w]`` (3-D; either may be a point): the textbook clamped
+    solution of the 2 x 2 normal equations (Ericson, Real-Time Collision Detection, sec. 5.1.9),
+    exact for degenerate segments. Scalars only: the hot loops create no array views."""
+    rx, ry, rz = px - ax, py - ay, pz - az
+    a = ux * ux + uy * uy + uz * uz
+    e = wx * wx + wy * wy + wz * wz
+    f = wx * rx + wy * ry + wz * rz
     s, t = 0.0, 0.0
     if a == 0.0 and e == 0.0:
-        pass
-    elif a == 0.0:
-        t = min(max(f / e, 0.0), 1.0)
-    else:
-        c = d1x * rx + d1y * ry + d1z * rz
-        if e == 0.0:
-            s = min(max(-c / a, 0.0), 1.0)
-        else:
-            b = d1x * d2x + d1y * d2y + d1z * d2z
-            denom = a * e - b * b
-            if denom > 0.0:
-                s = min(max((b * f - c * e) / denom, 0.0), 1.0)
-            t = (b * s + f) / e
-            if t < 0.0:
-                t = 0.0
-                s = min(max(-c / a, 0.0), 1.0)
-            elif t > 1.0:
-                t = 1.0
-                s = min(max((b - c) / a, 0.0), 1.0)
-    x[0], x[1], x[2] = P[0] + d1x * s, P[1] + d1y * s, P[2] + d1z * s
-    y[0], y[1], y[2] = A[0] + d2x * t, A[1] + d2y * t, A[2] + d2z * t
+        return s, t
+    if a == 0.0:
+        return s, min(max(f / e, 0.0), 1.0)
+    c = ux * rx + uy * ry + uz * rz
+    if e == 0.0:
+        return min(max(-c / a, 0.0), 1.0), t
+    b = ux * wx + uy * wy + uz * wz
+    denom = a * e - b * b
+    if denom > 0.0:
+        s = min(max((b * f - c * e) / denom, 0.0), 1.0)
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = min(max(-c / a, 0.0), 1.0)
+    elif t > 1.0:
+        t = 1.0
+        s = min(max((b - c) / a, 0.0), 1.0)
+    return s, t
+
+
+@kernel
+def closest_points(P: F64, Q: F64, A: F64, B: F64, x: F64, y: F64) -> float:
+    """Closest points ``x`` on segment ``[P, Q]`` and ``y`` on ``[A, B]`` (3-D; either may be a
+    point); returns ``||x - y||`` (:func:`segment_params`)."""
+    u0, u1, u2 = Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]
+    w0, w1, w2 = B[0] - A[0], B[1] - A[1], B[2] - A[2]
+    s, t = segment_params(P[0], P[1], P[2], u0, u1, u2, A[0], A[1], A[2], w0, w1, w2)
+    x[0], x[1], x[2] = P[0] + u0 * s, P[1] + u1 * s, P[2] + u2 * s
+    y[0], y[1], y[2] = A[0] + w0 * t, A[1] + w1 * t, A[2] + w2 * t
     return math.sqrt((x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2)
+
+
+@kernel
+def link_gap(
+    pts: F64, i: int, data: F64, o: int, t: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """Link ``i`` (``pts[i]`` to ``pts[i + 1]``) against obstacle ``o`` at time ``t``:
+    ``(span, dx, dy, dz, cx, cy, cz)`` with ``d = x* - w*`` the vector between the closest points
+    (link minus obstacle), ``span = ||d||`` and ``c = w*`` the obstacle's closest point (m)."""
+    at = HEADER + o * STRIDE
+    vx, vy, vz = data[at + 7], data[at + 8], data[at + 9]
+    ax, ay, az = data[at] + vx * t, data[at + 1] + vy * t, data[at + 2] + vz * t
+    wx, wy, wz = data[at + 3] - data[at], data[at + 4] - data[at + 1], data[at + 5] - data[at + 2]
+    px, py, pz = pts[i, 0], pts[i, 1], pts[i, 2]
+    ux, uy, uz = pts[i + 1, 0] - px, pts[i + 1, 1] - py, pts[i + 1, 2] - pz
+    s, tt = segment_params(px, py, pz, ux, uy, uz, ax, ay, az, wx, wy, wz)
+    cx, cy, cz = ax + tt * wx, ay + tt * wy, az + tt * wz
+    dx, dy, dz = px + s * ux - cx, py + s * uy - cy, pz + s * uz - cz
+    return math.sqrt(dx * dx + dy * dy + dz * dz), dx, dy, dz, cx, cy, cz
 
 
 @kernel
@@ -135,16 +175,16 @@ def obstacle_at(data: F64, o: int, t: float, A: F64, B: F64) -> float:
 
 
 @kernel
-def link_distances(data: F64, t: float, pts: F64, out: F64, scratch: F64) -> float:
+def link_distances(data: F64, t: float, pts: F64, out: F64) -> float:
     """``out[i, o]``: the distance (m) of link ``i`` (``pts[i]`` to ``pts[i + 1]``) to obstacle
     ``o`` at time ``t``, radii subtracted; returns the smallest (``inf`` without obstacles), the
-    record's clearance. ``scratch`` is 4 x 3."""
-    A, B, x, y = scratch[0], scratch[1], scratch[2], scratch[3]
+    record's clearance."""
     least = math.inf
     for o in range(int(data[5])):
-        r = obstacle_at(data, o, t, A, B)
+        r = data[HEADER + o * STRIDE + 6] + data[3]
         for i in range(pts.shape[0] - 1):
-            d = closest_points(pts[i], pts[i + 1], A, B, x, y) - r - data[3]
+            span = link_gap(pts, i, data, o, t)[0]
+            d = span - r
             out[i, o] = d
             if d < least:
                 least = d

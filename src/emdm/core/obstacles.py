@@ -155,7 +155,7 @@ def distances(scenario: Any, q: Vector, t: float = 0.0) -> Vector:
     out = np.zeros((n + 1, len(scenario.obstacles)))
     if scenario.obstacles:
         data = np.array(scenario.obstacle_data)
-        link_distances(data, float(t), pts, out, np.empty((4, 3)))
+        link_distances(data, float(t), pts, out)
     return out
 
 

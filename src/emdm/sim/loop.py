@@ -143,7 +143,6 @@ class StepWork(NamedTuple):
     pts: F64
     axes: F64
     dist: F64
-    scratch: F64
 
 
 @kernel
@@ -197,7 +196,6 @@ def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
         np.zeros((n + 2, POINT)),
         np.zeros((n, AXIS)),
         np.zeros((n + 1, no)),
-        np.zeros((4, 3)),
     )
 
 
@@ -360,7 +358,7 @@ def run_kernel(
         t = k * motion.dt
         if motion.obstacles.size:
             chain_points(geo, rec.p[k], w.kin, w.sp, w.pts, w.axes)
-            rec.clearance[k] = link_distances(motion.obstacles, t, w.pts, w.dist, w.scratch)
+            rec.clearance[k] = link_distances(motion.obstacles, t, w.pts, w.dist)
         err2 = 0.0
         for i in range(nt):
             rec.v[k, i] = motion.kp[i] * rec.e[k, i]

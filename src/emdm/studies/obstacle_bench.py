@@ -25,6 +25,11 @@ SPREAD = 0.3
 path of the end effector."""
 
 
+GOAL_ROOM = 0.01
+"""Room (m) an obstacle leaves around the goal beyond its stop distance, so that the end
+effector can reach it."""
+
+
 def scene(
     preset: str, count: int, rng: np.random.Generator, radius: tuple[float, float]
 ) -> Scenario:
@@ -165,7 +170,8 @@ def scene_from(
     (spheres in 3-D) of a radius uniform in ``radius`` (m), centres at a point uniform along the
     straight path of the end effector from its start to the goal, plus an offset uniform in the
     cube of half-width :data:`SPREAD` times the path's length, none within the stop distance of
-    the start (redrawn until so)."""
+    the start, nor within its stop distance plus :data:`GOAL_ROOM` of the goal (redrawn until
+    so)."""
     dim = base.robot.dim
     shape = "circle" if dim == 2 else "sphere"
     start = base.robot.position(base.motion.q0)[:dim]
@@ -175,6 +181,8 @@ def scene_from(
     while len(obstacles) < count:
         centre = start + rng.uniform() * (goal - start) + rng.uniform(-spread, spread, dim)
         new = {"shape": shape, "center": centre.tolist(), "radius": float(rng.uniform(*radius))}
+        if np.linalg.norm(centre - goal) < new["radius"] + base.obstacle_damper.stop + GOAL_ROOM:
+            continue  # the end effector could not reach the goal
         try:
             scenario_from_dict({**data, "obstacles": [*obstacles, new]})
         except ScenarioError:

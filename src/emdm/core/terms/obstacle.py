@@ -26,9 +26,7 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from ..distance import HEADER, STRIDE, closest_points, obstacle_at
+from ..distance import HEADER, STRIDE, link_gap
 from ..jit import kernel
 from ..scenario import Scenario
 from .base import F64
@@ -96,23 +94,20 @@ def write(
     _reach(pts, axes, lb, ub, dt)
     n = axes.shape[0]
     nx = G.shape[1]
-    scratch = np.empty((4, 3))
-    A, B, x, y = scratch[0], scratch[1], scratch[2], scratch[3]
-    box = np.empty((2, n))  # the joint bounds before any row slowed a joint
-    for j in range(n):
-        box[0, j], box[1, j] = lb[j], ub[j]
+    for j in range(n):  # the joint bounds before any row slowed a joint
+        axes[j, 7], axes[j, 8] = lb[j], ub[j]
     for o in range(int(data[5])):
         at = HEADER + o * STRIDE
-        r = obstacle_at(data, o, t, A, B)
+        r = data[at + 6] + lrad
         vx, vy, vz = data[at + 7], data[at + 8], data[at + 9]
         drift = dt * math.sqrt(vx * vx + vy * vy + vz * vz)
         for i in range(pts.shape[0] - 1):
-            span = closest_points(pts[i], pts[i + 1], A, B, x, y)
-            d = span - r - lrad
+            span, dx, dy, dz, cx, cy, cz = link_gap(pts, i, data, o, t)
+            d = span - r
             reach = max(pts[i, 4], pts[i + 1, 4]) + drift
             if (d >= influence and d - stop >= reach) or span == 0.0:
                 continue
-            nx_, ny_, nz_ = (x[0] - y[0]) / span, (x[1] - y[1]) / span, (x[2] - y[2]) / span
+            nx_, ny_, nz_ = dx / span, dy / span, dz / span
             approach = nx_ * vx + ny_ * vy + nz_ * vz
             for e in (i, i + 1):
                 if e == 0:
@@ -120,11 +115,7 @@ def write(
                 if e == i + 1 and pts[e, 0] == pts[i, 0] and pts[e, 1] == pts[i, 1]:
                     if pts[e, 2] == pts[i, 2]:
                         continue  # a link of length 0: one point, one row
-                d_e = (
-                    (nx_ * (pts[e, 0] - y[0]) + ny_ * (pts[e, 1] - y[1]) + nz_ * (pts[e, 2] - y[2]))
-                    - r
-                    - lrad
-                )
+                d_e = (nx_ * (pts[e, 0] - cx) + ny_ * (pts[e, 1] - cy) + nz_ * (pts[e, 2] - cz)) - r
                 for j in range(min(e, n)):
                     ax, ay, az = axes[j, 3], axes[j, 4], axes[j, 5]
                     rx, ry, rz = (
@@ -146,8 +137,8 @@ def write(
                     # their speed squared) until it takes half, but not below SLOWEST
                     scale = max(SLOWEST, math.sqrt(max(0.5 * damp, 0.0) / c_e))
                     for j in range(min(e, n)):  # the smallest scale any row asks of joint j
-                        lb[j] = max(lb[j], scale * box[0, j])
-                        ub[j] = min(ub[j], scale * box[1, j])
+                        lb[j] = max(lb[j], scale * axes[j, 7])
+                        ub[j] = min(ub[j], scale * axes[j, 8])
                     c_e *= scale * scale
                 h[rows] = damp - approach - c_e
                 rows += 1
