@@ -233,7 +233,7 @@ def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
     how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
     against the largest ``G_i x`` the bounds allow: ``h_i >= LAZY * max_box G_i x`` and ``h_i >
     0`` (obstacles beyond their influence distance, as a rule). The order does not change the
-    program; :func:`solve_lazily` checks the lazy rows at the answer."""
+    program; :func:`settle_rows` checks the lazy rows at the answer."""
     near = 0
     nx = G.shape[1]
     for i in range(ng):
@@ -255,11 +255,11 @@ def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
 
 
 @kernel
-def solve_lazily(w: StepWork, near: int, ng: int) -> tuple[int, int]:
-    """The active set on the rows ``G[:near]``; when its answer breaks one of the lazy rows
-    ``G[near:ng]``, again on all of them (so the answer is the optimum of the whole program)."""
-    G, h = w.G[:near], w.h[:near]
-    code, iterations = active_set(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
+def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> tuple[int, int]:
+    """After the active set on the rows ``G[:near]`` returned ``(code, iterations)``: unravel a
+    cycle (:func:`_unravel`), and when the answer breaks one of the lazy rows ``G[near:ng]``,
+    solve again on all of them (so the answer is the optimum of the whole program). Called only
+    for programs with rows: passing the step's buffers costs a reference count per array."""
     if code == MAX_ITER_EXCEEDED and near > 0:
         code, iterations = _unravel(w, near, iterations)
     if code != OK or near == ng:
@@ -375,6 +375,7 @@ def run_kernel(
         )
         G, h = w.G[:ng], w.h[:ng]
         near = partition_rows(w.G, w.h, w.lb, w.ub, ng) if ng > 0 else 0
+        Gn, hn = (G, h) if near == ng else (w.G[:near], w.h[:near])  # the rows solved first
         w.rows[0] = ng
         for j in range(n):
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
@@ -387,7 +388,9 @@ def run_kernel(
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = solve_lazily(w, near, ng)
+            code, iterations = active_set(w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res)
+            if ng > 0 and code != INFEASIBLE:
+                code, iterations = settle_rows(w, near, ng, code, iterations)
             if code == INFEASIBLE and ng > 0:  # the rows cut the task the bounds allow: the
                 for i in range(nt):  # exact scale under the rows too (a linear program)
                     w.b[i] = rec.v[k, i]
@@ -396,13 +399,20 @@ def run_kernel(
                     return HANDOFF, k
                 for i in range(nt):
                     w.b[i] *= alpha
-                code, iterations = solve_lazily(w, ng, ng)
+                code, iterations = active_set(
+                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                )
+                code, iterations = settle_rows(w, ng, ng, code, iterations)
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
             alpha = 1.0
             start = ticks()
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
-                code, iterations = solve_lazily(w, near, ng)
+                code, iterations = active_set(
+                    w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res
+                )
+                if ng > 0 and code != INFEASIBLE:
+                    code, iterations = settle_rows(w, near, ng, code, iterations)
             if code == INFEASIBLE:
                 alpha = task_scale_rows(w.A, w.b, G, h, w.lb, w.ub, w.qp.feas)
                 if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
@@ -418,7 +428,11 @@ def run_kernel(
                     if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
                         code, iterations = OK, 0
                 if code != OK:
-                    code, iterations = solve_lazily(w, ng, ng)
+                    code, iterations = active_set(
+                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                    )
+                    if ng > 0:
+                        code, iterations = settle_rows(w, ng, ng, code, iterations)
             scaled = alpha < 1.0
         stop = ticks()
         if code != OK or max(w.res[0], w.res[1], w.res[2]) > KKT_TOL or w.res[3] > BOUND_TOL:
