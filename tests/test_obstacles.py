@@ -148,30 +148,39 @@ def numpy_rows(sc, q, lb, ub):
     return np.array(G), np.array(h), where
 
 
+def near_a_link(name, rng, gap):
+    """``(q, scenario)``: a random configuration of preset ``name`` and a 0.1 m circle or sphere
+    whose surface is ``gap`` (a range, m) from a random point of a random link; ``None`` when
+    another link starts within the stop distance."""
+    sc0 = load_scenario(name)
+    dim = sc0.robot.dim
+    q = rng.uniform(sc0.arm.q_min + 0.3, sc0.arm.q_max - 0.3)
+    pts = polyline(sc0, q)
+    link = int(rng.integers(1, sc0.n))
+    point = pts[link] + rng.uniform(0.2, 0.8) * (pts[link + 1] - pts[link])
+    direction = rng.normal(size=3)
+    if dim == 2:
+        direction[2] = 0.0
+    centre = point + direction / np.linalg.norm(direction) * (0.1 + rng.uniform(*gap))
+    obstacle = {"shape": "circle" if dim == 2 else "sphere", "center": list(centre[:dim])}
+    try:
+        return q, with_obstacles(name, [{**obstacle, "radius": 0.1}], q0=q)
+    except ScenarioError:
+        return None
+
+
 @pytest.mark.parametrize("name", ["task1", "panda"])
 def test_rows_match_a_numpy_twin_and_keep_every_link_out_at_the_worst_command(name):
     """The compiled rows equal the numpy twin's up to the tightening (which is >= 0), and at the
     most adversarial vertices of the command polytope no link ends inside the stop distance."""
     rng = np.random.default_rng(3)
-    sc0 = load_scenario(name)
-    dim = sc0.robot.dim
     ctrl = get_controller("C-EMDM")
     found = 0
     for _ in range(60):
-        q = rng.uniform(sc0.arm.q_min + 0.3, sc0.arm.q_max - 0.3)
-        pts = polyline(sc0, q)
-        link = int(rng.integers(1, sc0.n))
-        point = pts[link] + rng.uniform(0.2, 0.8) * (pts[link + 1] - pts[link])
-        direction = rng.normal(size=3)
-        if dim == 2:
-            direction[2] = 0.0
-        direction /= np.linalg.norm(direction)
-        centre = point + direction * (0.1 + rng.uniform(0.035, 0.12))
-        obstacle = {"shape": "circle" if dim == 2 else "sphere", "center": list(centre[:dim])}
-        try:
-            sc = with_obstacles(name, [{**obstacle, "radius": 0.1}], q0=q)
-        except ScenarioError:
+        drawn = near_a_link(name, rng, (0.035, 0.12))
+        if drawn is None:
             continue  # another link starts within the stop distance
+        q, sc = drawn
         if sc.obstacle_distances(q).min() <= sc.obstacle_damper.stop:
             continue
         qp = program_at(ctrl, sc, q).qp
@@ -319,18 +328,10 @@ def test_without_the_tightening_a_panda_link_can_cross_the_stop_distance():
     sc0 = load_scenario("panda")
     worst = np.inf
     for _ in range(120):
-        q = rng.uniform(sc0.arm.q_min + 0.3, sc0.arm.q_max - 0.3)
-        pts = polyline(sc0, q)
-        link = int(rng.integers(1, sc0.n))
-        point = pts[link] + rng.uniform(0.2, 0.8) * (pts[link + 1] - pts[link])
-        direction = rng.normal(size=3)
-        centre = point + direction / np.linalg.norm(direction) * (0.1 + rng.uniform(0.031, 0.06))
-        try:
-            sc = with_obstacles(
-                "panda", [{"shape": "sphere", "center": list(centre), "radius": 0.1}], q0=q
-            )
-        except ScenarioError:
+        drawn = near_a_link("panda", rng, (0.031, 0.06))
+        if drawn is None:
             continue
+        q, sc = drawn
         bounds = joint_bounds(sc, q)
         G, h, _ = numpy_rows(sc, q, bounds.lo, bounds.hi)
         if not len(h):
