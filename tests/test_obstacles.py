@@ -446,3 +446,14 @@ def test_run_folder_keeps_clearance_and_rows_and_the_command_line_says_how_each_
         np.testing.assert_array_equal(back.clearance, run.clearance)
         np.testing.assert_array_equal(back.rows_active, run.rows_active)
         np.testing.assert_array_equal(back.qd, run.qd)
+
+
+def test_a_link_caught_between_rows_is_stood_still_not_stopped():
+    """With a circle beside link 2 at the start, C-IVKC (no slack) meets steps whose rows, at the
+    speed floor, all ask to move away while the task allows no motion: the step is built again
+    without the floor (standing still is admissible and exact) instead of ending the run."""
+    sc = with_obstacles("task1", [{"shape": "circle", "center": [0.5, 0.0], "radius": 0.1}])
+    run = simulate(sc, "C-IVKC")
+    assert not run.reached and run.steps == sc.max_steps
+    assert run.clearance.min() >= sc.obstacle_damper.stop
+    assert run.fallback.any() and np.all(run.kkt <= KKT_TOL)

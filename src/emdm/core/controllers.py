@@ -45,6 +45,7 @@ from .scenario import Scenario
 from .sections import Weights
 from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, build_program
 from .terms.damper import joint_bounds as _joint_bounds
+from .terms.obstacle import SLOWEST
 from .tolerances import ERROR_FLOOR
 
 
@@ -225,6 +226,7 @@ def step_program(
     *,
     weights: Weights | None = None,
     t: float = 0.0,
+    floor: float = SLOWEST,
 ) -> QP:
     """The program of ``controller`` at configuration ``q`` and time ``t`` (s; where obstacles
     move) for the desired velocity ``v``."""
@@ -256,6 +258,7 @@ def step_program(
         float(t),
         pts,
         axes,
+        float(floor),
     )
     rows = build_program(data, state, out)
     return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])

@@ -30,7 +30,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
-from ..core.controllers import Controller, Name, admissible, get_controller, slack_weight
+from ..core.controllers import (
+    Controller,
+    Name,
+    admissible,
+    get_controller,
+    slack_weight,
+    state_at,
+    step_program,
+)
 from ..core.distance import AXIS, POINT, chain_points, link_distances
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
@@ -47,6 +55,8 @@ from ..core.problem import QP
 from ..core.scenario import Scenario
 from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
+from ..core.terms.base import TermKind
+from ..core.terms.obstacle import SLOWEST
 from ..core.tolerances import AT_BOUND, LAZY, STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
@@ -371,7 +381,9 @@ def run_kernel(
         if k == cap:
             return FULL, k
         ng = build_program(
-            prog, StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes), out
+            prog,
+            StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes, SLOWEST),
+            out,
         )
         G, h = w.G[:ng], w.h[:ng]
         near = partition_rows(w.G, w.h, w.lb, w.ub, ng) if ng > 0 else 0
@@ -677,13 +689,24 @@ def _chain_step(
     )
     error_norm = float(np.linalg.norm(rec.e[k]))
     t = k * scenario.motion.dt
-    program = admissible(
-        nominal,
-        scenario.controller.on_infeasible,
-        slack_weight=slack_weight(scenario, error_norm),
-        step=k,
-    )
-    result = solve_chain(program.qp, chain, context=f"step {k} (t = {t:g} s): ", certify=certify)
+    weight = slack_weight(scenario, error_norm)
+    policy = scenario.controller.on_infeasible
+    context = f"step {k} (t = {t:g} s): "
+    try:
+        program = admissible(nominal, policy, slack_weight=weight, step=k)
+        result = solve_chain(program.qp, chain, context=context, certify=certify)
+    except NoSolution:
+        if not (scenario.obstacles and ctrl.has(TermKind.OBSTACLE)):
+            raise
+        # the obstacle rows' speed floor left no admissible command: the step again without
+        # it, where standing still is admissible (docs/mathematics.md, "Obstacles")
+        state = state_at(scenario, rec.q[k])
+        nominal = step_program(
+            ctrl, scenario, rec.q[k], state.kin, rec.v[k], error_norm, t=t, floor=0.0
+        )
+        program = admissible(nominal, policy, slack_weight=weight, step=k)
+        result = solve_chain(program.qp, chain, context=context, certify=certify)
+        rec.lo[k], rec.hi[k] = nominal.lb[:n], nominal.ub[:n]
     x = result.x
     rec.qd[k] = x[:n]
     rec.delta[k] = x[n : n + scenario.nt] if program.qp.n_slack else 0.0

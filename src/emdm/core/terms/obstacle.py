@@ -34,7 +34,8 @@ from .base import F64
 SLOWEST = 0.25
 """The obstacle rows slow a joint to no less than this fraction of its bound: below it, a row
 asks the link to move away instead (the arm hovers just outside the stop distance rather than
-freezing there)."""
+freezing there). Where that leaves no admissible command, the step is built again with no floor
+(standing still is then admissible, and exact)."""
 
 
 @kernel
@@ -83,7 +84,16 @@ def _reach(pts: F64, axes: F64, lb: F64, ub: F64, dt: float) -> None:
 
 @kernel
 def write(
-    data: F64, t: float, pts: F64, axes: F64, lb: F64, ub: F64, G: F64, h: F64, rows: int
+    data: F64,
+    t: float,
+    pts: F64,
+    axes: F64,
+    lb: F64,
+    ub: F64,
+    G: F64,
+    h: F64,
+    rows: int,
+    floor: float,
 ) -> int:
     """Rows of ``G x <= h`` at ``G[rows:]`` for every link and obstacle within reach (module
     notes); returns the new row count (the task slack's columns of a row are 0).
@@ -134,8 +144,8 @@ def write(
                 c_e = pts[e, 3]
                 if c_e > 0.5 * damp:  # the worst second-order motion takes more than half
                     # the damper's allowance: slow the joints that move E (c_E scales with
-                    # their speed squared) until it takes half, but not below SLOWEST
-                    scale = max(SLOWEST, math.sqrt(max(0.5 * damp, 0.0) / c_e))
+                    # their speed squared) until it takes half, but not below ``floor``
+                    scale = max(floor, math.sqrt(max(0.5 * damp, 0.0) / c_e))
                     for j in range(min(e, n)):  # the smallest scale any row asks of joint j
                         lb[j] = max(lb[j], scale * axes[j, 7])
                         ub[j] = min(ub[j], scale * axes[j, 8])

@@ -94,7 +94,9 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
         elif code == PLANE:
             rows = plane.write(data, s.p, s.J, out.G, out.h, rows)
         elif code == OBSTACLE:
-            rows = obstacle.write(data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, rows)
+            rows = obstacle.write(
+                data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, rows, s.floor
+            )
         elif code == CLEARANCE:
             clearance.write(weight, data, s.t, s.pts, s.axes, out.c)
     return rows
