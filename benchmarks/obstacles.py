@@ -38,8 +38,8 @@ def table(speed: dict, studies: list[dict], guard: dict) -> str:
     lines += [
         f"Never entered (`{guard['preset']}` arm, 50 random scenes x 200 random reachable goals, "
         f"C-EMDM through the batch loop): {guard['runs']} runs, {guard['reached']} reached; "
-        f"smallest clearance {guard['min_clearance']:.5f} m against a stop distance of "
-        f"{guard['stop']} m; {guard['runs_inside_stop']} runs ever inside it; "
+        f"smallest clearance {guard['min_clearance']!r} m against a stop distance of "
+        f"{guard['stop']} m; {guard['runs_inside_stop']} runs ever inside it by more than 1e-12 m; "
         f"{guard['runs_finished_by_the_chain']} runs finished by the solver chain, "
         f"{guard['runs_stopped']} stopped without an admissible command.",
         "",
