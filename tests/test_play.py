@@ -540,3 +540,27 @@ def test_a_moving_slider_and_a_playing_motion_are_throttled(session):
     s._due_now("front")
     s._flush()
     assert fronts == [1.5]
+
+
+def test_the_playground_draws_a_scenes_obstacles(bases):
+    """A scene with obstacles shows each one and its stop distance in the workspace (the same
+    outlines as the figures); a scene without obstacles shows none."""
+    pytest.importorskip("bokeh")
+    from bokeh.document import Document
+
+    from emdm.outputs.views import Views
+    from emdm.play.page import Session
+
+    sc = emdm.load_scenario("obstacle")
+
+    def make(name):
+        doc = Document()
+        context = SimpleNamespace(request=SimpleNamespace(arguments={"scenario": [name.encode()]}))
+        doc._session_context = lambda: context
+        return Session(doc, {"obstacle": sc, **bases})
+
+    (body,) = Views(sc).obstacle_outlines(np.eye(2))
+    s = make("obstacle")
+    assert s.obstacles.data["xs"] == [body[:, 0].tolist()]
+    assert len(s.stop_zones.data["xs"]) == 1
+    assert make("task1").obstacles.data["xs"] == []

@@ -38,6 +38,7 @@ from ..core.scenario import Scenario
 from ..core.validation import POLICIES
 from ..errors import EmdmError
 from ..outputs.style import CONTROLLER_STYLE, OKABE_ITO
+from ..outputs.views import Views
 from . import logic
 from .logic import CONTROLS, PAIRS, Control, Outcome, Settings
 
@@ -130,6 +131,8 @@ class Session:
         self.handles = ColumnDataSource({"x": [], "y": []}, name="handles")
         self.start = ColumnDataSource({"x": [], "y": []})
         self.annulus = ColumnDataSource({"x": [0.0], "y": [0.0], "inner": [0.0], "outer": [1.0]})
+        self.obstacles = ColumnDataSource({"xs": [], "ys": []})  # bodies, at t = 0
+        self.stop_zones = ColumnDataSource({"xs": [], "ys": []})  # within the stop distance
         self.front_src = ColumnDataSource({"M": [], "E": [], "fill": []}, name="front")
         self.front_now = ColumnDataSource({"M": [], "E": []})
         self.coloured: list[list[Any]] = [[], []]  # renderers drawn in each run's colour
@@ -197,6 +200,22 @@ class Session:
             fill_color="#000000",
             fill_alpha=0.06,
             line_color=None,
+        )
+        fig.patches(
+            "xs",
+            "ys",
+            source=self.obstacles,
+            fill_color="#777777",
+            fill_alpha=0.55,
+            line_color="#444444",
+        )
+        fig.patches(
+            "xs",
+            "ys",
+            source=self.stop_zones,
+            fill_alpha=0.0,
+            line_color="#444444",
+            line_dash="dashed",
         )
         fig.scatter([0], [0], marker="square", size=12, color="#333333")
         fig.line("x", "y", source=self.start, color="#888888", line_width=2, line_dash="dotted")
@@ -691,6 +710,19 @@ class Session:
                 "inner": [arm.inner_reach],
                 "outer": [arm.reach],
             }
+        views = Views(scenario)  # the obstacles as the figures draw them, at t = 0
+        for source, grow in (
+            (self.obstacles, 0.0),
+            (self.stop_zones, scenario.obstacle_damper.stop),
+        ):
+            outlines = views.obstacle_outlines(np.eye(2), 0.0, grow) if scenario.obstacles else []
+            _set(
+                source,
+                data={
+                    "xs": [o[:, 0].tolist() for o in outlines],
+                    "ys": [o[:, 1].tolist() for o in outlines],
+                },
+            )
         start = arm.joint_positions(scenario.motion.q0)
         _set(self.time_range, start=0.0, end=end)
         _set(self.start, data={"x": start[:, 0].tolist(), "y": start[:, 1].tolist()})
