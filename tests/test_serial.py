@@ -124,7 +124,7 @@ def test_bad_input_is_one_clear_error():
     with pytest.raises(ScenarioError, match="rigid"):
         SerialArm([[0.1, 0.0, 0.0, 0.0]], tool=np.diag([2.0, 1.0, 1.0, 1.0]))
     arm = SerialArm([[0.1, 0.0, 0.0, 0.0]] * 2)
-    with pytest.raises(ScenarioError, match="2 joint angles"):
+    with pytest.raises(ScenarioError, match="2 joint values"):
         arm.forward([0.0])
     with pytest.raises(ScenarioError, match="axes"):
         arm.manipulability([0.0, 0.0], "xyz")  # type: ignore[arg-type]

@@ -3,8 +3,9 @@
 Every arm is seen the same way here, planar or spatial: a polyline of points ``pts`` (base, every
 joint frame's origin, end effector; planar arms have ``z = 0``) whose consecutive points bound its
 links, and per joint ``j`` its axis ``axes[j] = [point (3), unit direction (3), a]``, where ``a``
-is the index in ``pts`` of the axis point (``j`` for a planar arm and standard DH, ``j + 1`` for
-modified DH). Joint ``j`` moves ``pts[k]`` exactly when ``j < k``, with velocity column
+is the index in ``pts`` of the axis point (``j`` for a planar arm, ``j + 1`` for a spatial one,
+whose points are the origins of the frames after each joint, :mod:`emdm.core.serial`).
+Joint ``j`` moves ``pts[k]`` exactly when ``j < k``, with velocity column
 ``axis_j x (pts[k] - point_j)`` (a revolute joint).
 
 Every obstacle is a capsule: a segment ``[A, B]`` and a radius ``r`` (a circle or a sphere has
@@ -49,7 +50,7 @@ def chain_points(geo: Geometry, p: F64, w: KinWork, sw: SpatialWork, pts: F64, a
     tip vectors ``w.rx, w.ry`` and tip ``p``, or a spatial arm's frames ``sw.frames`` and end
     effector ``sw.T``."""
     n = axes.shape[0]
-    if geo.dh.shape[0] == 0:
+    if geo.origins.shape[0] == 0:
         for i in range(n):
             pts[i, 0] = p[0] - w.rx[i]
             pts[i, 1] = p[1] - w.ry[i]
@@ -66,20 +67,18 @@ def chain_points(geo: Geometry, p: F64, w: KinWork, sw: SpatialWork, pts: F64, a
             pts[i, a] = sw.frames[i, a, 3]
     for a in range(3):
         pts[n + 1, a] = sw.T[a, 3]
-    shift = 1 if geo.modified else 0
-    for j in range(n):
-        f = sw.frames[j + shift]
+    for j in range(n):  # the joint's frame: its origin is on the axis, which is revolute here
         for a in range(3):
-            axes[j, a] = f[a, 3]
-            axes[j, 3 + a] = f[a, 2]
-        axes[j, 6] = float(j + shift)
+            axes[j, a] = sw.frames[j + 1, a, 3]
+            axes[j, 3 + a] = sw.J6[3 + a, j]
+        axes[j, 6] = float(j + 1)
 
 
 @kernel
 def chain_points_of(lengths: F64, geo: Geometry, q: F64, pts: F64, axes: F64) -> None:
     """:func:`chain_points` at ``q`` with its own buffers (the entry point for Python)."""
     n = q.size
-    nt = 2 if geo.dh.shape[0] == 0 else 3
+    nt = 2 if geo.origins.shape[0] == 0 else 3
     w, sw = kin_work(n), spatial_work(n)
     p, e = np.empty(nt), np.empty(nt)
     J, Jm = np.empty((nt, n)), np.empty(n)

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
-from .serial_kernels import manipulability_gradient, serial_hessian, serial_kinematics
+from .serial_kernels import chain_kinematics, manipulability_gradient, serial_hessian
 from .tolerances import SINGULAR_RELATIVE
 
 F64 = NDArray[np.float64]
@@ -46,12 +46,14 @@ class ArmData(NamedTuple):
 
 
 class Geometry(NamedTuple):
-    """A spatial arm's chain as kernel input: DH rows ``[a, alpha, d, offset]`` (0 x 4 for a planar
-    arm), ``modified`` for Craig's convention, the ``tool`` transform (4 x 4), and the Jacobian
-    ``rows`` of the manipulability (``serial_kernels.ROWS_*``)."""
+    """A spatial arm's chain as kernel input (:class:`emdm.core.serial.Chain`): per joint its
+    ``origins`` (n x 4 x 4; 0 x 4 x 4 for a planar arm), unit ``axes`` (n x 3) and ``prismatic``
+    flags, the ``tool`` transform after the last joint (the chain's tail, then the tool; 4 x 4),
+    and the Jacobian ``rows`` of the manipulability (``serial_kernels.ROWS_*``)."""
 
-    dh: F64
-    modified: bool
+    origins: F64
+    axes: F64
+    prismatic: NDArray[np.bool_]
     tool: F64
     rows: int
 
@@ -299,14 +301,14 @@ def task_kinematics(
     error is the rotation vector of ``R_goal R^T`` (base frame), where ``R_goal`` is the rotation
     of the goal's rotation vector. ``m`` and ``Jm`` are over the rows ``geo.rows``.
     """
-    if geo.dh.shape[0] == 0:
+    if geo.origins.shape[0] == 0:
         m = kinematics(lengths, q, p, J, Jm, w)
         e[0], e[1] = goal[0] - p[0], goal[1] - p[1]
         return m
     n = q.size
     frames, link, T, J6, H, Rg = sw.frames, sw.link, sw.T, sw.J6, sw.H, sw.R
-    serial_kinematics(geo.dh, geo.modified, geo.tool, q, frames, link, T, J6)
-    serial_hessian(J6, H)
+    chain_kinematics(geo.origins, geo.axes, geo.prismatic, geo.tool, q, frames, link, T, J6)
+    serial_hessian(J6, geo.prismatic, H)
     m = manipulability_gradient(J6, H, geo.rows, Jm)
     rows = 6 if task == TASK_POSE else 3
     for i in range(rows):

@@ -39,8 +39,9 @@ from .sections import (
     Task,
     Weights,
 )
-from .serial import SerialArm
+from .serial import SerialArm, _tool
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
+from .urdf import UrdfArm, read_urdf
 from .validation import (
     Policy,
     _check_consistency,
@@ -61,7 +62,16 @@ PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS + OBSTACLE_PRESETS
 TASK_ROWS = {Task.PLANAR: 2, Task.POSITION: 3, Task.POSE: 6}
 TASK_CODES = {Task.PLANAR: TASK_PLANAR, Task.POSITION: TASK_POSITION, Task.POSE: TASK_POSE}
 AXES = ("all", "trans", "rot")
-SPATIAL_ONLY = ("arm.dh", "arm.convention", "arm.tool", "motion.task", "motion.axes")
+SPATIAL_ONLY = (
+    "arm.dh",
+    "arm.convention",
+    "arm.urdf",
+    "arm.base_link",
+    "arm.tip_link",
+    "arm.tool",
+    "motion.task",
+    "motion.axes",
+)
 """Keys of spatial arms only (a planar scenario neither needs nor writes them)."""
 
 
@@ -71,10 +81,10 @@ class ScenarioWarning(UserWarning):
 
 # ---------------------------------------------------------------------------------------- schema
 # kind: "joints" (n values, scalar allowed), "task" (one value per task row: 2 planar, 3 position,
-# 6 pose), "dh" (n rows of 4), "vec3", "number", "str", "rows" (any number of rows of one
-# value per axis of the workspace: 2 planar, 3 spatial), "list" (any number of values). Missing
-# optional keys take the default (the brief's values); "" marks a key that is optional without a
-# default.
+# 6 pose), "dh" (n rows of 4), "tool" (3 numbers or 4 rows of 4), "number", "str", "rows" (any
+# number of rows of one value per axis of the workspace: 2 planar, 3 spatial), "list" (any number
+# of values). Missing optional keys take the default (the brief's values); "" marks a key that
+# is optional without a default.
 @dataclass(frozen=True)
 class _Key:
     kind: str
@@ -87,7 +97,10 @@ SCHEMA: dict[str, dict[str, _Key]] = {
         "lengths": _Key("joints", "", scalar_ok=False),
         "dh": _Key("dh", ""),
         "convention": _Key("str", "standard"),
-        "tool": _Key("vec3", [0.0, 0.0, 0.0]),
+        "urdf": _Key("str", ""),
+        "base_link": _Key("str", ""),
+        "tip_link": _Key("str", ""),
+        "tool": _Key("tool", [0.0, 0.0, 0.0]),
         "q_min": _Key("joints"),
         "q_max": _Key("joints"),
         "qd_min": _Key("joints"),
@@ -184,8 +197,8 @@ class Scenario:
 
     @property
     def spatial(self) -> bool:
-        """True for an arm in 3-D (given by DH rows)."""
-        return self.arm.dh is not None
+        """True for an arm in 3-D (given by DH rows or a URDF file)."""
+        return self.arm.dh is not None or self.arm.chain is not None
 
     @property
     def nt(self) -> int:
@@ -216,6 +229,8 @@ class Scenario:
     @cached_property
     def serial_arm(self) -> SerialArm:
         """The kinematic model of this scenario's spatial arm."""
+        if self.arm.chain is not None:
+            return SerialArm.from_chain(self.arm.chain, self.arm.tool)
         if self.arm.dh is None:
             raise ScenarioError(
                 self.source, "arm", "is a planar arm (arm.lengths), not a spatial one"
@@ -236,9 +251,12 @@ class Scenario:
 
     @property
     def link_lengths(self) -> Vector:
-        """Length of each link (m): the planar lengths, or ``hypot(a, d)`` of each DH row."""
+        """Length of each link (m): the planar lengths, ``hypot(a, d)`` of each DH row, or the
+        length of each joint's fixed origin in a URDF chain."""
         if self.arm.lengths is not None:
             return self.arm.lengths
+        if self.arm.chain is not None:
+            return np.asarray(np.linalg.norm(self.arm.chain.origins[:, :3, 3], axis=1))
         return np.hypot(self.arm.dh[:, 0], self.arm.dh[:, 2])  # type: ignore[index]
 
     @cached_property
@@ -265,12 +283,13 @@ class Scenario:
     def geometry(self) -> Geometry:
         """A spatial arm's chain (DH rows, convention, tool, manipulability rows) as kernel
         input; a planar arm has no DH rows."""
-        a = self.arm
         rows = {"all": ROWS_ALL, "trans": ROWS_TRANS, "rot": ROWS_ROT}[self.motion.axes]
-        tool = np.eye(4)
-        tool[:3, 3] = a.tool
-        dh = np.array(a.dh if a.dh is not None else np.zeros((0, 4)), dtype=float)
-        return Geometry(dh, a.convention == "modified", tool, rows)
+        if not self.spatial:
+            return Geometry(
+                np.zeros((0, 4, 4)), np.zeros((0, 3)), np.zeros(0, bool), np.eye(4), rows
+            )
+        arm = self.serial_arm
+        return Geometry(arm._origins, arm._axes, arm._prismatic, arm._end, rows)
 
     @property
     def max_steps(self) -> int:
@@ -290,7 +309,9 @@ class Scenario:
                 key: _plain(getattr(obj, key))
                 for key in SCHEMA[section]
                 if getattr(obj, key) is not None
+                and not (SCHEMA[section][key].kind == "str" and getattr(obj, key) == "")
                 and (self.spatial or f"{section}.{key}" not in SPATIAL_ONLY)
+                and not (self.arm.chain is not None and f"{section}.{key}" == "arm.convention")
             }
             if (
                 self.spatial
@@ -436,14 +457,21 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                         f"unknown key (known in [{key}]: {', '.join(SCHEMA[key])})",
                     )
 
-    raw_arm = data.get("arm", {})
-    raw_lengths, raw_dh = raw_arm.get("lengths"), raw_arm.get("dh")
-    if raw_lengths is not None and raw_dh is not None:
+    raw_arm = dict(data.get("arm", {}))
+    raw_lengths, raw_dh, raw_urdf = raw_arm.get("lengths"), raw_arm.get("dh"), raw_arm.get("urdf")
+    given = [k for k, v in (("lengths", raw_lengths), ("dh", raw_dh), ("urdf", raw_urdf)) if v]
+    if len(given) > 1:
         raise check.fail(
-            "arm.dh", "a planar arm has arm.lengths, a spatial one arm.dh: give one of them"
+            f"arm.{given[1]}",
+            "a planar arm has arm.lengths, a spatial one arm.dh or arm.urdf: give one of them",
         )
-    spatial = raw_dh is not None
-    if spatial:
+    spatial = raw_dh is not None or raw_urdf is not None
+    robot = None
+    if raw_urdf is not None:
+        robot = _read_robot(check, raw_arm, source)
+        n = robot.chain.n
+        data = {**data, "arm": raw_arm}  # the file's limits where the scenario gives none
+    elif spatial:
         if not isinstance(raw_dh, list) or len(raw_dh) < 1:
             raise check.fail(
                 "arm.dh", "must be a list of rows [a, alpha, d, offset], one per joint"
@@ -485,6 +513,11 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                 parsed[section][key] = check.vector(dotted, value, nt, spec.scalar_ok)
             elif spec.kind == "vec3":
                 parsed[section][key] = check.vector(dotted, value, 3, False)
+            elif spec.kind == "tool":
+                if isinstance(value, list) and len(value) == 4:
+                    parsed[section][key] = check.table(dotted, value, 4, 4).reshape(4, 4)
+                else:
+                    parsed[section][key] = check.vector(dotted, value, 3, False)
             elif spec.kind == "dh":
                 parsed[section][key] = check.table(dotted, value, n, 4)
             elif spec.kind == "rows":
@@ -505,6 +538,18 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                     raise check.fail(dotted, f"must be a string, got {_show(value)}")
                 parsed[section][key] = value
     parsed["motion"]["task"] = task
+    parsed["arm"]["chain"] = None if robot is None else robot.chain
+    if robot is None and (parsed["arm"]["base_link"] or parsed["arm"]["tip_link"]):
+        key = "arm.base_link" if parsed["arm"]["base_link"] else "arm.tip_link"
+        raise check.fail(key, "is for a robot from a URDF file (arm.urdf)")
+    if spatial:
+        try:
+            _tool(parsed["arm"]["tool"], source, "arm.tool")
+        except ScenarioError:
+            raise check.fail(
+                "arm.tool",
+                "must be a translation [x, y, z] (m) or a rigid 4 x 4 transform (rows)",
+            ) from None
     if parsed["arm"]["convention"] not in ("standard", "modified"):
         raise check.fail(
             "arm.convention",
@@ -536,6 +581,47 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     )
     check_start(check, scenario)
     return scenario
+
+
+def _read_robot(check: _Checker, raw_arm: dict[str, Any], source: str) -> UrdfArm:
+    """The URDF file of ``arm.urdf`` (relative to the scenario file), read into its chain; the
+    file's joint limits fill the ``arm`` keys the scenario leaves out (in place)."""
+    raw = raw_arm["urdf"]
+    if not isinstance(raw, str) or not raw:
+        raise check.fail("arm.urdf", f"must be the path of a URDF file, got {_show(raw)}")
+    names = {}
+    for key in ("base_link", "tip_link"):
+        value = raw_arm.get(key)
+        if value is not None and (not isinstance(value, str) or not value):
+            raise check.fail(f"arm.{key}", f"must be a link's name, got {_show(value)}")
+        names[key] = value or None
+    if "convention" in raw_arm:
+        raise check.fail("arm.convention", "is for DH rows (arm.dh), not a URDF file")
+    path = Path(raw).expanduser()
+    if not path.is_absolute():
+        here = Path(source)
+        path = (here.parent if here.is_file() else Path.cwd()) / path
+    path = path.resolve()
+    try:
+        robot = read_urdf(path, names["base_link"], names["tip_link"])
+    except ScenarioError as exc:
+        where = f"arm.urdf ({path.name})" if not exc.key else f"arm.urdf ({path.name}): {exc.key}"
+        raise check.fail(where, exc.problem) from None
+    raw_arm["urdf"] = str(path)
+    raw_arm["base_link"], raw_arm["tip_link"] = robot.base_link, robot.tip_link
+    defaults = {"q_min": robot.q_min, "q_max": robot.q_max, "qd_max": robot.qd_max}
+    defaults["qd_min"] = -robot.qd_max
+    for key, values in defaults.items():
+        if key in raw_arm:
+            continue
+        missing = [robot.chain.names[j] for j in np.flatnonzero(~np.isfinite(values))]
+        if missing:
+            raise check.fail(
+                f"arm.{key}",
+                f"is required: the file gives none for {', '.join(missing)}",
+            )
+        raw_arm[key] = [float(v) for v in values]
+    return robot
 
 
 # ----------------------------------------------------------------------------------- loading

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from .arm import Vector
+from .serial import Chain
 from .validation import Policy
 
 
@@ -22,9 +23,11 @@ class Task(StrEnum):
 
 @dataclass(frozen=True, eq=False)
 class ArmSpec:
-    """The arm: planar link ``lengths`` (m), or spatial DH rows ``dh`` (``[a, alpha, d, offset]``;
-    m, rad) with their ``convention`` and the ``tool`` translation (m); joint limits ``q_min,
-    q_max`` (rad) and velocity limits (rad/s), per joint."""
+    """The arm: planar link ``lengths`` (m), spatial DH rows ``dh`` (``[a, alpha, d, offset]``;
+    m, rad) with their ``convention``, or the chain of a ``urdf`` file from ``base_link`` to
+    ``tip_link`` (read into ``chain``); a spatial arm's ``tool`` (a translation, m, or a 4 x 4
+    transform); joint limits ``q_min, q_max`` (rad, or m for a prismatic joint) and velocity
+    limits (rad/s or m/s), per joint."""
 
     lengths: Vector | None
     dh: Vector | None
@@ -34,6 +37,10 @@ class ArmSpec:
     q_max: Vector
     qd_min: Vector
     qd_max: Vector
+    urdf: str = ""
+    base_link: str = ""
+    tip_link: str = ""
+    chain: Chain | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,15 +1,27 @@
-"""Serial arm with revolute joints in 3-D, from Denavit-Hartenberg parameters.
+"""Serial arm in 3-D: a chain of revolute and prismatic joints, from Denavit-Hartenberg parameters or
+a URDF file.
 
-``SerialArm(dh=[[a, alpha, d, offset], ...], convention="standard" | "modified", tool=...)`` (m,
-rad), with the conventions of robotics-toolbox-python's ``DHRobot``:
+Every arm is held as one chain (:class:`Chain`): per joint a fixed transform ``origin`` from the
+frame of the previous joint, then the joint's motion, a rotation by ``q`` about its unit ``axis``
+(revolute) or a translation by ``q`` along it (prismatic), in that frame; a fixed ``tail`` after
+the last joint. These are URDF's joint semantics (:mod:`emdm.core.urdf` reads a file into a
+chain), and DH rows are one case of them:
 
-- a standard DH link is ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``; a modified (Craig) DH link is
-  ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``; ``theta = q + offset``;
+- ``SerialArm(dh=[[a, alpha, d, offset], ...], convention="standard" | "modified", tool=...)``
+  (m, rad), with the conventions of robotics-toolbox-python's ``DHRobot``: a standard DH link is
+  ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``, a modified (Craig) DH link ``Rx(alpha) Tx(a) Rz(theta)
+  Tz(d)``, ``theta = q + offset``. As a chain (``Tz`` and ``Rz`` commute): standard, joint ``i``'s
+  origin is ``Tx(a_(i-1)) Rx(alpha_(i-1)) Tz(d_i) Rz(offset_i)`` and the tail ``Tx(a_n)
+  Rx(alpha_n)``; modified, joint ``i``'s origin is ``Rx(alpha_i) Tx(a_i) Rz(offset_i) Tz(d_i)``
+  and the tail the identity; every axis is ``z``;
+- ``SerialArm.from_urdf(path, base_link=..., tip_link=..., tool=...)``: the chain of a URDF file;
 - ``forward(q)``: the 4 x 4 pose of the end effector in the base frame, the tool transform last;
 - ``jacobian(q)``: the 6 x n geometric Jacobian in the base frame, linear rows first (``jacob0``):
-  column ``k`` is ``(z_k x (p_e - o_k), z_k)`` for joint ``k``'s axis ``z_k`` through ``o_k``;
-- ``hessian(q)``: ``H[i] = dJ/dq_i`` (n x 6 x n, ``hessian0``), from the Jacobian alone:
-  ``dv_k/dq_i = z_min(i,k) x v_max(i,k)``, ``dz_k/dq_i = z_i x z_k`` for ``i < k`` (else 0);
+  column ``k`` is ``(z_k x (p_e - o_k), z_k)`` for a revolute joint ``k``'s axis ``z_k`` through
+  ``o_k``, ``(z_k, 0)`` for a prismatic one;
+- ``hessian(q)``: ``H[i] = dJ/dq_i`` (n x 6 x n, ``hessian0``), from the Jacobian alone; for
+  revolute joints ``dv_k/dq_i = z_min(i,k) x v_max(i,k)``, ``dz_k/dq_i = z_i x z_k`` for
+  ``i < k`` (else 0); prismatic joints in :func:`emdm.core.serial_kernels.serial_hessian`;
 - ``manipulability(q, axes)``: ``m = sqrt(det(Ja Ja^T))`` over the rows ``axes`` selects (``"all"``,
   ``"trans"``: the three linear rows, ``"rot"``: the three angular rows);
 - ``manipulability_jacobian(q, axes)``: ``Jm_i = dm/dq_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)``
@@ -21,6 +33,9 @@ Every formula is one compiled kernel in :mod:`emdm.core.serial_kernels`.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -31,9 +46,9 @@ from .serial_kernels import (
     ROWS_ALL,
     ROWS_ROT,
     ROWS_TRANS,
+    chain_kinematics,
     manipulability_gradient,
     serial_hessian,
-    serial_kinematics,
 )
 
 Matrix = NDArray[np.float64]
@@ -41,7 +56,7 @@ Axes = Literal["all", "trans", "rot"]
 _ROWS = {"all": ROWS_ALL, "trans": ROWS_TRANS, "rot": ROWS_ROT}
 
 
-def _tool(tool: ArrayLike | None) -> Matrix:
+def _tool(tool: ArrayLike | None, source: str = "SerialArm", key: str = "tool") -> Matrix:
     """The tool transform: ``None`` (identity), a translation ``(x, y, z)`` (m) or a 4 x 4 pose."""
     if tool is None:
         return np.eye(4)
@@ -52,22 +67,81 @@ def _tool(tool: ArrayLike | None) -> Matrix:
         arr = out
     if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
         raise ScenarioError(
-            "SerialArm", "tool", "must be a translation [x, y, z] (m) or a finite 4 x 4 transform"
+            source, key, "must be a translation [x, y, z] (m) or a finite 4 x 4 transform"
         )
     rotation = arr[:3, :3]
     if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-9) or not np.allclose(
         arr[3], [0.0, 0.0, 0.0, 1.0]
     ):
         raise ScenarioError(
-            "SerialArm",
-            "tool",
+            source,
+            key,
             "must be a rigid transform (orthonormal rotation, last row 0 0 0 1)",
         )
     return np.ascontiguousarray(arr)
 
 
+def _rx(angle: float) -> Matrix:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]])
+
+
+def _rz(angle: float) -> Matrix:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1]])
+
+
+def _shift(x: float = 0.0, z: float = 0.0) -> Matrix:
+    out = np.eye(4)
+    out[0, 3], out[2, 3] = x, z
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Chain:
+    """A serial chain in URDF's semantics (module notes): per joint its ``origins`` (n x 4 x 4),
+    unit ``axes`` (n x 3, in the joint's frame) and ``prismatic`` flags (n,), the fixed ``tail``
+    after the last joint (4 x 4), the joints' ``names``, and ``travel``: the largest ``|q|`` of
+    each prismatic joint (m; 0 for a revolute one), so that :attr:`SerialArm.reach` bounds the
+    arm."""
+
+    origins: Matrix
+    axes: Matrix
+    prismatic: NDArray[np.bool_]
+    tail: Matrix
+    names: tuple[str, ...]
+    travel: Matrix
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return int(self.axes.shape[0])
+
+    @classmethod
+    def from_dh(cls, dh: Matrix, modified: bool) -> Chain:
+        """The chain of DH rows ``[a, alpha, d, offset]`` (module notes)."""
+        n = dh.shape[0]
+        origins = np.empty((n, 4, 4))
+        for i, (a, alpha, d, offset) in enumerate(dh):
+            if modified:
+                origins[i] = _rx(alpha) @ _shift(x=a) @ _rz(offset) @ _shift(z=d)
+            else:
+                before = np.eye(4) if i == 0 else _shift(x=dh[i - 1, 0]) @ _rx(dh[i - 1, 1])
+                origins[i] = before @ _shift(z=d) @ _rz(offset)
+        tail = np.eye(4) if modified else _shift(x=dh[-1, 0]) @ _rx(dh[-1, 1])
+        axes = np.zeros((n, 3))
+        axes[:, 2] = 1.0
+        names = tuple(f"joint{i + 1}" for i in range(n))
+        return cls(origins, axes, np.zeros(n, dtype=bool), tail, names, np.zeros(n))
+
+
 class SerialArm:
-    """A serial chain of ``n >= 1`` revolute joints from DH rows ``[a, alpha, d, offset]``."""
+    """A serial chain of ``n >= 1`` joints: DH rows ``[a, alpha, d, offset]`` (revolute joints)
+    or, through :meth:`from_urdf` and :meth:`from_chain`, any chain of revolute and prismatic
+    joints."""
+
+    dh: Matrix | None
+    """The DH rows (None for an arm from a URDF file or a chain)."""
 
     def __init__(
         self,
@@ -86,15 +160,47 @@ class SerialArm:
             raise ScenarioError(
                 "SerialArm", "convention", f'must be "standard" or "modified", got {convention!r}'
             )
-        self.dh: Matrix = np.ascontiguousarray(table)
+        self._set_chain(Chain.from_dh(table, convention == "modified"), _tool(tool))
+        self.dh = np.ascontiguousarray(table)
         self.dh.setflags(write=False)
-        self._dh = self.dh.copy()  # writable: one compiled signature
-        self.convention = convention
-        self.modified = convention == "modified"
-        self.tool: Matrix = _tool(tool)
-        self.n: int = int(table.shape[0])
+        self.convention: str = convention
+
+    @classmethod
+    def from_chain(cls, chain: Chain, tool: ArrayLike | None = None) -> SerialArm:
+        """The arm of a :class:`Chain`, with a ``tool`` (translation or 4 x 4) after its tail."""
+        arm = cls.__new__(cls)
+        arm._set_chain(chain, _tool(tool))
+        arm.dh = None
+        arm.convention = "urdf"
+        return arm
+
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | Path,
+        *,
+        base_link: str | None = None,
+        tip_link: str | None = None,
+        tool: ArrayLike | None = None,
+    ) -> SerialArm:
+        """The arm of a URDF file from ``base_link`` to ``tip_link`` (:func:`emdm.core.urdf.read_urdf`;
+        each may be omitted where the file leaves one choice)."""
+        from .urdf import read_urdf
+
+        return cls.from_chain(read_urdf(path, base_link, tip_link).chain, tool)
+
+    def _set_chain(self, chain: Chain, tool: Matrix) -> None:
+        self.chain = chain
+        self.n: int = chain.n
+        self.tool: Matrix = tool
+        self._origins = np.ascontiguousarray(chain.origins, dtype=float)
+        self._axes = np.ascontiguousarray(chain.axes, dtype=float)
+        self._prismatic = np.ascontiguousarray(chain.prismatic, dtype=np.bool_)
+        self._end = np.ascontiguousarray(chain.tail @ tool)  # the tail, then the tool
 
     def __repr__(self) -> str:
+        if self.dh is None:
+            return f"SerialArm(chain of {self.n} joints: {', '.join(self.chain.names)})"
         return f"SerialArm(dh={self.dh.tolist()}, convention={self.convention!r})"
 
     dim = 3
@@ -103,13 +209,19 @@ class SerialArm:
     @property
     def reach(self) -> float:
         """Farthest the end effector can be from the base (m): ``|a| + |d|`` over the DH rows plus
-        the tool's length."""
-        return float(
-            np.sum(np.abs(self.dh[:, 0]) + np.abs(self.dh[:, 2])) + np.linalg.norm(self.tool[:3, 3])
-        )
+        the tool's length; for any other chain, the lengths of its fixed translations plus the
+        largest travel of each prismatic joint (:attr:`Chain.travel`)."""
+        if self.dh is not None:
+            return float(
+                np.sum(np.abs(self.dh[:, 0]) + np.abs(self.dh[:, 2]))
+                + np.linalg.norm(self.tool[:3, 3])
+            )
+        fixed = np.linalg.norm(self._origins[:, :3, 3], axis=1).sum()
+        return float(fixed + np.linalg.norm(self._end[:3, 3]) + self.chain.travel.sum())
 
     def joint_positions(self, q: ArrayLike) -> Matrix:
-        """Origins of the base and of every link frame, then the end effector: (n + 2) x 3 (m)."""
+        """The base, the origin of every joint's frame (on its axis), then the end effector:
+        (n + 2) x 3 (m)."""
         origins = self.link_frames(q)[:, :3, 3]
         return np.vstack((origins, self.forward(q)[:3, 3]))
 
@@ -125,7 +237,7 @@ class SerialArm:
         q_arr = np.ascontiguousarray(q, dtype=float)
         if q_arr.shape != (self.n,):
             raise ScenarioError(
-                "SerialArm", "q", f"expected {self.n} joint angles, got shape {q_arr.shape}"
+                "SerialArm", "q", f"expected {self.n} joint values, got shape {q_arr.shape}"
             )
         return q_arr
 
@@ -133,13 +245,21 @@ class SerialArm:
         """Link frames ((n + 1) x 4 x 4), end-effector pose and Jacobian at ``q``."""
         frames = np.empty((self.n + 1, 4, 4))
         T, J = np.empty((4, 4)), np.empty((6, self.n))
-        serial_kinematics(
-            self._dh, self.modified, self.tool, self._check_q(q), frames, np.empty((4, 4)), T, J
+        chain_kinematics(
+            self._origins,
+            self._axes,
+            self._prismatic,
+            self._end,
+            self._check_q(q),
+            frames,
+            np.empty((4, 4)),
+            T,
+            J,
         )
         return frames, T, J
 
     def link_frames(self, q: ArrayLike) -> Matrix:
-        """Poses of the base and of every link frame ((n + 1) x 4 x 4, base frame), for drawing."""
+        """Poses of the base and of the frame after every joint ((n + 1) x 4 x 4, base frame)."""
         return self._kinematics(q)[0]
 
     def forward(self, q: ArrayLike) -> Matrix:
@@ -153,7 +273,7 @@ class SerialArm:
     def hessian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Kinematic Hessian ``H[i] = dJ/dq_i`` (n x 6 x n) in the base frame."""
         H = np.empty((self.n, 6, self.n))
-        serial_hessian(self.jacobian(q), H)
+        serial_hessian(self.jacobian(q), self._prismatic, H)
         return H
 
     def manipulability(self, q: ArrayLike, axes: Axes = "all") -> float:
@@ -172,7 +292,7 @@ class SerialArm:
             )
         J = self.jacobian(q)
         H = np.empty((self.n, 6, self.n))
-        serial_hessian(J, H)
+        serial_hessian(J, self._prismatic, H)
         Jm = np.empty(self.n)
         m = manipulability_gradient(J, H, _ROWS[axes], Jm)
         return float(m), Jm

@@ -1,5 +1,5 @@
-"""Kinematics of a serial chain of revolute joints in 3-D, compiled: pose, geometric Jacobian,
-kinematic Hessian, manipulability and its Jacobian.
+"""Kinematics of a serial chain of revolute and prismatic joints in 3-D, compiled: pose, geometric
+Jacobian, kinematic Hessian, manipulability and its Jacobian.
 
 The one implementation behind :class:`~emdm.core.serial.SerialArm`; the formulas are stated in
 ``docs/mathematics.md`` ("Spatial arms") and in the docstring of :mod:`emdm.core.serial`.
@@ -17,27 +17,11 @@ from .jit import kernel
 from .tolerances import CHOLESKY_PIVOT
 
 F64 = NDArray[np.float64]
+B8 = NDArray[np.bool_]
 
 ROWS_ALL, ROWS_TRANS, ROWS_ROT = 0, 1, 2
 """Which rows of the 6 x n Jacobian a manipulability uses: all, the linear (first three) rows,
 or the angular (last three) rows."""
-
-
-@kernel
-def link_transform(a: float, alpha: float, d: float, theta: float, modified: bool, T: F64) -> None:
-    """``T`` = the transform of one link: standard DH ``Rz(theta) Tz(d) Tx(a) Rx(alpha)``,
-    modified (Craig) DH ``Rx(alpha) Tx(a) Rz(theta) Tz(d)``."""
-    ct, st = math.cos(theta), math.sin(theta)
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    if modified:
-        T[0, 0], T[0, 1], T[0, 2], T[0, 3] = ct, -st, 0.0, a
-        T[1, 0], T[1, 1], T[1, 2], T[1, 3] = st * ca, ct * ca, -sa, -sa * d
-        T[2, 0], T[2, 1], T[2, 2], T[2, 3] = st * sa, ct * sa, ca, ca * d
-    else:
-        T[0, 0], T[0, 1], T[0, 2], T[0, 3] = ct, -st * ca, st * sa, a * ct
-        T[1, 0], T[1, 1], T[1, 2], T[1, 3] = st, ct * ca, -ct * sa, a * st
-        T[2, 0], T[2, 1], T[2, 2], T[2, 3] = 0.0, sa, ca, d
-    T[3, 0], T[3, 1], T[3, 2], T[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 @kernel
@@ -53,60 +37,109 @@ def _compose(A: F64, B: F64, out: F64) -> None:
 
 
 @kernel
-def serial_kinematics(
-    dh: F64, modified: bool, tool: F64, q: F64, frames: F64, link: F64, T: F64, J: F64
+def chain_kinematics(
+    origins: F64, axes: F64, prismatic: B8, tool: F64, q: F64, frames: F64, W: F64, T: F64, J: F64
 ) -> None:
     """Pose ``T`` (4 x 4, base frame) of the end effector and geometric Jacobian ``J`` (6 x n,
-    base frame, linear rows first) of the chain ``dh`` (rows ``a, alpha, d, offset``; m, rad).
+    base frame, linear rows first) of a chain of ``n`` joints.
 
-    ``frames[i]`` receives the pose of link frame ``i`` (``frames[0]`` the base). Joint ``i``
-    (1-based) turns about the z axis of frame ``i - 1`` (standard DH) or ``i`` (modified DH),
-    through that frame's origin; its column is ``(z x (p_e - o), z)``.
+    Joint ``i`` sits at ``origins[i]`` (4 x 4, relative to the frame after joint ``i - 1``; the
+    base for ``i = 0``) and moves about (revolute) or along (``prismatic[i]``) the unit
+    ``axes[i]`` of that frame by ``q[i]``; ``tool`` (4 x 4) follows the last joint. So
+    ``T = prod_i (origins[i] M_i(q_i)) tool`` with ``M_i`` the rotation ``Rot(a_i, q_i)`` or the
+    translation ``q_i a_i``, URDF's joint semantics. ``frames[0]`` receives the base (identity),
+    ``frames[i + 1]`` the frame after joint ``i``; ``W`` is scratch (4 x 4).
+
+    With ``z_i`` the axis in the base frame and ``o_i`` the origin of ``frames[i + 1]``, column
+    ``i`` of ``J`` is ``(z_i x (p_e - o_i), z_i)`` (revolute) or ``(z_i, 0)`` (prismatic). A
+    rotation about the frame's own ``z`` (every DH joint, most URDF joints) takes the short path.
     """
     n = q.size
     for i in range(4):
         for j in range(4):
             frames[0, i, j] = 1.0 if i == j else 0.0
     for i in range(n):
-        link_transform(dh[i, 0], dh[i, 1], dh[i, 2], q[i] + dh[i, 3], modified, link)
-        _compose(frames[i], link, frames[i + 1])
+        _compose(frames[i], origins[i], W)
+        F = frames[i + 1]
+        ax, ay, az = axes[i, 0], axes[i, 1], axes[i, 2]
+        zx = W[0, 0] * ax + W[0, 1] * ay + W[0, 2] * az
+        zy = W[1, 0] * ax + W[1, 1] * ay + W[1, 2] * az
+        zz = W[2, 0] * ax + W[2, 1] * ay + W[2, 2] * az
+        for r in range(4):
+            F[r, 3] = W[r, 3]
+            F[3, r] = W[3, r]
+        if prismatic[i]:
+            for r in range(3):
+                for c in range(3):
+                    F[r, c] = W[r, c]
+            F[0, 3] += q[i] * zx
+            F[1, 3] += q[i] * zy
+            F[2, 3] += q[i] * zz
+        elif ax == 0.0 and ay == 0.0 and az == 1.0:
+            cq, sq = math.cos(q[i]), math.sin(q[i])
+            for r in range(3):
+                F[r, 0] = cq * W[r, 0] + sq * W[r, 1]
+                F[r, 1] = cq * W[r, 1] - sq * W[r, 0]
+                F[r, 2] = W[r, 2]
+        else:  # R_W Rot(a, q) = c R_W + s [z]x R_W + (1 - c) z a^T, with z = R_W a
+            cq, sq = math.cos(q[i]), math.sin(q[i])
+            vq = 1.0 - cq
+            for c in range(3):
+                wx, wy, wz = W[0, c], W[1, c], W[2, c]
+                a_c = axes[i, c]
+                F[0, c] = cq * wx + sq * (zy * wz - zz * wy) + vq * zx * a_c
+                F[1, c] = cq * wy + sq * (zz * wx - zx * wz) + vq * zy * a_c
+                F[2, c] = cq * wz + sq * (zx * wy - zy * wx) + vq * zz * a_c
+        J[3, i], J[4, i], J[5, i] = zx, zy, zz
     _compose(frames[n], tool, T)
     for i in range(n):
-        f = frames[i + 1] if modified else frames[i]
-        zx, zy, zz = f[0, 2], f[1, 2], f[2, 2]
-        rx, ry, rz = T[0, 3] - f[0, 3], T[1, 3] - f[1, 3], T[2, 3] - f[2, 3]
-        J[0, i] = zy * rz - zz * ry
-        J[1, i] = zz * rx - zx * rz
-        J[2, i] = zx * ry - zy * rx
-        J[3, i], J[4, i], J[5, i] = zx, zy, zz
+        zx, zy, zz = J[3, i], J[4, i], J[5, i]
+        if prismatic[i]:
+            J[0, i], J[1, i], J[2, i] = zx, zy, zz
+            J[3, i], J[4, i], J[5, i] = 0.0, 0.0, 0.0
+        else:
+            f = frames[i + 1]
+            rx, ry, rz = T[0, 3] - f[0, 3], T[1, 3] - f[1, 3], T[2, 3] - f[2, 3]
+            J[0, i] = zy * rz - zz * ry
+            J[1, i] = zz * rx - zx * rz
+            J[2, i] = zx * ry - zy * rx
 
 
 @kernel
-def serial_hessian(J: F64, H: F64) -> None:
-    """Kinematic Hessian ``H[i] = dJ/dq_i`` (n x 6 x n) of a revolute chain, from ``J`` alone.
+def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
+    """Kinematic Hessian ``H[i] = dJ/dq_i`` (n x 6 x n) of a chain, from ``J`` alone.
 
-    With ``z_k`` the axis (angular rows) and ``v_k`` the linear rows of column ``k``:
-    ``dv_k/dq_i = z_min(i,k) x v_max(i,k)`` and ``dz_k/dq_i = z_i x z_k`` for ``i < k``, else 0.
+    With ``z_k`` a joint's axis (the angular rows of a revolute column, the linear rows of a
+    prismatic one) and ``v_k`` the linear rows of column ``k``: a revolute column has
+    ``dv_k/dq_i = z_i x v_k`` for a revolute ``i <= k`` (0 for a prismatic one),
+    ``z_k x v_i`` for ``i > k``, and ``dz_k/dq_i = z_i x z_k`` for a revolute ``i < k`` (else 0);
+    a prismatic column has ``dv_k/dq_i = z_i x z_k`` for a revolute ``i < k`` (else 0) and no
+    angular rows.
     """
     n = J.shape[1]
     for i in range(n):
         for k in range(n):
-            lo, hi = min(i, k), max(i, k)
-            zx, zy, zz = J[3, lo], J[4, lo], J[5, lo]
-            vx, vy, vz = J[0, hi], J[1, hi], J[2, hi]
-            H[i, 0, k] = zy * vz - zz * vy
-            H[i, 1, k] = zz * vx - zx * vz
-            H[i, 2, k] = zx * vy - zy * vx
-            if i < k:
-                ax, ay, az = J[3, i], J[4, i], J[5, i]
-                bx, by, bz = J[3, k], J[4, k], J[5, k]
-                H[i, 3, k] = ay * bz - az * by
-                H[i, 4, k] = az * bx - ax * bz
-                H[i, 5, k] = ax * by - ay * bx
-            else:
-                H[i, 3, k] = 0.0
-                H[i, 4, k] = 0.0
-                H[i, 5, k] = 0.0
+            lx = ly = lz = 0.0
+            gx = gy = gz = 0.0
+            turns = not prismatic[i]
+            ix, iy, iz = J[3, i], J[4, i], J[5, i]
+            if not prismatic[k]:
+                if i <= k:
+                    if turns:
+                        vx, vy, vz = J[0, k], J[1, k], J[2, k]
+                        lx, ly, lz = iy * vz - iz * vy, iz * vx - ix * vz, ix * vy - iy * vx
+                else:
+                    kx, ky, kz = J[3, k], J[4, k], J[5, k]
+                    vx, vy, vz = J[0, i], J[1, i], J[2, i]
+                    lx, ly, lz = ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx
+                if i < k and turns:
+                    kx, ky, kz = J[3, k], J[4, k], J[5, k]
+                    gx, gy, gz = iy * kz - iz * ky, iz * kx - ix * kz, ix * ky - iy * kx
+            elif i < k and turns:
+                kx, ky, kz = J[0, k], J[1, k], J[2, k]
+                lx, ly, lz = iy * kz - iz * ky, iz * kx - ix * kz, ix * ky - iy * kx
+            H[i, 0, k], H[i, 1, k], H[i, 2, k] = lx, ly, lz
+            H[i, 3, k], H[i, 4, k], H[i, 5, k] = gx, gy, gz
 
 
 @kernel

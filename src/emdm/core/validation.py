@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import Vector
+from .serial import SerialArm
 
 
 class Policy(StrEnum):
@@ -289,8 +290,12 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
                 f"reachable annulus [{inner:g}, {reach:g}] m: the goal cannot be reached"
             )
     else:
-        dh = arm["dh"]
-        reach = float(np.sum(np.abs(dh[:, 0]) + np.abs(dh[:, 2])) + np.linalg.norm(arm["tool"]))
+        model = (
+            SerialArm(arm["dh"], arm["convention"], arm["tool"])
+            if arm["chain"] is None
+            else SerialArm.from_chain(arm["chain"], arm["tool"])
+        )
+        reach = model.reach
         radius = float(np.linalg.norm(motion["goal"][:3]))
         if radius > reach:
             found.append(
