@@ -39,7 +39,7 @@ MOVING = ("revolute", "continuous", "prismatic")
 @dataclass(frozen=True, eq=False)
 class UrdfArm:
     """The chain of a URDF file from ``base_link`` to ``tip_link`` and its joints' limits as the
-    file gives them (NaN where it gives none: a continuous joint's position, a missing
+    file gives them (NaN where it gives none: a continuous joint's position, a missing or zero
     velocity): positions ``q_min, q_max`` (rad or m), speed ``qd_max`` (rad/s or m/s)."""
 
     path: Path
@@ -213,8 +213,8 @@ def _chain(source: str, base: str, tip: str, path_joints: list[Any], path: Path)
             raise ScenarioError(
                 source, key, f"has inverted limits: lower {lower:g} > upper {upper:g}"
             )
-        if speed <= 0:
-            raise ScenarioError(source, key, f"has a velocity limit {speed:g} <= 0")
+        if speed <= 0:  # some files write velocity="0" for "not given"
+            speed = math.nan
         origins.append(pending @ origin)
         axes.append(axis / norm)
         prismatic.append(joint.type == "prismatic")
