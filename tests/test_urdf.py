@@ -6,6 +6,7 @@ DH preset; scenarios name URDF robots; bad files are one-line errors."""
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import math
 import subprocess
 import sys
@@ -350,3 +351,41 @@ def test_the_command_line_says_one_line_and_exits_2(tmp_path: Path) -> None:
     )
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "well-formed" in proc.stderr
+
+
+def test_a_urdf_file_is_a_template_scenario_and_every_command_takes_it(tmp_path: Path) -> None:
+    path, _, _ = robot("iiwa14")
+    with pytest.raises(ScenarioError, match=r"tip_link: is needed: the tree branches"):
+        load_scenario(path)
+    sc = load_scenario(path, {"arm.tip_link": "tool0", "motion.max_time": 12.0})
+    assert sc.n == 7 and sc.motion.task == "pose" and sc.motion.max_time == 12.0
+    arm = sc.serial_arm
+    assert arm.manipulability(sc.motion.q0) > 0.01  # not the straight, singular zero
+    run = emdm.simulate(sc, "C-EMDM")
+    assert run.reached
+    file = tmp_path / "iiwa.toml"
+    file.write_text(sc.to_toml())
+    proc = subprocess.run(
+        [sys.executable, "-m", "emdm.cli", "mmc", "--arm", str(file), "--trials", "4", "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert set(json.loads(proc.stdout)["results"][str(file)]) == {"RRMC", "PARK", "MMC", "C-EMDM"}
+    batch = emdm.simulate_batch(sc, "C-EMDM", goals=np.tile(sc.motion.goal, (3, 1)))
+    assert batch.reached.all()
+
+
+def test_obstacles_need_revolute_joints(tmp_path: Path) -> None:
+    path = _write(
+        tmp_path, _robot(("j1", "revolute", "a", "b"), ("j2", "prismatic", "b", "c")), "p.urdf"
+    )
+    data = {
+        "arm": {"urdf": str(path)},
+        "motion": {"task": "position", "q0": [0.0, 0.0], "goal": [0.0, 0.0, 0.1]},
+        "obstacles": [{"shape": "sphere", "center": [1.0, 1.0, 1.0], "radius": 0.1}],
+    }
+    with pytest.raises(ScenarioError, match="j2 is prismatic"):
+        scenario_from_dict(data)
+    del data["obstacles"]
+    assert scenario_from_dict(data).serial_arm.chain.prismatic.tolist() == [False, True]

@@ -46,6 +46,7 @@ from .args import (
     integer,
     names,
     positive,
+    scenario_name,
 )
 from .boundary import RunStopped, run_command
 from .progress import Progress, say
@@ -824,7 +825,12 @@ def build_parser() -> argparse.ArgumentParser:
         "failure rate beside the published table.",
     )
     mmc.add_argument(
-        "--arm", action="append", choices=["panda", "ur5"], help="arm (repeatable; default both)"
+        "--arm",
+        action="append",
+        type=scenario_name,
+        metavar="ARM",
+        help="panda, ur5, or a spatial scenario file or URDF robot with a pose task "
+        "(repeatable; default panda and ur5)",
     )
     mmc.add_argument(
         "--trials",

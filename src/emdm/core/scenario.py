@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
 from .distance import pack as pack_obstacles
-from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry
+from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry, rotation_vector
 from .obstacles import Obstacle, check_damper, check_start, pack_rows, parse_obstacles
 from .obstacles import distances as obstacle_distances
 from .robot import Robot
@@ -572,6 +572,13 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     )
     if obstacles:
         check_damper(check, parsed["obstacle_damper"], parsed["motion"]["dt"])
+        if robot is not None and robot.chain.prismatic.any():
+            joint = robot.chain.names[int(np.flatnonzero(robot.chain.prismatic)[0])]
+            raise check.fail(
+                "obstacles",
+                f"need an arm of revolute joints, and {joint} is prismatic (the damper's "
+                "tightening bounds rotations only)",
+            )
     scenario = Scenario(
         name=str(name),
         source=source,
@@ -624,6 +631,45 @@ def _read_robot(check: _Checker, raw_arm: dict[str, Any], source: str) -> UrdfAr
     return robot
 
 
+def urdf_template(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """A scenario for the robot of a URDF file: the file's chain and limits (``arm.base_link``,
+    ``arm.tip_link`` from ``overrides`` where the file leaves a choice), a start ``q0``, and a
+    goal the arm reaches:
+    the pose (6 or more joints; else the position) at ``q0`` moved a fifth of the way to the
+    upper limits. The other settings are the defaults; ``emdm scenario robot.urdf`` prints it.
+    The start is the most dexterous (largest manipulability) of ``q = 0`` and 64 seeded draws in
+    the middle of the limits: a straight arm at 0 (many robots' zero) is singular."""
+    overrides = dict(overrides or {})
+    source = str(path)
+    arm: dict[str, Any] = {"urdf": str(Path(path).resolve())}
+    for key in ("base_link", "tip_link"):
+        if f"arm.{key}" in overrides:
+            arm[key] = overrides.pop(f"arm.{key}")
+    check = _Checker(source)
+    robot = _read_robot(check, arm, "")
+    lo, hi = np.asarray(arm["q_min"]), np.asarray(arm["q_max"])
+    model = SerialArm.from_chain(robot.chain)
+    task = "pose" if robot.chain.n >= 6 else "position"
+    axes: Any = "all" if task == "pose" else "trans"
+    # the start: of 0 and 64 seeded draws in the middle 60 % of the limits, the most dexterous
+    draws = np.random.default_rng(0).uniform(0.2, 0.8, (64, lo.size)) * (hi - lo) + lo
+    zero = np.clip(0.0, lo, hi)
+    q0 = max((zero, *draws), key=lambda q: model.manipulability(q, axes))
+    reach = model.forward(q0 + 0.2 * (hi - q0))
+    goal = reach[:3, 3].tolist()
+    if task == "pose":
+        rotvec = np.empty(3)
+        rotation_vector(np.ascontiguousarray(reach), rotvec, 0)
+        goal += rotvec.tolist()
+    data = {
+        "name": Path(path).stem,
+        "arm": arm,
+        "motion": {"task": task, "q0": q0.tolist(), "goal": goal},
+    }
+    scenario = scenario_from_dict(data, source=source)
+    return scenario.with_overrides(overrides) if overrides else scenario
+
+
 # ----------------------------------------------------------------------------------- loading
 def parse_override(text: str) -> tuple[str, Any]:
     """``"section.key=value"`` -> ``("section.key", value)``; the value is read as TOML, else a string."""
@@ -639,13 +685,19 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
-    """Load a preset (``"task1"``, ``"task2"``) or a TOML file, apply overrides, validate.
+    """Load a preset (``"task1"``, ``"task2"``), a TOML file or a URDF file (a template scenario
+    for the robot, :func:`urdf_template`), apply overrides, validate.
 
     Raises :class:`~emdm.errors.ScenarioError` for a missing file, a file that is not TOML, or invalid
     content. Valid but suspicious settings are kept in ``scenario.warnings`` and issued as
     :class:`ScenarioWarning`.
     """
     text_name = str(name_or_path)
+    if Path(text_name).suffix.lower() == ".urdf":
+        scenario = urdf_template(text_name, overrides)
+        for message in scenario.warnings:
+            warnings.warn(f"{text_name}: {message}", ScenarioWarning, stacklevel=2)
+        return scenario
     if text_name in PRESETS and not Path(text_name).exists():
         text = resources.files("emdm.core").joinpath("scenarios", f"{text_name}.toml").read_text()
         source = text_name

@@ -25,6 +25,7 @@ sampling nor its time limit nor what counts as a failure):
 from __future__ import annotations
 
 import time
+import zlib
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -32,6 +33,7 @@ import numpy as np
 
 from ..core.controllers import Name, goal_of
 from ..core.scenario import load_scenario
+from ..errors import ScenarioError
 from ..sim.batch import simulate_batch
 
 ARMS = ("panda", "ur5")
@@ -53,9 +55,11 @@ mean final manipulability, failure rate (%)."""
 
 
 def draw_tasks(arm: str, trials: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Starts (trials x n) and goal poses (trials x 6) of the protocol (module docstring)."""
+    """Starts (trials x n) and goal poses (trials x 6) of the protocol (module docstring), for a
+    preset or any spatial scenario (a file, a URDF robot)."""
     sc = load_scenario(arm)
-    rng = np.random.default_rng(np.random.SeedSequence([seed, ARMS.index(arm)]))
+    stream = ARMS.index(arm) if arm in ARMS else zlib.crc32(sc.name.encode())
+    rng = np.random.default_rng(np.random.SeedSequence([seed, stream]))
     lo = np.asarray(sc.arm.q_min) + np.asarray(sc.damper.influence)
     hi = np.asarray(sc.arm.q_max) - np.asarray(sc.damper.influence)
     q0s = rng.uniform(lo, hi, (trials, sc.n))
@@ -78,6 +82,8 @@ def run_mmc_benchmark(
     for arm in arms:
         q0s, goals = draw_tasks(arm, trials, seed)
         sc = load_scenario(arm)
+        if not sc.spatial or sc.nt != 6:
+            raise ScenarioError(sc.source, "motion.task", "the benchmark needs a spatial pose task")
         results[arm] = {}
         for name in controllers:
             simulate_batch(sc, name, goals=goals[:1], q0s=q0s[:1])  # compiled before timing
