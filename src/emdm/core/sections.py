@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from .arm import Vector
-from .serial import Chain
+from .chain import Chain
 from .validation import Policy
 
 

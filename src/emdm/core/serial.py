@@ -1,7 +1,7 @@
 """Serial arm in 3-D: a chain of revolute and prismatic joints, from Denavit-Hartenberg parameters or
 a URDF file.
 
-Every arm is held as one chain (:class:`Chain`): per joint a fixed transform ``origin`` from the
+Every arm is held as one chain (:class:`~emdm.core.chain.Chain`): per joint a fixed transform ``origin`` from the
 frame of the previous joint, then the joint's motion, a rotation by ``q`` about its unit ``axis``
 (revolute) or a translation by ``q`` along it (prismatic), in that frame; a fixed ``tail`` after
 the last joint. These are URDF's joint semantics (:mod:`emdm.core.urdf` reads a file into a
@@ -33,8 +33,6 @@ Every formula is one compiled kernel in :mod:`emdm.core.serial_kernels`.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
@@ -42,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
+from .chain import Chain
 from .serial_kernels import (
     ROWS_ALL,
     ROWS_ROT,
@@ -50,6 +49,7 @@ from .serial_kernels import (
     manipulability_gradient,
     serial_hessian,
 )
+from .urdf import read_urdf
 
 Matrix = NDArray[np.float64]
 Axes = Literal["all", "trans", "rot"]
@@ -79,60 +79,6 @@ def _tool(tool: ArrayLike | None, source: str = "SerialArm", key: str = "tool") 
             "must be a rigid transform (orthonormal rotation, last row 0 0 0 1)",
         )
     return np.ascontiguousarray(arr)
-
-
-def _rx(angle: float) -> Matrix:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]])
-
-
-def _rz(angle: float) -> Matrix:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1.0, 0], [0, 0, 0, 1]])
-
-
-def _shift(x: float = 0.0, z: float = 0.0) -> Matrix:
-    out = np.eye(4)
-    out[0, 3], out[2, 3] = x, z
-    return out
-
-
-@dataclass(frozen=True, eq=False)
-class Chain:
-    """A serial chain in URDF's semantics (module notes): per joint its ``origins`` (n x 4 x 4),
-    unit ``axes`` (n x 3, in the joint's frame) and ``prismatic`` flags (n,), the fixed ``tail``
-    after the last joint (4 x 4), the joints' ``names``, and ``travel``: the largest ``|q|`` of
-    each prismatic joint (m; 0 for a revolute one), so that :attr:`SerialArm.reach` bounds the
-    arm."""
-
-    origins: Matrix
-    axes: Matrix
-    prismatic: NDArray[np.bool_]
-    tail: Matrix
-    names: tuple[str, ...]
-    travel: Matrix
-
-    @property
-    def n(self) -> int:
-        """Number of joints."""
-        return int(self.axes.shape[0])
-
-    @classmethod
-    def from_dh(cls, dh: Matrix, modified: bool) -> Chain:
-        """The chain of DH rows ``[a, alpha, d, offset]`` (module notes)."""
-        n = dh.shape[0]
-        origins = np.empty((n, 4, 4))
-        for i, (a, alpha, d, offset) in enumerate(dh):
-            if modified:
-                origins[i] = _rx(alpha) @ _shift(x=a) @ _rz(offset) @ _shift(z=d)
-            else:
-                before = np.eye(4) if i == 0 else _shift(x=dh[i - 1, 0]) @ _rx(dh[i - 1, 1])
-                origins[i] = before @ _shift(z=d) @ _rz(offset)
-        tail = np.eye(4) if modified else _shift(x=dh[-1, 0]) @ _rx(dh[-1, 1])
-        axes = np.zeros((n, 3))
-        axes[:, 2] = 1.0
-        names = tuple(f"joint{i + 1}" for i in range(n))
-        return cls(origins, axes, np.zeros(n, dtype=bool), tail, names, np.zeros(n))
 
 
 class SerialArm:
@@ -185,8 +131,6 @@ class SerialArm:
     ) -> SerialArm:
         """The arm of a URDF file from ``base_link`` to ``tip_link`` (:func:`emdm.core.urdf.read_urdf`;
         each may be omitted where the file leaves one choice)."""
-        from .urdf import read_urdf
-
         return cls.from_chain(read_urdf(path, base_link, tip_link).chain, tool)
 
     def _set_chain(self, chain: Chain, tool: Matrix) -> None:
@@ -210,7 +154,7 @@ class SerialArm:
     def reach(self) -> float:
         """Farthest the end effector can be from the base (m): ``|a| + |d|`` over the DH rows plus
         the tool's length; for any other chain, the lengths of its fixed translations plus the
-        largest travel of each prismatic joint (:attr:`Chain.travel`)."""
+        largest travel of each prismatic joint (:attr:`~emdm.core.chain.Chain.travel`)."""
         if self.dh is not None:
             return float(
                 np.sum(np.abs(self.dh[:, 0]) + np.abs(self.dh[:, 2]))

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import ScenarioError
-from .serial import Chain
+from .chain import Chain
 
 Vector = NDArray[np.float64]
 
