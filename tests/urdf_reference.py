@@ -1,6 +1,7 @@
 """The independent reference for URDF arms: the file read with the standard library's XML parser
 and URDF's semantics written out in numpy, in complex arithmetic so that complex-step
-differentiation gives the Hessian and the manipulability's gradient to rounding.
+differentiation gives the Hessian to rounding; the manipulability and its gradient follow from
+them in 40-digit arithmetic (mpmath).
 
 Nothing here calls emdm or yourdfpy. The semantics (the URDF specification): each joint's
 ``<origin xyz rpy>`` places its frame in its parent link's frame, ``rpy`` being fixed-axis roll
@@ -14,6 +15,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+import mpmath
 import numpy as np
 
 
@@ -120,10 +122,17 @@ def forward(joints: list[Joint], q, tool=None):
     return T, J
 
 
+def _high_precision(J, rows):
+    """``J_a`` (the rows ``rows``) of a float Jacobian as a 40-digit mpmath matrix."""
+    return mpmath.matrix(np.asarray(J, float)[rows].tolist())
+
+
 def manipulability(joints, q, rows=slice(None), tool=None):
-    """``sqrt(det(Ja Ja^T))`` (``J J^T``, not ``J J^H``: analytic in complex ``q``)."""
-    J = forward(joints, q, tool)[1][rows]
-    return np.sqrt(np.linalg.det(J @ J.T))
+    """``sqrt(det(J_a J_a^T))`` in 40-digit arithmetic from the reference Jacobian: near a
+    singularity, forming ``J_a J_a^T`` in double precision squares the condition number."""
+    with mpmath.workdps(40):
+        Ja = _high_precision(forward(joints, q, tool)[1], rows)
+        return float(mpmath.sqrt(mpmath.det(Ja * Ja.T)))
 
 
 def complex_step(f, q, h=1e-30):
@@ -138,4 +147,17 @@ def hessian(joints, q, tool=None):
 
 
 def manipulability_gradient(joints, q, rows=slice(None), tool=None):
-    return complex_step(lambda x: manipulability(joints, x, rows, tool), q)
+    """``dm/dq_i = m tr((J_a J_a^T)^-1 J_a H_a,i^T)`` in 40-digit arithmetic from the reference
+    ``J`` and its complex-step Hessian (both exact to rounding)."""
+    J = forward(joints, q, tool)[1]
+    H = hessian(joints, q, tool)
+    with mpmath.workdps(40):
+        Ja = _high_precision(J, rows)
+        A = Ja * Ja.T
+        m = mpmath.sqrt(mpmath.det(A))
+        B = A**-1 * Ja
+        out = []
+        for Hi in H:
+            Ha = _high_precision(Hi, rows)
+            out.append(float(m * sum((B * Ha.T)[a, a] for a in range(Ja.rows))))
+    return np.array(out)

@@ -1,11 +1,11 @@
 """Serial arm in 3-D: a chain of revolute and prismatic joints, from Denavit-Hartenberg parameters or
 a URDF file.
 
-Every arm is held as one chain (:class:`~emdm.core.chain.Chain`): per joint a fixed transform ``origin`` from the
-frame of the previous joint, then the joint's motion, a rotation by ``q`` about its unit ``axis``
-(revolute) or a translation by ``q`` along it (prismatic), in that frame; a fixed ``tail`` after
-the last joint. These are URDF's joint semantics (:mod:`emdm.core.urdf` reads a file into a
-chain), and DH rows are one case of them:
+Every arm is held as one chain (:class:`~emdm.core.chain.Chain`): per joint a fixed transform
+``origin`` from the frame of the previous joint, then the joint's motion, a rotation by ``q``
+about its unit ``axis`` (revolute) or a translation by ``q`` along it (prismatic), in that frame;
+a fixed ``tail`` after the last joint. These are URDF's joint semantics (:mod:`emdm.core.urdf`
+reads a file into a chain), and DH rows are one case of them:
 
 - ``SerialArm(dh=[[a, alpha, d, offset], ...], convention="standard" | "modified", tool=...)``
   (m, rad), with the conventions of robotics-toolbox-python's ``DHRobot``: a standard DH link is

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
-from .tolerances import CHOLESKY_PIVOT
+from .tolerances import FACTOR_PIVOT
 
 F64 = NDArray[np.float64]
 B8 = NDArray[np.bool_]
@@ -143,52 +143,67 @@ def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
 
 
 @kernel
-def _gradient_by_cholesky(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
-    """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` by a Cholesky factor ``L L^T`` of
-    ``Ja Ja^T`` (``m`` = the product of its pivots); -1 when a pivot is below
-    :data:`CHOLESKY_PIVOT` (near a singularity, where the SVD form is the accurate one)."""
+def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
+    """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` from a Householder factor
+    ``Ja^T = Q R`` (``Q``: n x count, orthonormal columns): ``Ja Ja^T = R^T R``, so
+    ``m = prod |R_aa|`` and ``(Ja Ja^T)^-1 Ja = R^-1 Q^T``, without forming ``Ja Ja^T`` (which
+    would square the condition number). -1 when some ``|R_aa|`` is at most
+    :data:`FACTOR_PIVOT` times the largest row norm of ``Ja`` (near a singularity, where the SVD
+    form is used)."""
     n = J.shape[1]
-    L = np.empty((count, count))
-    for a in range(count):
-        for b in range(a + 1):
-            acc = 0.0
-            for j in range(n):
-                acc += J[first + a, j] * J[first + b, j]
-            L[a, b] = acc
+    A = np.empty((n, count))  # Ja^T, overwritten by R above its diagonal and the reflectors below
     big = 0.0
     for a in range(count):
-        big = max(big, L[a, a])
+        norm2 = 0.0
+        for j in range(n):
+            A[j, a] = J[first + a, j]
+            norm2 += A[j, a] * A[j, a]
+        big = max(big, norm2)
+    scales = np.empty((2, count))  # R's diagonal, the reflectors' 2 / (v^T v)
+    diag, beta = scales[0], scales[1]
     m = 1.0
-    for a in range(count):
-        for b in range(a):
-            acc = L[a, b]
-            for c in range(b):
-                acc -= L[a, c] * L[b, c]
-            L[a, b] = acc / L[b, b]
-        acc = L[a, a]
-        for c in range(a):
-            acc -= L[a, c] * L[a, c]
-        if acc <= CHOLESKY_PIVOT * CHOLESKY_PIVOT * big:
+    for c in range(count):
+        norm2 = 0.0
+        for j in range(c, n):
+            norm2 += A[j, c] * A[j, c]
+        norm = math.sqrt(norm2)
+        alpha = -norm if A[c, c] >= 0.0 else norm
+        if norm <= FACTOR_PIVOT * math.sqrt(big):
             return -1.0
-        L[a, a] = math.sqrt(acc)
-        m *= L[a, a]
-    B = np.empty((count, n))  # B = (L L^T)^-1 Ja, column by column
-    for j in range(n):
-        for a in range(count):
-            acc = J[first + a, j]
-            for c in range(a):
-                acc -= L[a, c] * B[c, j]
-            B[a, j] = acc / L[a, a]
+        A[c, c] -= alpha  # the reflector v = x - alpha e_1 is A[c:, c]
+        vv = norm2 - 2.0 * alpha * (A[c, c] + alpha) + alpha * alpha
+        beta[c] = 2.0 / vv
+        for b in range(c + 1, count):
+            dot = 0.0
+            for j in range(c, n):
+                dot += A[j, c] * A[j, b]
+            dot *= beta[c]
+            for j in range(c, n):
+                A[j, b] -= dot * A[j, c]
+        diag[c] = alpha
+        m *= norm
+    Q = np.zeros((n, count))  # the thin Q: the reflectors applied to the first columns of I
+    for a in range(count):
+        Q[a, a] = 1.0
+    for c in range(count - 1, -1, -1):
+        for b in range(c, count):  # columns b < c of Q are still e_b, untouched by reflector c
+            dot = 0.0
+            for j in range(c, n):
+                dot += A[j, c] * Q[j, b]
+            dot *= beta[c]
+            for j in range(c, n):
+                Q[j, b] -= dot * A[j, c]
+    for j in range(n):  # Q[j] <- row j of (R^-1 Q^T)^T, i.e. B[:, j], by back substitution
         for a in range(count - 1, -1, -1):
-            acc = B[a, j]
+            acc = Q[j, a]
             for c in range(a + 1, count):
-                acc -= L[c, a] * B[c, j]
-            B[a, j] = acc / L[a, a]
+                acc -= A[a, c] * Q[j, c]
+            Q[j, a] = acc / diag[a]
     for i in range(n):
         acc = 0.0
         for a in range(count):
             for b in range(n):
-                acc += B[a, b] * H[i, first + a, b]
+                acc += Q[b, a] * H[i, first + a, b]
         Jm[i] = m * acc
     return m
 
@@ -198,7 +213,7 @@ def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
     """Manipulability ``m = sqrt(det(Ja Ja^T))`` of the rows ``rows`` (:data:`ROWS_ALL`,
     :data:`ROWS_TRANS`, :data:`ROWS_ROT`) and its gradient ``Jm`` (n,); returns ``m``.
 
-    Away from singularities, by a Cholesky factor of ``Ja Ja^T`` (:func:`_gradient_by_cholesky`);
+    Away from singularities, by a Householder factor of ``Ja^T`` (:func:`_gradient_by_qr`);
     near one, from the singular values ``s`` and vectors ``u_r, v_r`` of ``Ja``: ``m = prod s`` and
     ``Jm_i = sum_r (prod_{l != r} s_l) u_r^T Ha_i v_r``, the textbook
     ``m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` without its inverse. Where ``Ja`` loses rank (``m = 0``,
@@ -208,7 +223,7 @@ def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
     n = J.shape[1]
     first, count = (0, 6) if rows == ROWS_ALL else ((0, 3) if rows == ROWS_TRANS else (3, 3))
     if count <= n:
-        m = _gradient_by_cholesky(J, H, first, count, Jm)
+        m = _gradient_by_qr(J, H, first, count, Jm)
         if m >= 0.0:
             return m
     k = min(count, n)

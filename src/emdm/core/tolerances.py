@@ -11,12 +11,12 @@ SINGULAR_RELATIVE = 1e-14
 """Planar arm: ``m <= SINGULAR_RELATIVE (sum l)^2`` counts as an exact singularity (the minors
 are rounding); there ``Jm`` is the steepest one-sided ascent (docs/mathematics.md (21))."""
 
-CHOLESKY_PIVOT = 1e-3
-"""Spatial arm: smallest Cholesky pivot of ``Ja Ja^T`` (relative to the square root of its largest
-diagonal entry) for which the manipulability gradient uses the factor; nearer a singularity it
-takes the SVD. Forming ``Ja Ja^T`` squares the condition number: a pivot of relative size ``r``
-carries a relative rounding error of about ``eps / r^2``, so ``1e-3`` keeps ``m`` and ``Jm`` within
-about 1e-10 of the SVD form."""
+FACTOR_PIVOT = 1e-3
+"""Spatial arm: smallest diagonal entry of the triangular factor ``R`` of ``Ja^T = Q R``
+(relative to the largest row norm of ``Ja``) for which the manipulability gradient uses the
+factor; nearer a singularity it takes the SVD. The factor's rounding is about ``eps`` relative to
+``|R|`` (``Ja Ja^T`` is never formed), so ``m`` and ``Jm`` stay within a few ``eps`` of the exact
+values above the cut-off too; below it the SVD keeps them finite at the singularity."""
 
 RANK_TOL = 1e-12
 """Columns (or rows) count as independent when a pivot or 2x2 minor exceeds this, relative to
