@@ -283,3 +283,14 @@ def test_pareto_command(tmp_path, capsys):
     capsys.readouterr()
     assert main(["pareto", "task1", "--controller", "C-IVKC", "--out", str(tmp_path / "no")]) == 2
     assert "must weigh manipulability" in capsys.readouterr().err
+
+
+def test_animate_a_spatial_arm_writes_an_mp4(tmp_path):
+    """Three projections side by side make a frame of odd width; H.264 in yuv420p takes even
+    sizes only, so the frames are cropped by a pixel (the Panda's MP4 used to fail)."""
+    out = tmp_path / "anim"
+    args = ["animate", "panda", "--set", "motion.max_time=0.5", "--controller", "C-EMDM"]
+    assert main([*args, "--out", str(out)]) == 0
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    frames, _ = imageio_ffmpeg.count_frames_and_secs(str(out / "C-EMDM.mp4"))
+    assert frames >= 10

@@ -389,3 +389,18 @@ def test_obstacles_need_revolute_joints(tmp_path: Path) -> None:
         scenario_from_dict(data)
     del data["obstacles"]
     assert scenario_from_dict(data).serial_arm.chain.prismatic.tolist() == [False, True]
+
+
+def test_the_urdf_panda_goes_around_obstacles() -> None:
+    """The URDF's polyline has joint 7's origin 0.107 m before the flange, where the DH frame 7 sits
+    at the flange: the links differ, so the runs do too, and both stay outside the stop distance."""
+    path, base, tip = robot("panda")
+    dh = load_scenario("panda-obstacles")
+    data = dh.to_dict()
+    data["arm"] = {"urdf": str(path), "base_link": base, "tip_link": tip}
+    urdf = scenario_from_dict(data, source="urdf")
+    stop = urdf.obstacle_damper.stop
+    for ctrl in ("C-EMDM", "NEO"):
+        run = emdm.simulate(urdf, ctrl)
+        assert run.reached and run.clearance.min() >= stop - 1e-12
+    assert emdm.simulate(urdf, "MMC").clearance.min() < stop  # the blind baseline enters it

@@ -265,6 +265,8 @@ class Animator:
             return None
         frames = self.frames()
         height, width = frames[0].shape[:2]
+        height, width = height - height % 2, width - width % 2  # yuv420p: even sizes only
+        frames = [np.ascontiguousarray(frame[:height, :width]) for frame in frames]
         fps = self.speedup / (self.stride * self.dt)
         path.parent.mkdir(parents=True, exist_ok=True)
         writer = imageio_ffmpeg.write_frames(
@@ -278,7 +280,7 @@ class Animator:
         )
         writer.send(None)
         for frame in frames + [frames[-1]] * max(0, math.ceil(self.hold * fps) - 1):
-            writer.send(np.ascontiguousarray(frame))
+            writer.send(frame)
         writer.close()
         return path
 
