@@ -37,6 +37,7 @@ import emdm  # noqa: E402
 from emdm import SerialArm  # noqa: E402
 from emdm.core.scenario import load_scenario, scenario_from_dict  # noqa: E402
 from emdm.core.urdf import read_urdf  # noqa: E402
+from emdm.studies.bench import _median_time  # noqa: E402
 
 QUANTITIES = (
     "pose",
@@ -83,15 +84,6 @@ def accuracy(name: str, draws: int = 20) -> dict[str, float]:
     return {"joints": arm.n, "prismatic": int(read.chain.prismatic.sum()), **worst}
 
 
-def _median(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def loading(repeats: int = 20) -> dict[str, float]:
     path, base, tip = suite.robot("panda")
     data = load_scenario("panda").to_dict()
@@ -110,8 +102,8 @@ def loading(repeats: int = 20) -> dict[str, float]:
         check=True,
     )
     return {
-        "read_urdf_s": _median(lambda: read_urdf(path, base, tip), repeats),
-        "scenario_s": _median(lambda: scenario_from_dict(data, source="bench"), repeats),
+        "read_urdf_s": _median_time(lambda: read_urdf(path, base, tip), repeats),
+        "scenario_s": _median_time(lambda: scenario_from_dict(data, source="bench"), repeats),
         "cold_process_import_emdm_s": float(cold.stdout.split()[0]),
         "cold_process_first_read_s": float(cold.stdout.split()[1]),
     }
