@@ -5,6 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 OUT    ?= results
+ARGS   ?=
 
 .PHONY: install study test lint typecheck unit clean
 
@@ -17,7 +18,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 study: $(STAMP)
-	$(BIN)/emdm report --out $(OUT)/report
+	$(BIN)/emdm report --out $(OUT)/report $(ARGS)
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks

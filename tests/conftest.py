@@ -20,11 +20,13 @@ def rng():
 
 @pytest.fixture(scope="session")
 def quick_report(tmp_path_factory):
-    """One ``emdm report --quick`` for every test that reads a report (test_report, test_paper)."""
+    """One ``emdm report --quick`` for every test that reads a report (test_report, test_paper),
+    signed by two authors whose names hold TeX's special characters."""
     from emdm.cli import main
 
     out = tmp_path_factory.mktemp("report") / "report"
-    assert main(["report", "--quick", "--out", str(out)]) == 0
+    authors = ["--author", "Émilie du Châtelet", "--author", "R&D 100% $x_1$ #2"]
+    assert main(["report", "--quick", *authors, "--out", str(out)]) == 0
     return out
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -217,3 +218,37 @@ def test_the_page_loads_in_a_real_browser(report):
         assert driver.title.startswith("emdm report")
     finally:
         driver.quit()
+
+
+def test_the_authors_sign_the_paper_the_pitch_and_the_page(report, tmp_path):
+    """``emdm report --author`` (the session's quick report has two): the names, TeX-escaped, on
+    the paper's and the pitch's title pages and the page; ``--title`` replaces the title."""
+    root, _ = report
+    paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
+    pitch = (root / "paper" / "pitch.tex").read_text(encoding="utf-8")
+    page = (root / "index.html").read_text(encoding="utf-8")
+    signed = r"Émilie du Châtelet, R\&D 100\% \$x\_1\$ \#2"
+    assert signed in paper and signed in pitch
+    assert "The emdm study" not in paper
+    assert "Émilie du Châtelet, R&amp;D 100% $x_1$ #2</p>" in page
+    from emdm.outputs.report.config import BYLINE, byline
+    from emdm.outputs.report.render import write_latex
+
+    copy = tmp_path / "report"
+    shutil.copytree(root, copy)
+    (copy / BYLINE).write_text(json.dumps(byline([], "A Title of Our Own")), encoding="utf-8")
+    write_latex(copy)
+    retitled = (copy / "paper" / "paper.tex").read_text(encoding="utf-8")
+    assert r"\title{A Title of Our Own}" in retitled and "The emdm study" in retitled
+    for bad, message in ((["ok", " "], "must not be empty"), (["x" * 121], "at most 120")):
+        with pytest.raises(ValueError, match=message):
+            byline(bad)
+
+
+def test_a_bad_title_is_one_line_and_nothing_runs(tmp_path, capsys):
+    from emdm.cli import main
+
+    out = tmp_path / "r"
+    assert main(["report", "--quick", "--title", "a\nb", "--out", str(out)]) == 2
+    assert "--title: the title must be one line" in capsys.readouterr().err
+    assert not out.exists()

@@ -79,6 +79,20 @@ def positive(maximum: float) -> Callable[[str], float]:
     return parse
 
 
+def text(what: str, longest: int) -> Callable[[str], str]:
+    """One line of printable text, not empty, at most ``longest`` characters."""
+
+    def parse(value: str) -> str:
+        from ..outputs.report.config import check_text
+
+        try:
+            return check_text(what, value, longest)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    return parse
+
+
 def names(kind: str) -> Callable[[str], list[str]]:
     """One or more controller or solver names, comma-separated; each checked, case-insensitive."""
     canonical: Callable[[str], str] = (

@@ -34,6 +34,7 @@ from ..outputs.records import (
     write_json,
     write_run_folder,
 )
+from ..outputs.report.config import LONGEST_NAME, LONGEST_TITLE
 from ..sim.loop import Run, simulate
 from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, registered_solvers
 from .args import (
@@ -47,6 +48,7 @@ from .args import (
     names,
     positive,
     scenario_name,
+    text,
 )
 from .boundary import RunStopped, run_command
 from .progress import Progress, say
@@ -421,7 +423,12 @@ def cmd_report(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with Progress(f"report ({'quick' if args.quick else 'full'})", unit="part") as bar:
         prov = build_report(
-            out, quick=args.quick, workers=args.workers, progress=lambda m: bar.step(note=m)
+            out,
+            quick=args.quick,
+            workers=args.workers,
+            progress=lambda m: bar.step(note=m),
+            authors=args.author or (),
+            title=args.title,
         )
     if prov.get("compiled", {}).get("hint"):
         print(prov["compiled"]["hint"], file=sys.stderr)
@@ -742,6 +749,19 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_quick(rep, "a reduced study in about 20 s (demos, tests)")
     add_workers(rep, "up to 2")
+    rep.add_argument(
+        "--author",
+        action="append",
+        type=text("an author's name", LONGEST_NAME),
+        metavar="NAME",
+        help="a name on the paper, the pitch and the page (repeatable, in order)",
+    )
+    rep.add_argument(
+        "--title",
+        type=text("the title", LONGEST_TITLE),
+        metavar="TEXT",
+        help="the paper's and the pitch's title (default: the study's own)",
+    )
     add_out(rep, "results/report")
     rep.set_defaults(func=cmd_report)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,6 +52,38 @@ QUICK = ReportConfig(
     mp4=False,
     mmc_trials=40,
 )
+
+BYLINE = "data/byline.json"
+"""The authors and title given to ``emdm report`` (:func:`byline`), read by the paper, the pitch
+and the page."""
+LONGEST_NAME, LONGEST_TITLE = 120, 200
+
+
+def check_text(what: str, text: str, longest: int) -> str:
+    """``text`` stripped, or a ValueError naming ``what``: empty, longer than ``longest``
+    characters, or holding a control character (a newline would break the title page)."""
+    clean = text.strip()
+    if not clean:
+        raise ValueError(f"{what} must not be empty")
+    if len(clean) > longest:
+        raise ValueError(f"{what} must be at most {longest} characters, got {len(clean)}")
+    if not clean.isprintable():
+        raise ValueError(f"{what} must be one line of printable characters")
+    return clean
+
+
+def byline(authors: Sequence[str] = (), title: str | None = None) -> dict[str, Any]:
+    """The record behind the title page: ``authors`` in order (at most 20) and an optional
+    ``title`` replacing the study's own, each checked by :func:`check_text`."""
+    if isinstance(authors, str) or len(authors) > 20:
+        raise ValueError("authors must be a list of at most 20 names")
+    out: dict[str, Any] = {
+        "authors": [check_text("an author's name", a, LONGEST_NAME) for a in authors]
+    }
+    if title is not None:
+        out["title"] = check_text("the title", title, LONGEST_TITLE)
+    return out
+
 
 TASKS = ("task1", "task2")
 PAIRS = {"UC": ("UC-IVKC", "UC-EMDM"), "C": ("C-IVKC", "C-EMDM")}

@@ -72,6 +72,9 @@ class Document:
     figures: dict[str, Figure]
     tables: dict[str, Table]
     answers: list[tuple[str, Sentence]] = field(default_factory=list)
+    authors: tuple[str, ...] = ()
+    """The names on the paper, the pitch and the page (``emdm report --author``); none: the
+    study signs as "The emdm study"."""
 
     def number(self) -> None:
         """Number figures and tables by first appearance; fill in the references' numbers."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .config import PAIRS
+from .config import BYLINE, PAIRS
 from .document import Document, Figure, Section, Table
 from .trace import Cite, Data, Math, Num, Ref, Sentence, Text, format_value, sentence
 
@@ -180,8 +180,11 @@ class Story:
         self.evidence_table(sections)
         for sec in sections:
             sec.figures = [k for k in sec.figures if k in self.figures]
+        byline = self.d.load(BYLINE) if self.d.exists(BYLINE) else {}
         doc = Document(
-            title="Effort-Minimising, Dexterity-Maximising Velocity Control of Planar Arms",
+            title=byline.get("title")
+            or "Effort-Minimising, Dexterity-Maximising Velocity Control of Planar Arms",
+            authors=tuple(byline.get("authors", ())),
             abstract=self.abstract(),
             sections=[s for s in sections if s is not None],
             figures=self.figures,

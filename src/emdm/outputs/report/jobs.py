@@ -37,7 +37,17 @@ from .. import paper_figures as pf
 from ..animate import animate
 from ..records import atomic_output, cell, write_csv, write_json, write_run_folder
 from . import explain
-from .config import EVIDENCE, FULL, PAIRS, QUICK, TASKS, Evidence, ReportConfig
+from .config import (
+    BYLINE,
+    EVIDENCE,
+    FULL,
+    PAIRS,
+    QUICK,
+    TASKS,
+    Evidence,
+    ReportConfig,
+    byline,
+)
 
 PAPER_FIGURES = "paper/figures"
 SLIDE_FIGURES = "paper/slides"
@@ -413,8 +423,13 @@ def build_report(
     workers: int | None = None,
     progress: Callable[[str], None] | None = None,
     compile_pdf: bool = True,
+    authors: Sequence[str] = (),
+    title: str | None = None,
 ) -> dict[str, Any]:
     """Run the whole study and write the report into ``out`` (atomically). Returns provenance.
+
+    ``authors`` (names, in order) sign the paper, the pitch and the page, and ``title`` replaces
+    the study's own (checked first: a ValueError names the bad one).
 
     ``out`` receives ``index.html``, ``paper/`` (``paper.tex`` and ``pitch.tex``, and their PDFs
     when a TeX engine is installed and ``compile_pdf``), ``animations/``, ``data/`` and
@@ -422,11 +437,13 @@ def build_report(
     """
     from .render import compile_documents, write_html, write_latex
 
+    names = byline(authors, title)
     cfg = QUICK if quick else FULL
     say = progress or (lambda _msg: None)
     start = time.perf_counter()
     workers = workers or min(2, os.cpu_count() or 1)
     with atomic_output(Path(out), command="emdm report") as stage:
+        write_json(stage / BYLINE, names)
         scenarios = {task: load_scenario(task) for task in TASKS}
         runs = {task: {c: simulate(sc, c) for c in CONTROLLERS} for task, sc in scenarios.items()}
         for task, task_runs in runs.items():
