@@ -170,9 +170,11 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.65 if n == 3 else 2.35) if medium is PAPER else 3.4
+    height = (2.8 if n == 3 else 2.45) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
-        outer = fig.add_gridspec(2, 2, height_ratios=[1.0, 1.45 if n == 3 else 1.2])
+        # the joint strips get most of the height: limits, damper zones and a joint held near its
+        # limit must be readable at column width (about 9 mm per strip in the paper)
+        outer = fig.add_gridspec(2, 2, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
         ax_m = fig.add_subplot(outer[0, 0])
         ax_e = fig.add_subplot(outer[0, 1])
         q_axes = _column(fig, outer[1, 0], n)
@@ -188,8 +190,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
             _shade(ax, spans)
         ax_m.set_ylabel(r"$m$ (m$^2$)")
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)")
-        ax_m.set_xlabel(r"$t$ (s)")
-        ax_e.set_xlabel(r"$t$ (s)")
+        # time in seconds on every panel: its label only under the joint strips
         lo, hi = sc.arm.q_min, sc.arm.q_max
         for j in range(n):
             ax = q_axes[j]
@@ -211,10 +212,10 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             span = max(top, limit) * 1.15
             qd_axes[j].set_ylim(-span, span)
-            qspan = [
-                min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs)) - 0.2,
-                max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs)) + 0.2,
-            ]
+            bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
+            top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
+            margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
+            qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
             # two ticks per strip (three collide at this height): the position limits, and the
             # velocity limits unless the commands go far beyond them (UC)
@@ -377,10 +378,26 @@ def workspace_figure(
 
 
 def _ratio_tex(ratio: float) -> str:
-    """A weight ratio as math: ``10^{3}`` for powers of ten, else three digits."""
+    """A weight ratio as math: ``10^{3}`` for powers of ten, ``5.62\times10^{3}`` for others
+    beyond [0.01, 1000), else three digits (never a computer's ``5.62e+03``)."""
     if ratio > 0 and abs(math.log10(ratio) - round(math.log10(ratio))) < 1e-9:
         return rf"10^{{{round(math.log10(ratio))}}}"
+    if ratio > 0 and not 0.01 <= ratio < 1000:
+        mantissa, exponent = f"{ratio:.2e}".split("e")
+        return rf"{mantissa}\times10^{{{int(exponent)}}}"
     return f"{ratio:.3g}"
+
+
+def _value_axis(ax: Any, values: Any) -> None:
+    """A log y axis with labelled decades where the values span more than a factor of 30, else a
+    linear one with three plain ticks: a log axis within one decade shows no label at all."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v) & (v > 0)]
+    if v.size and v.max() > 30 * v.min():
+        ax.set_yscale("log")
+        _log_axis(ax.yaxis)
+    else:
+        ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
 
 
 def _log_axis(axis: Any) -> None:
@@ -426,7 +443,7 @@ def _front_axes(
     )
     near = int(info["nominal_index"])  # the point of the nominal ratio, found with the data
     _ring(ax, M[near], E[near], medium)
-    ax.set_yscale("log")
+    _value_axis(ax, E)
     note = ""
     if info["degenerate"]:
         note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
@@ -446,7 +463,7 @@ def _front_axes(
     if info["degenerate"]:
         x, y = M[0], E[0]
         ax.set_xlim(x - 0.5 * abs(x) - 1e-3, x + 0.5 * abs(x) + 1e-3)
-        ax.set_ylim(y / 3, y * 3)
+        ax.set_ylim(0.5 * y, 1.5 * y)
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
     ax.ticklabel_format(axis="x", style="sci", scilimits=(-2, 3), useMathText=True)
     ax.xaxis.get_offset_text().set_fontsize(medium.tiny)
@@ -508,8 +525,7 @@ def pareto_figure(
             nom = [r for r in ok if np.isclose(r["w_manip"] / r["w_effort"], nominal)]
             if nom:
                 _ring(ax, nom[0]["mean_manipulability"], nom[0]["total_effort"], medium)
-            ax.set_yscale("log")
-            _log_axis(ax.yaxis)
+            _value_axis(ax, [r["total_effort"] for r in ok])
             if bad:
                 text = ", ".join(_ratio_tex(r["w_manip"] / r["w_effort"]) for r in bad)
                 ax.text(
@@ -530,6 +546,12 @@ def pareto_figure(
         assert sc is not None
         bar = fig.colorbar(sc, ax=axes, shrink=0.8, pad=0.01, aspect=30)
         bar.set_label(r"$\log_{10} w_M/w_E$ (circle: nominal)")
+        fig.canvas.draw()  # the formatters now know their scale: fold it into the bottom labels
+        for ax in axes[-1, :whole]:
+            power = getattr(ax.xaxis.get_major_formatter(), "orderOfMagnitude", 0)
+            if power:
+                ax.xaxis.get_offset_text().set_visible(False)
+                ax.set_xlabel(rf"$M$ ($10^{{{power}}}$ m$^2$/s)")
     return stem
 
 

@@ -743,8 +743,8 @@ class Story:
         p += sentence(
             ". Otherwise Task 1 is benign: ",
             COND_J,
-            " stays below ",
-            self.ev(t, "C-EMDM", "conditioning", "cond_J_max", fmt=".1f"),
+            " peaks at ",
+            self.ev(t, "C-EMDM", "conditioning", "cond_J_max", fmt=".3g"),
             " along the whole runs and the programs have no slack.",
         )
         sec.paragraphs.append(p)
