@@ -716,11 +716,11 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
     circle = np.stack(
         (np.cos(np.linspace(0, 2 * np.pi, 73)), np.sin(np.linspace(0, 2 * np.pi, 73)))
     )
-    t_end = max(float(r.t[-1]) for r in runs)
-    instants = np.linspace(0.0, t_end, times)
     with _figure(stem, medium, width, height) as fig:
         axes = fig.subplots(1, len(runs), squeeze=False)[0]
         for ax, run in zip(axes, runs, strict=True):
+            # each run's own instants: a run that ends early is not drawn at times it never had
+            instants = np.linspace(0.0, float(run.t[-1]), times)
             st = _style(run, medium)
             ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
             ax.plot(run.p[:, 0], run.p[:, 1], color=st["color"], linewidth=medium.line * 0.8)
@@ -755,11 +755,8 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_ylim(-reach * 1.05, reach * 1.05)
             ax.set_xticks([])
             ax.set_yticks([])
-            ax.text(
-                0.02,
-                0.02,
+            ax.set_xlabel(  # below the workspace, where no arm can cover it
                 r"arm at $t$ = " + ", ".join(f"{t:.1f}" for t in instants) + " s",
-                transform=ax.transAxes,
                 fontsize=medium.tiny,
                 color="#444444",
             )
