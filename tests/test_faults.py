@@ -375,3 +375,30 @@ def test_a_read_only_place_is_refused_before_work(tmp_path, mounts, capsys):
     err = capsys.readouterr().err
     assert "cannot create folders in" in err and "read-only file system" in err
     assert err.count("\n") == 1
+
+
+def test_a_read_only_cache_compiles_in_memory_with_one_line(monkeypatch, capsys):
+    """With no writable cache folder numba refuses ``cache=True`` ("no locator available"); the
+    kernel is compiled in memory instead, and one line says so."""
+    import numba
+
+    from emdm.core import jit
+
+    real = numba.njit
+
+    def refusing(*args, **kwargs):
+        if kwargs.get("cache"):
+            raise RuntimeError("cannot cache function 'f': no locator available for file 'x.py'")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(jit.numba, "njit", refusing)
+    monkeypatch.setattr(jit, "_uncached", [])
+
+    def twice(x: float) -> float:
+        return 2.0 * x
+
+    compiled = jit.kernel(twice)
+    assert compiled(3.0) == 6.0
+    assert jit.kernel(lambda x: x + 1.0)(1.0) == 2.0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "compiling in memory" in err

@@ -89,9 +89,29 @@ def _register_cache_locator() -> None:
 _register_cache_locator()  # before any kernel below (or in other modules) is decorated
 
 
+_uncached: list[str] = []
+
+
 def kernel(function: F) -> F:
-    """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel)."""
-    return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
+    """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel).
+
+    Where no cache folder is writable (a read-only install and home, no ``NUMBA_CACHE_DIR``),
+    numba refuses ``cache=True`` with a long traceback; the kernel is then compiled in memory for
+    this process only, and one line on stderr says so (once) and how to keep the machine code.
+    """
+    try:
+        return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
+    except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+        if "cache" not in str(exc):
+            raise
+        if not _uncached:
+            print(
+                "emdm: no writable cache folder for the compiled kernels; compiling in memory for "
+                "this process (set NUMBA_CACHE_DIR to a writable folder to keep them)",
+                file=sys.stderr,
+            )
+        _uncached.append(function.__name__)
+        return cast(F, numba.njit(cache=False, nogil=True, error_model="numpy")(function))
 
 
 @intrinsic
