@@ -402,3 +402,20 @@ def test_a_read_only_cache_compiles_in_memory_with_one_line(monkeypatch, capsys)
     assert jit.kernel(lambda x: x + 1.0)(1.0) == 2.0
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "compiling in memory" in err
+
+
+def test_hostile_inputs_found_by_the_fuzzing_are_one_line(tmp_path, capsys):
+    """Three defects of issue 25, each once an internal error: a TOML nested 2000 deep
+    (RecursionError), a speed-up that makes a GIF frame longer than the format holds
+    (OverflowError after the work), and Pareto fronts at w_M = 0 (math domain error)."""
+    from emdm.cli import main
+
+    deep = tmp_path / "deep.toml"
+    deep.write_text("a = " + "[" * 2000 + "]" * 2000 + "\n")
+    assert main(["run", str(deep)]) == 2
+    assert "nest too deeply" in capsys.readouterr().err
+    out = tmp_path / "anim"
+    assert main(["animate", "task1", "--speedup", "1e-6", "--out", str(out)]) == 2
+    assert "longer than a GIF frame can last" in capsys.readouterr().err and not out.exists()
+    args = ["pareto", "task1", "--set", "weights.manipulability=0", "--set", "motion.max_time=2"]
+    assert main([*args, "--out", str(tmp_path / "p")]) == 0

@@ -335,11 +335,14 @@ def cmd_animate(args: argparse.Namespace) -> int:
     scenario, folder = _source(args)
     try:
         frame_schedule(1, scenario.motion.dt, args.speedup, 20.0)
-    except ValueError:
-        raise UsageError(
-            f"--speedup {args.speedup:g}: no frame duration in whole centiseconds fits "
-            f"dt = {scenario.motion.dt:g} s at that speed-up; try 0.5, 1, 2 or 5"
-        ) from None
+    except ValueError as exc:
+        why = (
+            str(exc)
+            if "GIF frame" in str(exc)
+            else f"no frame duration in whole centiseconds fits dt = {scenario.motion.dt:g} s "
+            "at that speed-up; try 0.5, 1, 2 or 5"
+        )
+        raise UsageError(f"--speedup {args.speedup:g}: {why}") from None
     if not args.no_mp4:
         _check_mp4()
     out = _out(args, f"{safe(scenario.name)}-animations", _inputs(args))

@@ -679,8 +679,8 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise ScenarioError("--set", text, "expected section.key=value")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
-    except ValueError:  # not TOML (or an integer of more than 4300 digits): kept as text
-        value = raw
+    except (ValueError, RecursionError):  # not TOML (or too deep, or an integer of more than
+        value = raw  # 4300 digits): kept as text, which validation then refuses by name
     return dotted, value
 
 
@@ -715,6 +715,10 @@ def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None 
         data = tomllib.loads(text)
     except ValueError as exc:  # TOMLDecodeError, or an integer of more than 4300 digits
         raise ScenarioError(source, "", f"not a valid TOML file: {exc}") from None
+    except RecursionError:
+        raise ScenarioError(
+            source, "", "not a scenario: its arrays or tables nest too deeply"
+        ) from None
     data.setdefault("name", Path(source).stem)
     scenario = scenario_from_dict(data, source=source)
     if overrides:

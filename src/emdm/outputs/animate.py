@@ -44,9 +44,18 @@ def ellipse_points(J: Matrix, p: np.ndarray, scale: float) -> Matrix:
     return np.asarray(p[:, None] + scale * (U * np.sqrt(np.maximum(lam, 0.0))) @ CIRCLE).T
 
 
+GIF_LONGEST_MS = 655_350
+"""A GIF frame's longest duration in ms: its delay is a 16-bit count of hundredths of a second."""
+
+
 def frame_schedule(steps: int, dt: float, speedup: float, max_fps: float) -> tuple[list[int], int]:
     """State indices shown, and the stride: the smallest with a whole-centisecond frame time
     and at most ``max_fps`` frames per second."""
+    if dt / speedup * 1000.0 > GIF_LONGEST_MS:
+        raise ValueError(
+            f"one step would show for {dt / speedup:.3g} s, longer than a GIF frame can last "
+            f"({GIF_LONGEST_MS / 1000:g} s): use a larger speed-up"
+        )
     stride = 1
     while True:
         frame_ms = stride * dt / speedup * 1000.0

@@ -48,7 +48,12 @@ def pareto_figure(data: dict[str, Any], out: Path) -> Path:
                 label="dominated",
             )
             near = int(
-                np.argmin([abs(math.log10(max(r, 1e-12)) - math.log10(nominal)) for r in ratio])
+                np.argmin(
+                    [
+                        abs(math.log10(max(r, 1e-12)) - math.log10(max(nominal, 1e-12)))
+                        for r in ratio
+                    ]
+                )
             )
             ax.scatter(
                 [M[near]],
