@@ -353,6 +353,9 @@ def test_the_command_line_says_one_line_and_exits_2(tmp_path: Path) -> None:
     assert proc.stderr.count("\n") == 1 and "well-formed" in proc.stderr
 
 
+TAIL = ("--trials", "4", "--json")
+
+
 def test_a_urdf_file_is_a_template_scenario_and_every_command_takes_it(tmp_path: Path) -> None:
     path, _, _ = robot("iiwa14")
     with pytest.raises(ScenarioError, match=r"tip_link: is needed: the tree branches"):
@@ -366,7 +369,7 @@ def test_a_urdf_file_is_a_template_scenario_and_every_command_takes_it(tmp_path:
     file = tmp_path / "iiwa.toml"
     file.write_text(sc.to_toml())
     proc = subprocess.run(
-        [sys.executable, "-m", "emdm.cli", "mmc", "--arm", str(file), "--trials", "4", "--json"],
+        [sys.executable, "-m", "emdm.cli", "mmc", "--protocol", "emdm", "--arm", str(file), *TAIL],
         capture_output=True,
         text=True,
     )
