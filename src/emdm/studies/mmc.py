@@ -5,8 +5,8 @@ manipulability, mean final manipulability and failure rate. emdm runs the same t
 ``PARK``, ``MMC``; see :mod:`emdm.core.controllers`), and C-EMDM beside them, on the presets
 ``panda`` and ``ur5``, through :func:`emdm.simulate_batch` (every step certified).
 
-Protocol (this module's: the published table, on the MMC project page, states neither its
-sampling nor its time limit nor what counts as a failure):
+Protocol (``emdm mmc --protocol emdm``: emdm's own, with its compiled controllers and C-EMDM; the
+authors' protocol, ``emdm mmc``'s default, is :mod:`emdm.studies.mmc_paper`):
 
 - ``trials`` tasks per arm, the same for every controller (paired), from ``seed``;
 - start ``q0`` and goal configuration ``q*`` drawn uniformly inside each joint's limits shrunk by
