@@ -419,3 +419,20 @@ def test_hostile_inputs_found_by_the_fuzzing_are_one_line(tmp_path, capsys):
     assert "longer than a GIF frame can last" in capsys.readouterr().err and not out.exists()
     args = ["pareto", "task1", "--set", "weights.manipulability=0", "--set", "motion.max_time=2"]
     assert main([*args, "--out", str(tmp_path / "p")]) == 0
+
+
+def test_a_lab_with_nothing_to_solve_and_a_garbage_scheduler_are_one_line(tmp_path, capsys):
+    """Two more internal errors of issue 25: the solver lab when the start is the goal
+    (IndexError) and a Dask scheduler address that is not one (ValueError from distributed)."""
+    import emdm
+    from emdm.cli import main
+
+    start = emdm.load_scenario("task1")
+    tip = start.robot.position(start.motion.q0)
+    goal = f"motion.goal=[{float(tip[0])!r}, {float(tip[1])!r}]"
+    assert main(["solvers", "task1", "--set", goal, "--out", str(tmp_path / "s")]) == 2
+    assert "at the goal at the start" in capsys.readouterr().err
+    args = ["study", "task1", "--engine", "dask", "--scheduler", "garbage", "--runs", "10"]
+    assert main([*args, "--out", str(tmp_path / "d")]) == 2
+    assert "expected a Dask scheduler address" in capsys.readouterr().err
+    assert not (tmp_path / "s").exists() and not (tmp_path / "d").exists()

@@ -519,6 +519,13 @@ def cmd_study(args: argparse.Namespace) -> int:
 
     if args.engine == "local" and (args.scheduler or args.workers):
         raise UsageError("--scheduler and --workers go with --engine dask")
+    if args.scheduler and not re.fullmatch(
+        r"(tcp|tls|inproc|ucx)://\S+:\d+|\S+:\d+", args.scheduler
+    ):
+        raise UsageError(
+            f"--scheduler {safe(args.scheduler)}: expected a Dask scheduler address such as "
+            "tcp://10.0.0.5:8786"
+        )
     overrides = _overrides(args)
     scenarios = [_load(name, overrides) for name in _unique(args.scenario)]
     weights = parse_weights(args.weights) if args.weights else None

@@ -32,7 +32,7 @@ from ..core.arm import Vector
 from ..core.controllers import Controller, get_controller, program_at
 from ..core.problem import QP
 from ..core.scenario import Scenario
-from ..errors import NoSolution
+from ..errors import NoSolution, ScenarioError
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 
@@ -244,6 +244,12 @@ def run_lab(
     ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
     specs = [get_solver(name) for name in solvers]
     reference = simulate(scenario, ctrl)
+    if reference.steps == 0:
+        raise ScenarioError(
+            scenario.source,
+            "motion.goal",
+            f"{ctrl.name} is at the goal at the start: there is no program to solve",
+        )
     steps = sample_steps(reference, sample)
     reps = representative_steps(reference) if reference.steps else {}
     programs = {k: program_at(ctrl, scenario, reference.q[k]).qp for k in steps}
