@@ -372,6 +372,13 @@ def test_the_server_is_local_offline_and_stops_on_sigterm():
         with pytest.raises(urllib.error.HTTPError) as info:
             urllib.request.urlopen(url + "nothing-here", timeout=10)
         assert info.value.code == 404
+        for host in ("evil.example", "127.0.0.1.evil.example"):  # DNS rebinding: refused
+            request = urllib.request.Request(url, headers={"Host": host})
+            with pytest.raises(urllib.error.HTTPError) as info:
+                urllib.request.urlopen(request, timeout=10)
+            assert info.value.code == 403 and b"Bokeh" not in info.value.read()
+        local = urllib.request.Request(url.replace("127.0.0.1", "localhost"))
+        assert urllib.request.urlopen(local, timeout=10).status == 200
     finally:
         stop_server(proc, signal.SIGTERM)
 

@@ -19,11 +19,40 @@ from bokeh.application import Application
 from bokeh.application.handlers.function import FunctionHandler
 from bokeh.server.server import Server
 from bokeh.server.util import bind_sockets
+from tornado.httputil import HTTPHeaders, HTTPServerRequest
+from tornado.web import OutputTransform
 
 from ..core.scenario import Scenario
 from ..errors import EmdmError
 from . import page
 from .logic import PAIRS, front, run_pair
+
+LOCAL_HOSTS = ("127.0.0.1", "localhost")
+"""The only Host headers the server answers: a page from another name that resolves to this
+machine (DNS rebinding) gets 403 and nothing of the playground."""
+
+
+class LoopbackOnly(OutputTransform):
+    """Replace every response to a request whose Host is not :data:`LOCAL_HOSTS` by a 403."""
+
+    REFUSAL = b"emdm play answers only http://127.0.0.1 and http://localhost\n"
+
+    def __init__(self, request: HTTPServerRequest) -> None:
+        self.refused = request.host_name not in LOCAL_HOSTS
+
+    def transform_first_chunk(
+        self, status_code: int, headers: HTTPHeaders, chunk: bytes, finishing: bool
+    ) -> tuple[int, HTTPHeaders, bytes]:
+        if not self.refused:
+            return status_code, headers, chunk
+        refused = HTTPHeaders()
+        refused["Content-Type"] = "text/plain; charset=utf-8"
+        if finishing:
+            refused["Content-Length"] = str(len(self.REFUSAL))
+        return 403, refused, self.REFUSAL
+
+    def transform_chunk(self, chunk: bytes, finishing: bool) -> bytes:
+        return b"" if self.refused else chunk
 
 
 def free_port() -> int:
@@ -50,8 +79,9 @@ def serve(bases: dict[str, Scenario], *, port: int = 5006, open_browser: bool = 
             {"/": Application(FunctionHandler(partial(page.build, bases=bases)))},
             address="127.0.0.1",
             port=port,
-            allow_websocket_origin=[f"127.0.0.1:{port}", f"localhost:{port}"],
+            allow_websocket_origin=[f"{host}:{port}" for host in LOCAL_HOSTS],
             num_procs=1,
+            transforms=[LoopbackOnly],
         )
     except OSError as exc:
         raise EmdmError(
