@@ -571,3 +571,19 @@ def test_the_playground_draws_a_scenes_obstacles(bases):
     assert s.obstacles.data["xs"] == [body[:, 0].tolist()]
     assert len(s.stop_zones.data["xs"]) == 1
     assert make("task1").obstacles.data["xs"] == []
+
+
+def test_a_bad_number_of_links_is_a_message_on_the_page(session):
+    """Typing "abc" (no value), nothing, 2.5 or 99 in Number of links: a message naming the field
+    and its range, the spinner back at the value in force, no "internal error"."""
+    s = session()
+    n = s.scenario.n
+    for bad in (None, 2.5, 99, float("nan")):
+        s.links.value = bad
+        _settle(s)
+        assert "Number of links must be a whole number from 2 to 8" in s.banner.text, bad
+        assert "internal error" not in s.banner.text
+        assert s.links.value == n and s.scenario.n == n
+    s.links.value = 4
+    _settle(s)
+    assert s.scenario.n == 4 and "Not applied" not in s.banner.text

@@ -554,6 +554,25 @@ class Session:
         self._request("replay")
 
     def _on_links(self, attr: str, old: Any, new: Any) -> None:
+        valid = isinstance(new, int | float) and math.isfinite(new) and float(new).is_integer()
+        if not valid or not logic.MIN_LINKS <= int(new) <= logic.MAX_LINKS:
+            self._show(
+                [
+                    f"Not applied: Number of links must be a whole number from {logic.MIN_LINKS} "
+                    f"to {logic.MAX_LINKS}, got {'nothing' if new is None else new!r} (the page "
+                    "shows the last valid settings)"
+                ],
+                [],
+            )
+            self._syncing = True  # the spinner shows the value in force again
+            try:
+                _set(
+                    self.links,
+                    value=self.settings.links or (self.scenario.n if self.scenario else 2),
+                )
+            finally:
+                self._syncing = False
+            return
         self.settings.links = int(new)
         self.settings.overrides.pop("motion.q0", None)
         self._request("replay")
