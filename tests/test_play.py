@@ -587,3 +587,15 @@ def test_a_bad_number_of_links_is_a_message_on_the_page(session):
     s.links.value = 4
     _settle(s)
     assert s.scenario.n == 4 and "Not applied" not in s.banner.text
+
+
+def test_a_page_computes_a_bounded_number_of_steps(bases, session):
+    """``?motion.max_time=6000`` (an unreachable goal ran 120,000 steps per controller and froze
+    the tab) is refused in the page's words; the served scenario's own max_time stands."""
+    with pytest.raises(ScenarioError, match=r"at most 4000 per controller \(max_time <= 200 s\)"):
+        logic.build_scenario(bases, Settings("task1", overrides={"motion.max_time": 6000.0}))
+    assert logic.build_scenario(bases, Settings("task1")).max_steps == 600
+    long = {"task1": bases["task1"].with_overrides({"motion.max_time": 300.0})}
+    assert logic.build_scenario(long, Settings("task1")).max_steps == 6000
+    s = session(**{"motion.max_time": "6000"})
+    assert "at most 4000" in s.banner.text and s.scenario.motion.max_time == 30.0

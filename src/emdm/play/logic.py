@@ -35,6 +35,9 @@ PAIRS: dict[str, tuple[str, str]] = {
 """Controller pairs: EMDM and its IVKC baseline (drawn as a ghost), constrained or not."""
 
 MIN_LINKS, MAX_LINKS = 2, 8
+MAX_STEPS = 4000
+"""Steps a page computes per controller at most, unless the served scenario itself asks for more
+(a page change that asked for 10^12 steps froze the tab; ``emdm run`` has no such cap)."""
 ELLIPSE_SHARE = 0.3
 """The largest possible ellipse is drawn this share of the arm's reach (see :func:`ellipse_scale`)."""
 
@@ -167,7 +170,17 @@ def build_scenario(bases: Mapping[str, Scenario], settings: Settings) -> Scenari
     base = bases[settings.scenario]
     if settings.links is not None:
         base = with_links(base, settings.links)
-    return base.with_overrides(settings.overrides)
+    scenario = base.with_overrides(settings.overrides)
+    cap = max(MAX_STEPS, bases[settings.scenario].max_steps)  # the served file's own stands
+    if scenario.max_steps > cap:
+        raise ScenarioError(
+            "page",
+            "motion.max_time",
+            f"gives {scenario.max_steps} steps of dt = {scenario.motion.dt:g} s; a page computes "
+            f"at most {cap} per controller (max_time <= {cap * scenario.motion.dt:g} s), which "
+            "keeps every change interactive",
+        )
+    return scenario
 
 
 def parse_query(
