@@ -283,7 +283,12 @@ def test_the_page_explains_a_refused_slider_and_keeps_the_last_valid_view(sessio
     _settle(s)
     assert "Not applied: damper.stop: must be < damper.influence" in html.unescape(s.banner.text)
     assert s.scenario is good
+    for name in ("stop", "influence"):  # every slider shows the settings in force again
+        control = CONTROL[name]
+        shown = control.from_slider(s.sliders[name].value)
+        assert shown == pytest.approx(control.value(good), rel=0.02, abs=control.step), name
     s.sliders["stop"].value = 0.1
+    s.sliders["influence"].value = 0.3
     _settle(s)
     assert s.banner.text == "" and s.scenario.damper.influence[0] == 0.3
 

@@ -7,6 +7,7 @@ Changes are coalesced: a burst of slider or drag events costs one recomputation.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import html
 import logging
@@ -99,6 +100,7 @@ class Session:
         request = getattr(doc.session_context, "request", None)
         arguments = dict(request.arguments) if request is not None else {}
         self.settings, notes = logic.parse_query(arguments, list(bases))
+        self._valid = copy.deepcopy(self.settings)  # the settings of the scenario shown
         self.scenario: Scenario | None = None
         self.outcomes: tuple[Outcome, ...] = ()
         self.t = 0.0
@@ -673,7 +675,20 @@ class Session:
             if self.scenario is None:
                 self.settings = Settings(scenario=self.settings.scenario)
                 self._recompute(replay=replay, notes=[*notes, f"Not applied: {logic.message(exc)}"])
+                return
+            # back to the settings in force, and every control showing them (a refused slider
+            # value must not stay on screen beside plots of the earlier one)
+            self.settings = copy.deepcopy(self._valid)
+            end = max(
+                [self.scenario.motion.dt] + [float(o.run.t[-1]) for o in self.outcomes if o.run]
+            )
+            self._syncing = True
+            try:
+                self._sync_widgets(self.scenario, end, replay=False)
+            finally:
+                self._syncing = False
             return
+        self._valid = copy.deepcopy(self.settings)
         ran = time.perf_counter()
         outcomes = logic.run_pair(scenario, self.settings.pair)
         self.timing["runs"] = time.perf_counter() - ran
