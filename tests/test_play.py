@@ -604,3 +604,15 @@ def test_a_page_computes_a_bounded_number_of_steps(bases, session):
     assert logic.build_scenario(long, Settings("task1")).max_steps == 6000
     s = session(**{"motion.max_time": "6000"})
     assert "at most 4000" in s.banner.text and s.scenario.motion.max_time == 30.0
+
+
+def test_inert_controls_are_greyed_out(session):
+    """The infeasibility policy acts on the C pair only; the slack weight only where the EMDM
+    controllers carry a slack (two links, or obstacles)."""
+    s = session()  # task1: three links, C pair
+    assert not s.policy.disabled and s.sliders["c_S"].disabled
+    s.pair.active = 1
+    _settle(s)
+    assert s.policy.disabled
+    s = session(scenario="task2")
+    assert not s.sliders["c_S"].disabled

@@ -782,11 +782,16 @@ class Session:
         _set(self.links, value=scenario.n)
         _set(self.pair, active=list(PAIRS).index(self.settings.pair))
         _set(self.policy, value=str(scenario.controller.on_infeasible))
+        # controls that change nothing here are greyed out: the policy acts on the C pair only,
+        # the slack weight on an arm with as many joints as task rows (or among obstacles) only
+        _set(self.policy, disabled=self.settings.pair != "C")
         for control in CONTROLS:
             slider = self.sliders[control.name]
             position = control.to_slider(control.value(scenario))
             if abs(slider.value - position) > control.step / 2:
                 slider.value = position
+            if control.key == "weights.slack":
+                _set(slider, disabled=scenario.redundant and not scenario.obstacles)
         if replay:
             self.play.active = False
             self.play.active = True
