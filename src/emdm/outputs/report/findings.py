@@ -1588,8 +1588,10 @@ class Story:
             "solvers",
             sentence(
                 "Task 2 C-EMDM solvers on the same re-solved programs: median time, median "
-                "iterations/evaluations, largest gap to the exact optimum and bound violation; "
-                "time to goal when each solver alone runs the loop."
+                "iterations/evaluations, largest gap to the exact optimum and bound violation "
+                "(0: below ",
+                Math(r"10^{-12}", "10<sup>−12</sup>"),
+                "); time to goal when each solver alone runs the loop.",
             ),
             [
                 sentence("solver"),
