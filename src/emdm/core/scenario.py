@@ -288,8 +288,7 @@ class Scenario:
             return Geometry(
                 np.zeros((0, 4, 4)), np.zeros((0, 3)), np.zeros(0, bool), np.eye(4), rows
             )
-        arm = self.serial_arm
-        return Geometry(arm._origins, arm._axes, arm._prismatic, arm._end, rows)
+        return self.serial_arm.geometry(rows)
 
     @property
     def max_steps(self) -> int:

@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
 from .chain import Chain
+from .kernels import Geometry
 from .serial_kernels import (
     ROWS_ALL,
     ROWS_ROT,
@@ -141,6 +142,11 @@ class SerialArm:
         self._axes = np.ascontiguousarray(chain.axes, dtype=float)
         self._prismatic = np.ascontiguousarray(chain.prismatic, dtype=np.bool_)
         self._end = np.ascontiguousarray(chain.tail @ tool)  # the tail, then the tool
+
+    def geometry(self, rows: int) -> Geometry:
+        """The chain as kernel input, with the manipulability's Jacobian ``rows``
+        (``serial_kernels.ROWS_*``); the tool is the chain's tail, then the tool."""
+        return Geometry(self._origins, self._axes, self._prismatic, self._end, rows)
 
     def __repr__(self) -> str:
         if self.dh is None:
