@@ -180,9 +180,12 @@ def test_rows_through_the_solver_chain():
     bare = solve_chain(QP(qp.P, qp.c, qp.A, qp.b, qp.lb, qp.ub, qp.n), ["active-set"]).x
     if np.any(qp.G @ bare > qp.h + 1e-9):  # the optimum without rows crosses one
         assert kkt_report(qp, bare).bound_excess > 1e-9
-    from emdm.solvers import solve_active_set
+    from emdm.solvers import solve_active_set, solve_kkt
 
-    declined = solve_active_set(qp, history=True)
+    traced = solve_active_set(qp, history=True)  # the lab's call: the same kernel, with its trace
+    np.testing.assert_array_equal(traced.x, ours.x)
+    assert len(traced.history) == traced.iterations and traced.history[-1]["step"] == 0.0
+    declined = solve_kkt(qp)
     assert declined.x is None and declined.status.startswith("unsupported")
 
 

@@ -37,7 +37,10 @@ class QPWork(NamedTuple):
     """Scratch buffers of the solver kernels for programs of ``nx`` variables, ``nt`` equality and
     ``ng`` inequality rows. ``lam`` holds the task rows' multipliers, then the inequality rows'
     (``nu = lam[nt:]``); ``work`` the working set's bounds (-1 / +1 per variable), then its rows
-    (1 when held). The rows add no array: a kernel call pays for every array it is passed."""
+    (1 when held). The rows add no array: a kernel call pays for every array it is passed.
+    ``trace`` (one row per iteration: objective, largest step component, working-set size) and
+    ``limit`` (an iteration limit when positive) serve the solver lab; the control loop leaves
+    them empty and 0."""
 
     feas: FeasWork
     work: NDArray[np.int8]
@@ -58,11 +61,14 @@ class QPWork(NamedTuple):
     skip: NDArray[np.bool_]
     B: F64
     warm: NDArray[np.bool_]
+    trace: F64
+    limit: NDArray[np.int64]
 
 
 @kernel
-def qp_work(nx: int, nt: int, ng: int) -> QPWork:
-    """Buffers for programs with ``nx`` variables, ``nt`` equality and ``ng`` inequality rows."""
+def qp_work(nx: int, nt: int, ng: int, trace_rows: int = 0) -> QPWork:
+    """Buffers for programs with ``nx`` variables, ``nt`` equality and ``ng`` inequality rows
+    (and ``trace_rows`` iterations of trace, filled with NaN)."""
     cols = 2 * nt + 2 * nx + ng
     size = nx + nt + ng
     return QPWork(
@@ -85,6 +91,8 @@ def qp_work(nx: int, nt: int, ng: int) -> QPWork:
         np.empty(cols, dtype=np.bool_),
         np.empty((nx, cols + 1)),
         np.zeros(1, dtype=np.bool_),  # work holds the last optimum's working set
+        np.full((trace_rows, 3), np.nan),
+        np.zeros(1, dtype=np.int64),
     )
 
 

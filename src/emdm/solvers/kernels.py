@@ -306,6 +306,12 @@ def _cold_start(
     if code != OK:
         return code, 0
     if unique:  # the (scaled) task leaves one feasible point: it is the optimum
+        if w.trace.shape[0]:  # the trace's working set: the bounds the point sits on
+            for j in range(n):
+                work[j] = -1 if x[j] == lb[j] else (1 if x[j] == ub[j] else 0)
+            for i in range(ng):
+                work[n + i] = 0
+            _trace(P, c, x, 0.0, w, 0)
         certify(P, c, A, b, G, h, lb, ub, x, w, out)
         if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
             return OK, 0
@@ -339,7 +345,7 @@ def _cold_start(
     for i in range(ng):
         if _row_active(G, h, i, x) and _independent(A, G, gwork, i, free, w):
             gwork[i] = 1
-    limit = 10 * (n + ng + 2) + 20
+    limit = w.limit[0] if w.limit[0] > 0 else 10 * (n + ng + 2) + 20
     zero_step = False
     for iteration in range(1, limit + 1):
         f = 0
@@ -393,6 +399,8 @@ def _cold_start(
             finite = finite and math.isfinite(nu[i])
         if not finite:
             return NEEDS_REFERENCE, iteration
+        if w.trace.shape[0]:
+            _trace(P, c, x, pmax, w, iteration - 1)
         if pmax <= 1e-12 * (1.0 + xmax):
             gmax = 0.0
             for j in range(n):
@@ -445,27 +453,39 @@ def _cold_start(
             else:
                 gwork[leave - n] = 0
             continue
-        step = 1.0
-        block = -1
-        for j in range(n):
-            if work[j] != 0 or abs(p[j]) <= 1e-13 * pmax:
-                continue
-            r = (lb[j] - x[j]) / p[j] if p[j] < 0 else (ub[j] - x[j]) / p[j]
-            if r < step:
-                step, block = r, j
-        for i in range(ng):
-            if gwork[i]:
-                continue
-            rate = 0.0
-            row_size = 0.0
+        while True:
+            step = 1.0
+            block = -1
             for j in range(n):
-                rate += G[i, j] * p[j]
-                row_size += abs(G[i, j])
-            if rate <= 1e-13 * pmax * row_size:
+                if work[j] != 0 or abs(p[j]) <= 1e-13 * pmax:
+                    continue
+                r = (lb[j] - x[j]) / p[j] if p[j] < 0 else (ub[j] - x[j]) / p[j]
+                if r < step:
+                    step, block = r, j
+            for i in range(ng):
+                if gwork[i]:
+                    continue
+                rate = 0.0
+                row_size = 0.0
+                for j in range(n):
+                    rate += G[i, j] * p[j]
+                    row_size += abs(G[i, j])
+                if rate <= 1e-13 * pmax * row_size:
+                    continue
+                r = (h[i] - _row_value(G, i, x)) / rate
+                if r < step:
+                    step, block = r, n + i
+            if (
+                0 <= block < n
+                and step <= 0.0
+                and abs(p[block]) <= 1e-9 * pmax
+                and not _holdable(A, G, gwork, work, block, free, w)
+            ):
+                # rounding noise of the step on a bound that cannot join the working set (its
+                # column depends on the free ones): it would block every step from here on
+                p[block] = 0.0
                 continue
-            r = (h[i] - _row_value(G, i, x)) / rate
-            if r < step:
-                step, block = r, n + i
+            break
         step = max(0.0, step)
         for j in range(n):
             x[j] += step * p[j]
@@ -478,13 +498,7 @@ def _cold_start(
         if 0 <= block < n:
             side = -1 if p[block] < 0 else 1
             x[block] = lb[block] if side < 0 else ub[block]
-            for j in range(n):
-                free[j] = work[j] == 0 and j != block
-            if (
-                (free_rank(A, free, w.feas) == nt)
-                if ng == 0
-                else _independent(A, G, gwork, -1, free, w)
-            ):
+            if _holdable(A, G, gwork, work, block, free, w):
                 work[block] = side
         elif block >= n:
             for j in range(n):
@@ -495,8 +509,71 @@ def _cold_start(
 
 
 @kernel
+def _holdable(
+    A: F64,
+    G: F64,
+    gwork: NDArray[np.int8],
+    work: NDArray[np.int8],
+    j: int,
+    free: NDArray[np.bool_],
+    w: QPWork,
+) -> bool:
+    """Whether bound ``j`` can join the working set: the free columns left keep the task rows
+    (and the rows held) independent. Overwrites ``free``."""
+    for i in range(work.size - gwork.size):
+        free[i] = work[i] == 0 and i != j
+    if G.shape[0] == 0:
+        return bool(free_rank(A, free, w.feas) == A.shape[0])
+    return bool(_independent(A, G, gwork, -1, free, w))
+
+
+@kernel
+def _trace(P: F64, c: F64, x: F64, step: float, w: QPWork, row: int) -> None:
+    """Row ``row`` of the lab's trace: objective at ``x``, the step's largest component, the
+    working set's size (bounds and rows held)."""
+    if row >= w.trace.shape[0]:
+        return
+    n = x.size
+    f = 0.0
+    for j in range(n):
+        acc = 0.5 * P[j, j] * x[j] + c[j]
+        for i in range(j):
+            acc += P[j, i] * x[i]
+        f += acc * x[j]
+    held = 0
+    for j in range(w.work.size):
+        held += w.work[j] != 0
+    w.trace[row, 0] = f
+    w.trace[row, 1] = step
+    w.trace[row, 2] = held
+
+
+@kernel
 def active_set_of(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, out: F64
 ) -> tuple[int, int]:
     """:func:`active_set` with its own buffers (the entry point for callers in Python)."""
     return active_set(P, c, A, b, G, h, lb, ub, x, qp_work(x.size, A.shape[0], G.shape[0]), out)
+
+
+@kernel
+def active_set_traced(
+    P: F64,
+    c: F64,
+    A: F64,
+    b: F64,
+    G: F64,
+    h: F64,
+    lb: F64,
+    ub: F64,
+    x: F64,
+    out: F64,
+    trace_rows: int,
+    max_iter: int,
+) -> tuple[int, int, F64]:
+    """:func:`active_set` from a cold start with an iteration limit (``max_iter`` > 0) and a trace
+    of ``trace_rows`` iterations (NaN past the last): the solver lab's entry point."""
+    w = qp_work(x.size, A.shape[0], G.shape[0], trace_rows)
+    w.limit[0] = max_iter
+    code, iterations = active_set(P, c, A, b, G, h, lb, ub, x, w, out)
+    return code, iterations, w.trace
