@@ -89,6 +89,13 @@ def test_free_variables_only():
     np.testing.assert_allclose(singular @ x, [1.0, 2.0])
 
 
-def test_half_bounded_variables_are_refused():
-    with pytest.raises(ValueError, match="bounded on both sides or free"):
-        task_scale(np.eye(2), np.ones(2), np.array([0.0, -np.inf]), np.array([np.inf, np.inf]))
+def test_half_bounded_variables_go_to_highs():
+    """The kernels take variables bounded on both sides or free; a half-bounded one is left to
+    HiGHS, whose answer is checked: x0 >= 0 allows the direction (1, 1) in full and (-1, 1) not
+    at all."""
+    lb, ub = np.array([0.0, -np.inf]), np.array([np.inf, np.inf])
+    assert task_scale(np.eye(2), np.ones(2), lb, ub) == 1.0
+    assert task_scale(np.eye(2), np.array([-1.0, 1.0]), lb, ub) == 0.0
+    x = feasible_point(np.eye(2), np.array([2.0, -3.0]), lb, ub)
+    np.testing.assert_allclose(x, [2.0, -3.0])
+    assert feasible_point(np.eye(2), np.array([-2.0, 3.0]), lb, ub) is None
