@@ -44,6 +44,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -53,7 +54,18 @@ from ..core.scenario import load_scenario
 
 Vector = NDArray[np.float64]
 Y, PS, PI, GAIN, THRESHOLD, DT = 0.01, 0.05, 0.9, 1.0, 0.17, 0.05
-CONTROLLERS = ("RRMC", "PARK", "BAUR", "MMC")
+
+
+class Paper(StrEnum):
+    """The controllers of the authors' script, named as in its table (Baur's is theirs only)."""
+
+    RRMC = "RRMC"
+    PARK = "PARK"
+    BAUR = "BAUR"
+    MMC = "MMC"
+
+
+CONTROLLERS = tuple(Paper)
 
 
 @dataclass(frozen=True)
@@ -117,7 +129,7 @@ def command(
     """One step of controller ``name`` (module notes); raises :class:`Singular`."""
     n = q.size
     try:
-        if name == "MMC":
+        if name == Paper.MMC:
             import daqp
 
             upper, lower = np.full(n + 6, 1e30), np.full(n + 6, -1e30)
@@ -137,8 +149,8 @@ def command(
         else:
             pinv = np.linalg.pinv(J)
             qd = pinv @ v
-            if name in ("PARK", "BAUR"):
-                gradient = Jm - (_joint_limit_terms(q, lo, hi) if name == "BAUR" else 0.0)
+            if name in (Paper.PARK, Paper.BAUR):
+                gradient = Jm - (_joint_limit_terms(q, lo, hi) if name == Paper.BAUR else 0.0)
                 qd = qd + (np.eye(n) - pinv @ J) @ gradient / Y
     except np.linalg.LinAlgError:
         raise Singular from None
@@ -191,7 +203,7 @@ def run_trial(
             if "qd" in s:
                 s["q"] = s["q"] + DT * s.pop("qd")
         it += 1
-        ended = [state[c]["arrived"] or state[c]["failed"] for c in ("RRMC", "MMC")]
+        ended = [state[c]["arrived"] or state[c]["failed"] for c in (Paper.RRMC, Paper.MMC)]
         if all(ended) or it > cap:
             break
     out = {}

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import Controller, get_controller
+from ..core.controllers import Controller, Name, get_controller
 from ..core.scenario import Scenario, load_scenario, scenario_from_dict
 from ..errors import NoSolution, ScenarioError
 from ..sim.batch import simulate_batch
@@ -54,7 +54,7 @@ def obstacle_speed(*, repeats: int = 20, batch_runs: int = 2000) -> dict[str, An
     """us/step of C-EMDM through ``emdm.simulate`` with 5 circles (task1's arm) and 10 spheres
     (Panda), and planar batch steps/s with the obstacle preset's circle."""
     rng = np.random.default_rng(0)
-    ctrl = get_controller("C-EMDM")
+    ctrl = get_controller(Name.C_EMDM)
     out: dict[str, Any] = {}
     for key, preset, count, radius in (
         ("planar_5_circles", "obstacle", 5, (0.03, 0.08)),
@@ -114,8 +114,8 @@ def random_scenes(
     data = base.to_dict()
     data.pop("obstacles", None)
     controllers: list[Controller] = []
-    for name in ("C-EMDM", "NEO"):
-        controllers += [get_controller(name), get_controller(name).blind()]
+    for kind in (Name.C_EMDM, Name.NEO):
+        controllers += [get_controller(kind), get_controller(kind).blind()]
     rows: dict[str, list[dict[str, float]]] = {c.name: [] for c in controllers}
     stop = base.obstacle_damper.stop
     for _ in range(scenes):
@@ -212,7 +212,7 @@ def never_entered(
     data = base.to_dict()
     data.pop("obstacles", None)
     arm = base.robot
-    ctrl = get_controller("C-EMDM")
+    ctrl = get_controller(Name.C_EMDM)
     runs = inside = chain = stopped = reached = 0
     least = np.inf
     for _ in range(scenes):

@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ...core.controllers import Name
 from ...studies.lab import DEFAULT_LAB_SOLVERS
 
 
@@ -86,7 +87,7 @@ def byline(authors: Sequence[str] = (), title: str | None = None) -> dict[str, A
 
 
 TASKS = ("task1", "task2")
-PAIRS = {"UC": ("UC-IVKC", "UC-EMDM"), "C": ("C-IVKC", "C-EMDM")}
+PAIRS = {"UC": (Name.UC_IVKC, Name.UC_EMDM), "C": (Name.C_IVKC, Name.C_EMDM)}
 """Each pair as (IVKC, EMDM): the brief compares them pair by pair."""
 
 
@@ -107,19 +108,30 @@ class Evidence:
 
 
 EVIDENCE = (
-    Evidence("t1-uc-no-manip", "task1", ("UC-EMDM",), {"weights.manipulability": 0.0}, "UC-IVKC"),
     Evidence(
-        "t1-c-slack-policy", "task1", ("C-IVKC", "C-EMDM"), {"controller.on_infeasible": "slack"}
+        "t1-uc-no-manip", "task1", (Name.UC_EMDM,), {"weights.manipulability": 0.0}, Name.UC_IVKC
     ),
-    Evidence("t2-c-ivkc-slack-policy", "task2", ("C-IVKC",), {"controller.on_infeasible": "slack"}),
-    Evidence("t2-c-ivkc-wide-limits", "task2", ("C-IVKC",), {"arm.q_min": -3.0, "arm.q_max": 3.0}),
-    Evidence("t2-c-emdm-no-manip", "task2", ("C-EMDM",), {"weights.manipulability": 0.0}),
+    Evidence(
+        "t1-c-slack-policy",
+        "task1",
+        (Name.C_IVKC, Name.C_EMDM),
+        {"controller.on_infeasible": "slack"},
+    ),
+    Evidence(
+        "t2-c-ivkc-slack-policy", "task2", (Name.C_IVKC,), {"controller.on_infeasible": "slack"}
+    ),
+    Evidence(
+        "t2-c-ivkc-wide-limits", "task2", (Name.C_IVKC,), {"arm.q_min": -3.0, "arm.q_max": 3.0}
+    ),
+    Evidence("t2-c-emdm-no-manip", "task2", (Name.C_EMDM,), {"weights.manipulability": 0.0}),
     Evidence(
         "t2-c-emdm-tight-slack",
         "task2",
-        ("C-EMDM",),
+        (Name.C_EMDM,),
         {"slack.min": [-0.1, -0.1], "slack.max": [0.1, 0.1]},
     ),
-    Evidence("t2-uc-emdm-stiff-slack", "task2", ("UC-EMDM",), {"weights.slack": 1e4}, "UC-IVKC"),
+    Evidence(
+        "t2-uc-emdm-stiff-slack", "task2", (Name.UC_EMDM,), {"weights.slack": 1e4}, Name.UC_IVKC
+    ),
 )
 """The evidence runs (each isolates one cause; the report says what each shows)."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from ...core.controllers import Name
 from .config import BYLINE, PAIRS
 from .document import Document, Figure, Section, Table
 from .trace import Cite, Data, Math, Num, Ref, Sentence, Text, format_value, sentence
@@ -203,29 +204,34 @@ class Story:
             "and maximises the manipulability rate (EMDM), and compare it with inverse velocity "
             "kinematics (IVKC). On a redundant three-link arm EMDM tracks as IVKC does and raises "
             "the mean manipulability by ",
-            self.pct(t1, "UC-EMDM", "UC-IVKC", "mean_manipulability"),
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
             " without and ",
-            self.pct(t1, "C-EMDM", "C-IVKC", "mean_manipulability"),
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
             " with joint limits, for ",
-            self.pct(t1, "UC-EMDM", "UC-IVKC", "total_effort"),
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
             " and ",
-            self.pct(t1, "C-EMDM", "C-IVKC", "total_effort"),
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
             " effort. ",
         )
-        if not self.mv(t2, "C-IVKC", "reached") and self.mv(t2, "C-EMDM", "reached"):
+        if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
             out += sentence(
                 "On a two-link arm with limits, C-IVKC stalls ",
-                self.ev(t2, "C-IVKC", "stall", "error", fmt=".2f", unit="m"),
+                self.ev(t2, Name.C_IVKC, "stall", "error", fmt=".2f", unit="m"),
                 " from the goal, while C-EMDM's task slack lets it leave the blocked straight "
                 "line and arrive in ",
-                self.ttg(t2, "C-EMDM"),
+                self.ttg(t2, Name.C_EMDM),
             )
-            e6 = self.evid("t2-c-emdm-no-manip", "runs", "C-EMDM")
-            if e6.get("reached") and e6["time_to_goal"] < self.mv(t2, "C-EMDM", "time_to_goal"):
+            e6 = self.evid("t2-c-emdm-no-manip", "runs", Name.C_EMDM)
+            if e6.get("reached") and e6["time_to_goal"] < self.mv(t2, Name.C_EMDM, "time_to_goal"):
                 out += sentence(
                     "; without the dexterity term it arrives sooner (",
                     self.evidn(
-                        "t2-c-emdm-no-manip", "runs", "C-EMDM", "time_to_goal", fmt=".2f", unit="s"
+                        "t2-c-emdm-no-manip",
+                        "runs",
+                        Name.C_EMDM,
+                        "time_to_goal",
+                        fmt=".2f",
+                        unit="s",
                     ),
                     ")",
                 )
@@ -479,12 +485,12 @@ class Story:
             " and ",
             self.mt(t, emdm, "total_effort", ".2f", "rad²/s"),
             " (UC pair: ",
-            self.mt(t, "UC-IVKC", "total_effort", ".2f"),
+            self.mt(t, Name.UC_IVKC, "total_effort", ".2f"),
             " and ",
-            self.mt(t, "UC-EMDM", "total_effort", ".2f"),
+            self.mt(t, Name.UC_EMDM, "total_effort", ".2f"),
             ")",
         )
-        qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, "UC-EMDM", "final_q")
+        qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, Name.UC_EMDM, "final_q")
         if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
             p += sentence(
                 f", and {emdm} ends in the configuration UC-EMDM reaches (",
@@ -652,15 +658,17 @@ class Story:
         sec = Section(
             "t1-solver", "Task 1: custom solver, fallback, convergence", level=2, brief="1.1"
         )
-        fallbacks = self.mv(t, "UC-EMDM", "fallback_steps") + self.mv(t, "C-EMDM", "fallback_steps")
+        fallbacks = self.mv(t, Name.UC_EMDM, "fallback_steps") + self.mv(
+            t, Name.C_EMDM, "fallback_steps"
+        )
         answer = sentence(
             "The custom active-set solver returned a certified optimum (relative KKT residual at "
             "most ",
             Math("10^{-9}", "10<sup>−9</sup>"),
             ") at every step of UC-EMDM (",
-            self.mt(t, "UC-EMDM", "steps", "d"),
+            self.mt(t, Name.UC_EMDM, "steps", "d"),
             ") and C-EMDM (",
-            self.mt(t, "C-EMDM", "steps", "d"),
+            self.mt(t, Name.C_EMDM, "steps", "d"),
             "), so the off-the-shelf fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
@@ -668,9 +676,9 @@ class Story:
         else:
             answer += sentence(
                 "answered ",
-                self.mt(t, "UC-EMDM", "fallback_steps", "d"),
+                self.mt(t, Name.UC_EMDM, "fallback_steps", "d"),
                 " and ",
-                self.mt(t, "C-EMDM", "fallback_steps", "d"),
+                self.mt(t, Name.C_EMDM, "fallback_steps", "d"),
                 " of them.",
             )
         sec.answer = answer
@@ -684,9 +692,9 @@ class Story:
         p = sentence(
             "Started from the previous step's working set where that is still optimal, else "
             "from an exact feasible point, it takes a median of ",
-            self.ev(t, "C-EMDM", "solver", "median_iterations", fmt=".0f"),
+            self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".0f"),
             " and at most ",
-            self.ev(t, "C-EMDM", "solver", "max_iterations", fmt="d"),
+            self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
             " iterations and terminates finitely, each iteration being an exact "
             "equality-constrained solve",
         )
@@ -744,7 +752,7 @@ class Story:
             ". Otherwise Task 1 is benign: ",
             COND_J,
             " peaks at ",
-            self.ev(t, "C-EMDM", "conditioning", "cond_J_max", fmt=".3g"),
+            self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
             " along the whole runs and the programs have no slack.",
         )
         sec.paragraphs.append(p)
@@ -1255,7 +1263,7 @@ class Story:
 
     def task2_challenges(self) -> Section:
         t = "task2"
-        emdm = "C-EMDM"
+        emdm = Name.C_EMDM
         f = "data/task2-lab-C-EMDM/solvers.json"
         sec = Section(
             "t2-challenges", "Task 2: convergence and numerical challenges", level=2, brief="2.1"
@@ -1333,13 +1341,13 @@ class Story:
         p = sentence(
             "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: the same "
             "tracking, ",
-            self.pct(t1, "UC-EMDM", "UC-IVKC", "mean_manipulability"),
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
             " and ",
-            self.pct(t1, "C-EMDM", "C-IVKC", "mean_manipulability"),
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
             " mean manipulability for ",
-            self.pct(t1, "UC-EMDM", "UC-IVKC", "total_effort"),
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
             " and ",
-            self.pct(t1, "C-EMDM", "C-IVKC", "total_effort"),
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
             " effort. On the non-redundant arm the slack, not the dexterity term, decides: it lets "
             "C-EMDM leave a straight line that the joint limits block, where task scaling, our "
             "departure from the brief, stalls C-IVKC. Exact active-set QP solvers, certified at "
@@ -1380,7 +1388,8 @@ class Story:
 
         arms = [a for a in ("panda", "ur5") if a in self.d.value(f, "results")]
         least = all(
-            rv(a, "MMC", "failure_rate") <= min(rv(a, c, "failure_rate") for c in ("RRMC", "PARK"))
+            rv(a, Name.MMC, "failure_rate")
+            <= min(rv(a, c, "failure_rate") for c in (Name.RRMC, Name.PARK))
             for a in arms
         )
         answer = sentence(
@@ -1392,15 +1401,15 @@ class Story:
         )
         for i, a in enumerate(arms):
             answer += sentence(
-                r(a, "MMC", "failure_rate", ".1f", "%"),
+                r(a, Name.MMC, "failure_rate", ".1f", "%"),
                 " on the ",
                 "Panda" if a == "panda" else "UR5",
                 " against RRMC's ",
-                r(a, "RRMC", "failure_rate", ".1f", "%"),
+                r(a, Name.RRMC, "failure_rate", ".1f", "%"),
                 " (published ",
-                pub(a, "MMC", 2, ".1f", "%"),
+                pub(a, Name.MMC, 2, ".1f", "%"),
                 " and ",
-                pub(a, "RRMC", 2, ".1f", "%"),
+                pub(a, Name.RRMC, 2, ".1f", "%"),
                 ")",
                 "; " if i < len(arms) - 1 else ".",
             )
@@ -1420,36 +1429,38 @@ class Story:
         )
         if "panda" in arms:
             p = "panda"
-            above_all = rv(p, "MMC", "mean_manipulability") >= rv(p, "PARK", "mean_manipulability")
-            succ = rv(p, "MMC", "mean_manipulability_of_successes") or 0.0
-            above_succ = succ >= (rv(p, "PARK", "mean_manipulability_of_successes") or 0.0)
+            above_all = rv(p, Name.MMC, "mean_manipulability") >= rv(
+                p, Name.PARK, "mean_manipulability"
+            )
+            succ = rv(p, Name.MMC, "mean_manipulability_of_successes") or 0.0
+            above_succ = succ >= (rv(p, Name.PARK, "mean_manipulability_of_successes") or 0.0)
             sec.paragraphs.append(
                 sentence(
                     "Our failure rates are higher than the published ones because independent start "
                     "and goal draws ask for large motions: ",
-                    r(p, "RRMC", "left_joint_limits", "d"),
+                    r(p, Name.RRMC, "left_joint_limits", "d"),
                     " of RRMC's and ",
-                    r(p, "PARK", "left_joint_limits", "d"),
+                    r(p, Name.PARK, "left_joint_limits", "d"),
                     " of PARK's Panda runs leave the joint limits, which nothing in their programs "
                     "prevents, while MMC's ",
-                    r(p, "MMC", "not_reached", "d"),
+                    r(p, Name.MMC, "not_reached", "d"),
                     " failures are stalls with joints held by their dampers. Over all runs MMC's "
                     "mean manipulability (",
-                    r(p, "MMC", "mean_manipulability", ".4f"),
+                    r(p, Name.MMC, "mean_manipulability", ".4f"),
                     ") is ",
                     "above" if above_all else "below",
                     " PARK's (",
-                    r(p, "PARK", "mean_manipulability", ".4f"),
+                    r(p, Name.PARK, "mean_manipulability", ".4f"),
                     "; published ",
-                    pub(p, "MMC", 0, ".4f"),
+                    pub(p, Name.MMC, 0, ".4f"),
                     " and ",
-                    pub(p, "PARK", 0, ".4f"),
+                    pub(p, Name.PARK, 0, ".4f"),
                     "); over the runs that reach the goal it is ",
                     "above" if above_succ else "below",
                     " (",
-                    r(p, "MMC", "mean_manipulability_of_successes", ".4f"),
+                    r(p, Name.MMC, "mean_manipulability_of_successes", ".4f"),
                     " against ",
-                    r(p, "PARK", "mean_manipulability_of_successes", ".4f"),
+                    r(p, Name.PARK, "mean_manipulability_of_successes", ".4f"),
                     ")",
                     (
                         ": a stalled run ends where the dampers hold it, often at low "
@@ -1470,13 +1481,13 @@ class Story:
                 sentence(
                     "On the non-redundant UR5 the null space is empty, so PARK is RRMC (failure "
                     "rates ",
-                    r(u, "PARK", "failure_rate", ".1f", "%"),
+                    r(u, Name.PARK, "failure_rate", ".1f", "%"),
                     " and ",
-                    r(u, "RRMC", "failure_rate", ".1f", "%"),
+                    r(u, Name.RRMC, "failure_rate", ".1f", "%"),
                     "), as in the published table; its manipulability is lower than published (",
-                    r(u, "RRMC", "mean_manipulability", ".4f"),
+                    r(u, Name.RRMC, "mean_manipulability", ".4f"),
                     " against ",
-                    pub(u, "RRMC", 0, ".4f"),
+                    pub(u, Name.RRMC, 0, ".4f"),
                     "), which depends on where the tasks lie in the joint space.",
                 )
             )
@@ -1524,13 +1535,13 @@ class Story:
                 sentence(
                     "The Panda preset task: the end-effector paths of RRMC, PARK, MMC and C-EMDM "
                     "in three projections. Mean manipulability: RRMC ",
-                    self.d.num(f, pp, "RRMC", "mean_manipulability", fmt=".4f"),
+                    self.d.num(f, pp, Name.RRMC, "mean_manipulability", fmt=".4f"),
                     ", PARK ",
-                    self.d.num(f, pp, "PARK", "mean_manipulability", fmt=".4f"),
+                    self.d.num(f, pp, Name.PARK, "mean_manipulability", fmt=".4f"),
                     ", MMC ",
-                    self.d.num(f, pp, "MMC", "mean_manipulability", fmt=".4f"),
+                    self.d.num(f, pp, Name.MMC, "mean_manipulability", fmt=".4f"),
                     ", C-EMDM ",
-                    self.d.num(f, pp, "C-EMDM", "mean_manipulability", fmt=".4f"),
+                    self.d.num(f, pp, Name.C_EMDM, "mean_manipulability", fmt=".4f"),
                     ".",
                 ),
                 wide=True,
@@ -1562,7 +1573,7 @@ class Story:
         )
         for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
             table.rows.append([sentence(title)])
-            for name in ("UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM"):
+            for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
                 goal = (
                     sentence(bare(self.ttg(task, name)))
                     if self.mv(task, name, "reached")
@@ -1646,28 +1657,28 @@ class Story:
 
     def evidence_table(self, sections: list[Section]) -> None:
         items = [
-            ("E1", "t1-uc-no-manip", "UC-EMDM", sentence(W_M, " = 0"), "reference"),
-            ("E2", "t1-c-slack-policy", "C-EMDM", sentence("slack policy"), "pair"),
-            ("E4", "t2-c-ivkc-slack-policy", "C-IVKC", sentence("slack policy"), None),
+            ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
+            ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
+            ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
             (
                 "E5",
                 "t2-c-ivkc-wide-limits",
-                "C-IVKC",
+                Name.C_IVKC,
                 sentence(Math(r"|q|\leq3", "|<i>q</i>| ≤ 3"), " rad"),
                 None,
             ),
-            ("E6", "t2-c-emdm-no-manip", "C-EMDM", sentence(W_M, " = 0"), None),
+            ("E6", "t2-c-emdm-no-manip", Name.C_EMDM, sentence(W_M, " = 0"), None),
             (
                 "E7",
                 "t2-c-emdm-tight-slack",
-                "C-EMDM",
+                Name.C_EMDM,
                 sentence(Math(r"|\delta|\leq0.1", "|δ| ≤ 0.1"), " m/s"),
                 None,
             ),
             (
                 "E8",
                 "t2-uc-emdm-stiff-slack",
-                "UC-EMDM",
+                Name.UC_EMDM,
                 sentence(Math(r"c_S=10^4", "<i>c</i><sub>S</sub> = 10<sup>4</sup>")),
                 None,
             ),

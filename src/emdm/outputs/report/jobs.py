@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ... import __version__
-from ...core.controllers import CONTROLLERS
+from ...core.controllers import CONTROLLERS, Name
 from ...core.scenario import Scenario, load_scenario
 from ...errors import EmdmError, NoSolution
 from ...sim.loop import Run, simulate
@@ -273,10 +273,10 @@ def _job_story_figures(stage: Path, cfg: ReportConfig) -> list[str]:
 
 def _story_figures(stage: Path) -> list[str]:
     t1, t2 = _load_runs("task1"), _load_runs("task2")
-    geometry = explain.geometry(t2["C-IVKC"].scenario, t2["C-IVKC"].p[0])
+    geometry = explain.geometry(t2[Name.C_IVKC].scenario, t2[Name.C_IVKC].p[0])
     out = []
     if geometry is not None:
-        pair = [t2["C-IVKC"], t2["C-EMDM"]]
+        pair = [t2[Name.C_IVKC], t2[Name.C_EMDM]]
         out.append(str(pf.workspace_figure(pair, geometry, stage / PAPER_FIGURES / "workspace")))
         out.append(
             str(pf.workspace_figure(pair, geometry, stage / SLIDE_FIGURES / "workspace", pf.SLIDE))
@@ -285,8 +285,8 @@ def _story_figures(stage: Path) -> list[str]:
         str(
             pf.manipulability_figure(
                 {
-                    "Task 1.1, unconstrained": [t1["UC-IVKC"], t1["UC-EMDM"]],
-                    "Task 1.2, constrained": [t1["C-IVKC"], t1["C-EMDM"]],
+                    "Task 1.1, unconstrained": [t1[Name.UC_IVKC], t1[Name.UC_EMDM]],
+                    "Task 1.2, constrained": [t1[Name.C_IVKC], t1[Name.C_EMDM]],
                 },
                 stage / SLIDE_FIGURES / "task1-m",
             )
@@ -296,7 +296,7 @@ def _story_figures(stage: Path) -> list[str]:
         out.append(
             str(
                 pf.stills_figure(
-                    [runs["C-IVKC"], runs["C-EMDM"]], stage / SLIDE_FIGURES / f"{task}-stills"
+                    [runs[Name.C_IVKC], runs[Name.C_EMDM]], stage / SLIDE_FIGURES / f"{task}-stills"
                 )
             )
         )
@@ -321,7 +321,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
         return json.loads((stage / rel).read_text(encoding="utf-8"))
 
     out = []
-    names = ("UC-EMDM", "C-EMDM")
+    names: tuple[str, ...] = (Name.UC_EMDM, Name.C_EMDM)
     fronts = {c: load(f"data/task1-pareto-{c}/pareto.json") for c in names}
     infos = {c: load(f"data/task1-pareto-{c}/fronts.json")["steps"] for c in names}
     grids = {c: load(f"data/task1-pareto-{c}/weight_grid.json")["runs"] for c in names}
@@ -329,9 +329,9 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     out.append(
         str(
             pf.pareto_figure(
-                {"UC-EMDM": fronts["UC-EMDM"]},
-                {"UC-EMDM": infos["UC-EMDM"]},
-                {"UC-EMDM": grids["UC-EMDM"]},
+                {Name.UC_EMDM: fronts[Name.UC_EMDM]},
+                {Name.UC_EMDM: infos[Name.UC_EMDM]},
+                {Name.UC_EMDM: grids[Name.UC_EMDM]},
                 stage / SLIDE_FIGURES / "pareto",
                 pf.SLIDE,
                 steps=(0, 1),
@@ -341,7 +341,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     lab = load("data/task2-lab-C-EMDM/solvers.json")
     out.append(str(pf.solver_figure(lab, dt_task2, stage / PAPER_FIGURES / "solvers")))
     out.append(str(pf.solver_figure(lab, dt_task2, stage / SLIDE_FIGURES / "solvers", pf.SLIDE)))
-    run = simulate(load_scenario("task2"), "C-EMDM")
+    run = simulate(load_scenario("task2"), Name.C_EMDM)
     rows = {
         name: _read_rows(stage / "data" / "task2-lab-C-EMDM" / "solvers" / f"{name}.csv")
         for name in ("interior-point", "admm", "slsqp")
@@ -460,8 +460,8 @@ def build_report(
         with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
             # longest jobs first: the gradient-free closed loops
             for name in reversed(solvers2):
-                futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", "C-EMDM", [name], cfg)
-            for ctrl in ("UC-EMDM", "C-EMDM"):
+                futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", Name.C_EMDM, [name], cfg)
+            for ctrl in (Name.UC_EMDM, Name.C_EMDM):
                 futures[f"pareto:{ctrl}"] = pool.submit(
                     _job_pareto, "task1", ctrl, cfg, stage / "data" / f"task1-pareto-{ctrl}"
                 )

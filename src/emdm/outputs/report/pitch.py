@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from ...core.controllers import Name
 from .document import Document
 from .findings import ALPHA, ERR, M_SYM, MRATE, RATIO, W_M, Story
 from .trace import Data, Sentence, Text, sentence
@@ -46,22 +47,22 @@ class Pitch:
         out.bullets["task1"] = [
             sentence(
                 "Tracking unchanged: both pairs reach the goal together (",
-                s.ttg(t1, "UC-EMDM"),
+                s.ttg(t1, Name.UC_EMDM),
                 " unconstrained, ",
-                s.ttg(t1, "C-EMDM"),
+                s.ttg(t1, Name.C_EMDM),
                 " constrained)",
             ),
             sentence(
                 "EMDM raises mean ",
                 M_SYM,
                 " by ",
-                s.pct(t1, "UC-EMDM", "UC-IVKC", "mean_manipulability"),
+                s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
                 " / ",
-                s.pct(t1, "C-EMDM", "C-IVKC", "mean_manipulability"),
+                s.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
                 " for ",
-                s.pct(t1, "UC-EMDM", "UC-IVKC", "total_effort"),
+                s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
                 " / ",
-                s.pct(t1, "C-EMDM", "C-IVKC", "total_effort"),
+                s.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
                 " effort",
             ),
         ]
@@ -73,13 +74,13 @@ class Pitch:
                     ": the bounds leave a single admissible command (task scaled, ",
                     ALPHA,
                     " down to ",
-                    s.ev(t1, "C-EMDM", "scaling", "min_alpha", fmt=".2f"),
+                    s.ev(t1, Name.C_EMDM, "scaling", "min_alpha", fmt=".2f"),
                     ")",
                 )
             )
         t2c = [
-            sentence("C-IVKC ", *s.outcome(t2, "C-IVKC")),
-            sentence("C-EMDM ", *s.outcome(t2, "C-EMDM")),
+            sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
+            sentence("C-EMDM ", *s.outcome(t2, Name.C_EMDM)),
         ]
         geo = self.d.value(f"data/{t2}/events.json", "geometry")
         if geo and geo["line_blocked"]:
@@ -94,7 +95,7 @@ class Pitch:
             )
         out.bullets["task2"] = t2c
         ev: list[Sentence] = []
-        e4 = s.evid("t2-c-ivkc-slack-policy", "runs", "C-IVKC")
+        e4 = s.evid("t2-c-ivkc-slack-policy", "runs", Name.C_IVKC)
         if e4.get("reached"):
             ev.append(
                 sentence(
@@ -102,14 +103,14 @@ class Pitch:
                     s.evidn(
                         "t2-c-ivkc-slack-policy",
                         "runs",
-                        "C-IVKC",
+                        Name.C_IVKC,
                         "time_to_goal",
                         fmt=".2f",
                         unit="s",
                     ),
                 )
             )
-        e6 = s.evid("t2-c-emdm-no-manip", "runs", "C-EMDM")
+        e6 = s.evid("t2-c-emdm-no-manip", "runs", Name.C_EMDM)
         if e6.get("reached"):
             ev.append(
                 sentence(
@@ -117,12 +118,17 @@ class Pitch:
                     W_M,
                     " = 0): goal in ",
                     s.evidn(
-                        "t2-c-emdm-no-manip", "runs", "C-EMDM", "time_to_goal", fmt=".2f", unit="s"
+                        "t2-c-emdm-no-manip",
+                        "runs",
+                        Name.C_EMDM,
+                        "time_to_goal",
+                        fmt=".2f",
+                        unit="s",
                     ),
                     ", sooner",
                 )
             )
-        e7 = s.evid("t2-c-emdm-tight-slack", "runs", "C-EMDM")
+        e7 = s.evid("t2-c-emdm-tight-slack", "runs", Name.C_EMDM)
         if not e7.get("reached", True):
             ev.append(
                 sentence(
@@ -132,7 +138,7 @@ class Pitch:
                     s.evidn(
                         "t2-c-emdm-tight-slack",
                         "runs",
-                        "C-EMDM",
+                        Name.C_EMDM,
                         "final_error",
                         fmt=".2f",
                         unit="m",
