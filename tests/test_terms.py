@@ -224,3 +224,23 @@ def test_a_crossed_stop_distance_is_named_when_the_scaled_task_cannot_go_on():
     run = caught.value.run
     d = min(sc.plane_distances(q)[0] for q in run.q)
     assert sc.planes.stop - 1e-3 < d < sc.planes.stop  # crossed, by less than a millimetre
+
+
+def test_the_explanation_tells_how_a_run_fared_beside_a_plane():
+    """The planes event is read from the record: the closest approach, which plane and when, the
+    steps with a row held and the verdict; a controller blind to the rows says so."""
+    from emdm.outputs.report.explain import plane_sentence, planes
+
+    sc = _with_plane("task1", 0.49)
+    run = emdm.simulate(sc, "MMC")
+    d = np.array([sc.plane_distances(q)[0] for q in run.q])
+    event = planes(run)
+    assert event["min_distance"] == d.min() and event["plane"] == 1
+    assert event["t_min"] == run.t[int(np.argmin(d))]
+    assert event["entered"] == (d.min() < sc.planes.stop)
+    assert event["active_row_steps"] == int(np.count_nonzero(run.rows_active)) > 100
+    assert event["sees_planes"]
+    blind = planes(emdm.simulate(sc, "UC-EMDM"))
+    assert blind["entered"] and not blind["sees_planes"]
+    assert plane_sentence("UC-EMDM", blind).endswith("does not see the planes.")
+    assert planes(emdm.simulate(emdm.load_scenario("task1"), "MMC")) is None

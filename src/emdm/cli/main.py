@@ -167,11 +167,21 @@ def cmd_run(args: argparse.Namespace) -> int:
             )
         print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
         print(summary_table(results, "m,rad" if scenario.nt == 6 else "m"))
-        if scenario.obstacles:  # how each run fared among the obstacles, from its record
-            from ..outputs.report.explain import obstacle_sentence, obstacles
+        if scenario.obstacles or scenario.planes.count:  # how each run fared, from its record
+            from ..outputs.report.explain import (
+                obstacle_sentence,
+                obstacles,
+                plane_sentence,
+                planes,
+            )
 
             for name, run in runs.items():
-                print(obstacle_sentence(name, obstacles(run)))
+                for line in (
+                    obstacle_sentence(name, obstacles(run)),
+                    plane_sentence(name, planes(run)),
+                ):
+                    if line:
+                        print(line)
     if stopped:
         first, *others = stopped.items()
         message = f"run stopped: {_stopped(*first)}"

@@ -185,6 +185,50 @@ def obstacle_sentence(name: str, event: dict[str, Any] | None) -> str | None:
     return f"{name}: {where}, outside the stop distance ({event['stop']:g} m)."
 
 
+def planes(run: Run) -> dict[str, Any] | None:
+    """With a ``[planes]`` section: the end effector's smallest distance to any plane, when and to
+    which, whether the stop distance was crossed, the steps with a row held, and whether the run
+    stalled within a plane's influence (its rows, not a joint, held the task back)."""
+    sc = run.scenario
+    if not sc.planes.count:
+        return None
+    D = np.array([sc.plane_distances(q) for q in run.q])  # states x planes
+    k, i = (int(v) for v in np.unravel_index(int(np.argmin(D)), D.shape))
+    pl = sc.planes
+    final = float(D[-1].min())
+    return {
+        "min_distance": float(D[k, i]),
+        "t_min": float(run.t[k]),
+        "plane": i + 1,
+        "stop": pl.stop,
+        "entered": bool(D[k, i] < pl.stop),
+        "sees_planes": bool(run.rows.max(initial=0) > 0) if run.steps else False,
+        "active_row_steps": int(np.count_nonzero(run.rows_active)),
+        "stalled_at_plane": bool(run.stalled_from is not None and final < pl.influence),
+        "final_distance": final,
+    }
+
+
+def plane_sentence(name: str, event: dict[str, Any] | None) -> str | None:
+    """One line on a run beside planes, from :func:`planes` (``None`` without them)."""
+    if event is None:
+        return None
+    where = (
+        f"the end effector came within {event['min_distance']:.4f} m of plane {event['plane']} "
+        f"at t = {event['t_min']:.2f} s"
+    )
+    if event["entered"]:
+        return f"{name}: {where}, inside the stop distance ({event['stop']:g} m): it " + (
+            "does not see the planes." if not event["sees_planes"] else "was entered."
+        )
+    if event["stalled_at_plane"]:
+        return (
+            f"{name}: stalled at a plane ({where}; its rows held the task back on "
+            f"{event['active_row_steps']} steps)."
+        )
+    return f"{name}: {where}, outside the stop distance ({event['stop']:g} m)."
+
+
 def singular(run: Run) -> dict[str, Any]:
     """The smallest manipulability, when, and (two-link arm) the elbow flips through ``q2 = 0``."""
     k = int(np.argmin(run.m))
@@ -296,6 +340,7 @@ def run_events(run: Run) -> dict[str, Any]:
         "pinned": pinned(run)[:6],
         "stall": stall(run),
         "obstacles": obstacles(run),
+        "planes": planes(run),
         "singular": singular(run),
         "conditioning": conditioning(run),
         "effort": effort(run),
