@@ -244,3 +244,21 @@ def test_the_explanation_tells_how_a_run_fared_beside_a_plane():
     assert blind["entered"] and not blind["sees_planes"]
     assert plane_sentence("UC-EMDM", blind).endswith("does not see the planes.")
     assert planes(emdm.simulate(emdm.load_scenario("task1"), "MMC")) is None
+
+
+def test_program_data_is_kept_per_scenario_and_controller():
+    """A scenario keeps each controller's program data for its next run; another controller of
+    the same name (other terms), other weights or another scenario get their own."""
+    from dataclasses import replace
+
+    sc = emdm.load_scenario("task1")
+    ctrl = emdm.get_controller("C-EMDM")
+    first = ctrl.program_data(sc)
+    assert ctrl.program_data(sc) is first
+    other = replace(ctrl, terms=ctrl.terms[:2])
+    assert other.program_data(sc).codes.size == 2 < first.codes.size
+    assert ctrl.program_data(sc).codes.size == first.codes.size
+    heavier = sc.with_overrides({"weights.manipulability": 7.0})
+    assert 7.0 in ctrl.program_data(heavier).weights and 7.0 not in first.weights
+    np.testing.assert_array_equal(emdm.simulate(heavier, ctrl).qd, emdm.simulate(
+        emdm.load_scenario("task1", {"weights.manipulability": 7.0}), "C-EMDM").qd)

@@ -97,8 +97,17 @@ class Controller:
         return term.when is When.ALWAYS or not scenario.redundant
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
-        """The terms, weights and numbers of this controller's program on ``scenario``."""
-        w = weights or scenario.weights
+        """The terms, weights and numbers of this controller's program on ``scenario`` (with the
+        scenario's weights: built once per scenario and kept in its :attr:`Scenario.memo`)."""
+        if weights is None:  # keyed by name, checked by identity first (hashing the terms costs)
+            key = ("program", self.name)
+            kept = scenario.memo.get(key)
+            if kept is None or (kept[0] is not self and kept[0] != self):
+                kept = scenario.memo[key] = (self, self._program_data(scenario, scenario.weights))
+            return kept[1]  # type: ignore[no-any-return]
+        return self._program_data(scenario, weights)
+
+    def _program_data(self, scenario: Scenario, w: Weights) -> ProgramData:
         codes: list[int] = []
         values: list[float] = []
         data: list[float] = []

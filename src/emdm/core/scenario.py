@@ -260,6 +260,13 @@ class Scenario:
         return np.hypot(self.arm.dh[:, 0], self.arm.dh[:, 2])  # type: ignore[index]
 
     @cached_property
+    def memo(self) -> dict[Any, Any]:
+        """Kernel inputs built from this scenario, kept for its next run (a scenario is immutable,
+        as :attr:`arm_data` and :attr:`geometry` assume): each controller's program data and the
+        motion, which cost a run of a few steps more than its steps do."""
+        return {}
+
+    @cached_property
     def arm_data(self) -> ArmData:
         """The arm's links, limits and dampers as input of the compiled kernels."""
         a, d = self.arm, self.damper

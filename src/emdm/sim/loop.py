@@ -557,10 +557,15 @@ class Run:
 
 
 def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
-    """The scenario's task as kernel input (``goal`` replaces the scenario's when given)."""
+    """The scenario's task as kernel input (``goal`` replaces the scenario's when given; without
+    one, built once per scenario and kept in its memo)."""
+    if goal is None:
+        if "motion" not in scenario.memo:
+            scenario.memo["motion"] = motion_data(scenario, scenario.motion.goal)
+        return scenario.memo["motion"]  # type: ignore[no-any-return]
     mo = scenario.motion
     return Motion(
-        np.array(mo.goal if goal is None else goal, dtype=float),
+        np.array(goal, dtype=float),
         np.array(mo.kp, dtype=float),
         float(mo.dt),
         float(mo.tolerance),
