@@ -260,5 +260,7 @@ def test_program_data_is_kept_per_scenario_and_controller():
     assert ctrl.program_data(sc).codes.size == first.codes.size
     heavier = sc.with_overrides({"weights.manipulability": 7.0})
     assert 7.0 in ctrl.program_data(heavier).weights and 7.0 not in first.weights
-    np.testing.assert_array_equal(emdm.simulate(heavier, ctrl).qd, emdm.simulate(
-        emdm.load_scenario("task1", {"weights.manipulability": 7.0}), "C-EMDM").qd)
+    np.testing.assert_array_equal(
+        emdm.simulate(heavier, ctrl).qd,
+        emdm.simulate(emdm.load_scenario("task1", {"weights.manipulability": 7.0}), "C-EMDM").qd,
+    )
