@@ -104,7 +104,7 @@ class Controller:
             kept = scenario.memo.get(key)
             if kept is None or (kept[0] is not self and kept[0] != self):
                 kept = scenario.memo[key] = (self, self._program_data(scenario, scenario.weights))
-            return kept[1]  # type: ignore[no-any-return]
+            return kept[1]
         return self._program_data(scenario, weights)
 
     def _program_data(self, scenario: Scenario, w: Weights) -> ProgramData:
