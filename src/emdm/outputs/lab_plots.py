@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.patches import Patch
+from matplotlib.ticker import NullFormatter
 
 from ..studies.lab import LabResult
 from .style import COLUMN, DOUBLE, FAMILY_COLOR, color, figure
@@ -47,7 +48,7 @@ def convergence_figure(lab: LabResult, out: Path) -> Path:
                     "label": name,
                     "linewidth": 1.0,
                     "marker": ".",
-                    "markersize": 2,
+                    "markersize": 4,
                 }
                 if "iteration" in hist[0]:
                     ax[0, col].loglog([h["iteration"] + 1 for h in hist], err, **style)
@@ -56,9 +57,19 @@ def convergence_figure(lab: LabResult, out: Path) -> Path:
             alpha = lab.reference.alpha[k]
             ax[0, col].set_title(f"{label} step (k = {k}, alpha = {alpha:.3g})")
             ax[0, col].set_xlabel("iteration + 1")
+            ax[0, col].xaxis.set_minor_formatter(NullFormatter())  # 2x10^0, 3x10^0... ran together
             ax[1, col].set_xlabel("objective evaluations")
             for row in range(2):
                 ax[row, col].set_ylabel("best |f - f*| + violation")
+                if not ax[row, col].lines:  # say why a panel is empty instead of a blank frame
+                    ax[row, col].text(
+                        0.5, 0.5, "no " + ("iterative" if row == 0 else "gradient-free")
+                        + " solver\nin this comparison", ha="center", va="center",
+                        transform=ax[row, col].transAxes, color="0.4",
+                    )  # fmt: skip
+                    ax[row, col].set_xticks([])
+                    ax[row, col].set_yticks([])
+                    continue
                 ax[row, col].set_ylim(1e-17, None)
         handles, labels = [], []
         for axis in ax.flat:
