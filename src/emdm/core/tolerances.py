@@ -53,4 +53,4 @@ STALL_TIME = 1.0
 LAZY = 0.5
 """A row ``G_i x <= h_i`` with ``h_i >= LAZY * max_box G_i x`` (it keeps at least half its
 right-hand side against the largest value the bounds allow) is solved lazily: left out of the
-first solve and checked at its answer (``sim.loop.settle_rows``). Dimensionless."""
+first solve and checked at its answer (``sim.rows.settle_rows``). Dimensionless."""

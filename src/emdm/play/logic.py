@@ -323,7 +323,7 @@ def ellipses(points: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, 
 
 def at_bounds(run: Run) -> np.ndarray:
     """Per command and joint: -1 at the lower bound, +1 at the upper, 0 free; ``(K, n)``: the
-    record's ``active`` column, the one definition of a joint at a bound (``sim.loop.mark_active``)."""
+    record's ``active`` column, the one definition of a joint at a bound (``sim.buffers.mark_active``)."""
     return np.asarray(run.active, dtype=np.int8)
 
 

@@ -23,18 +23,16 @@ from ..core.scenario import Scenario
 from ..core.terms import ProgramData
 from ..core.validation import Policy
 from ..errors import NoSolution
+from .buffers import Motion, new_record, step_work
 from .loop import (
     REACHED,
     TIMEOUT,
     WARM_UP_PRESETS,
     Exit,
-    Motion,
     _warm_up,
     motion_data,
-    new_record,
     run_kernel,
     simulate,
-    step_work,
 )
 from .metrics import OUTCOMES, outcomes, run_outcomes
 

@@ -24,7 +24,6 @@ import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,16 +38,12 @@ from ..core.controllers import (
     state_at,
     step_program,
 )
-from ..core.distance import AXIS, POINT, chain_points, link_distances
+from ..core.distance import chain_points, link_distances
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
     Geometry,
-    KinWork,
-    SpatialWork,
-    kin_work,
     kinematics,
-    spatial_work,
     task_kinematics,
 )
 from ..core.problem import QP
@@ -57,20 +52,19 @@ from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
 from ..core.terms.base import TermKind
 from ..core.terms.obstacle import SLOWEST
-from ..core.tolerances import AT_BOUND, LAZY, STALL_BAND, STALL_TIME
+from ..core.tolerances import STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
 from ..solvers.kernels import (
     INFEASIBLE,
-    MAX_ITER_EXCEEDED,
     OK,
-    QPWork,
     active_set,
     certify,
-    qp_work,
 )
+from .buffers import Motion, Record, StepWork, mark_active, new_record, step_work
+from .rows import count_active_rows, partition_rows, settle_rows
 
 F64 = NDArray[np.float64]
 
@@ -88,241 +82,6 @@ class Exit(IntEnum):
 
 
 REACHED, TIMEOUT, HANDOFF, FULL = (int(e) for e in Exit)  # IntEnum does not cross numba's parfors
-
-
-class Motion(NamedTuple):
-    """The task as kernel input: goal (m; a pose's orientation as a rotation vector, rad), gain
-    (1/s, per task row), dt (s), tolerance (m, and rad for a pose), steps, and the kind of task
-    (``core.kernels.TASK_*``)."""
-
-    goal: F64
-    kp: F64
-    dt: float
-    tolerance: float
-    n_steps: int
-    task: int
-    obstacles: F64
-    """The scenario's obstacles, packed (:mod:`emdm.core.distance`; empty without them)."""
-
-
-class Record(NamedTuple):
-    """Every recorded quantity, preallocated: states ``0..cap`` and commands ``0..cap-1``."""
-
-    q: F64
-    p: F64
-    e: F64
-    v: F64
-    m: F64
-    qd: F64
-    effort: F64
-    manip: F64
-    delta: F64
-    alpha: F64
-    lo: F64
-    hi: F64
-    active: NDArray[np.int8]
-    iterations: NDArray[np.int64]
-    ticks: NDArray[np.int64]
-    kkt: F64
-    excess: F64
-    rows: NDArray[np.int64]
-    rows_active: NDArray[np.int64]
-    clearance: F64
-
-
-class StepWork(NamedTuple):
-    """One step's buffers: kinematics (planar, and spatial: empty for a planar arm), the program
-    ``(P, c, A, b, G, h, lb, ub)``, answer and residuals."""
-
-    kin: KinWork
-    sp: SpatialWork
-    qp: QPWork
-    J: F64
-    Jm: F64
-    P: F64
-    c: F64
-    A: F64
-    b: F64
-    G: F64
-    h: F64
-    lb: F64
-    ub: F64
-    x: F64
-    res: F64
-    rows: NDArray[np.int64]
-    pts: F64
-    axes: F64
-    dist: F64
-
-
-@kernel
-def new_record(cap: int, n: int, nt: int) -> Record:
-    """A record with room for ``cap`` commands of an ``n``-joint arm on an ``nt``-row task."""
-    return Record(
-        np.empty((cap + 1, n)),
-        np.empty((cap + 1, nt)),
-        np.empty((cap + 1, nt)),
-        np.empty((cap + 1, nt)),
-        np.empty(cap + 1),
-        np.empty((cap, n)),
-        np.empty(cap),
-        np.empty(cap),
-        np.zeros((cap, nt)),
-        np.empty(cap),
-        np.empty((cap, n)),
-        np.empty((cap, n)),
-        np.zeros((cap, n), dtype=np.int8),
-        np.zeros(cap, dtype=np.int64),
-        np.zeros(cap, dtype=np.int64),
-        np.empty(cap),
-        np.empty(cap),
-        np.zeros(cap, dtype=np.int64),
-        np.zeros(cap, dtype=np.int64),
-        np.full(cap + 1, np.inf),
-    )
-
-
-@kernel
-def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
-    """Buffers for one step of an ``n``-joint arm whose program has ``nx`` variables, ``nt``
-    task rows and ``ng`` inequality rows, among ``no`` obstacles."""
-    return StepWork(
-        kin_work(n),
-        spatial_work(n if nt != 2 else 0),
-        qp_work(nx, nt, ng),
-        np.empty((nt, n)),
-        np.empty(n),
-        np.empty((nx, nx)),
-        np.empty(nx),
-        np.zeros((nt, nx)),
-        np.empty(nt),
-        np.zeros((ng, nx)),
-        np.zeros(ng),
-        np.empty(nx),
-        np.empty(nx),
-        np.empty(nx),
-        np.empty(4),
-        np.zeros(1, dtype=np.int64),
-        np.zeros((n + 2, POINT)),
-        np.zeros((n, AXIS)),
-        np.zeros((n + 1, no)),
-    )
-
-
-@kernel
-def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
-    """``active_j`` = -1 when ``qd_j`` is at its lower bound, +1 at its upper bound, else 0: the
-    one definition of "at a bound" (:data:`emdm.core.tolerances.AT_BOUND`), recorded in
-    ``Run.active`` and read from there by the report and the playground."""
-    for j in range(qd.size):
-        if qd[j] <= lo[j] + AT_BOUND * (1.0 + abs(lo[j])):
-            active[j] = -1
-        elif qd[j] >= hi[j] - AT_BOUND * (1.0 + abs(hi[j])):
-            active[j] = 1
-        else:
-            active[j] = 0
-
-
-@kernel
-def count_active_rows(G: F64, h: F64, x: F64) -> int:
-    """How many rows of ``G x <= h`` hold with equality at ``x`` (within ``AT_BOUND (1 + |h_i|)``,
-    the record's definition of "at a bound")."""
-    count = 0
-    for i in range(G.shape[0]):
-        gx = 0.0
-        for j in range(x.size):
-            gx += G[i, j] * x[j]
-        if h[i] - gx <= AT_BOUND * (1.0 + abs(h[i])):
-            count += 1
-    return count
-
-
-@kernel
-def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
-    """Reorder the rows ``G[:ng] x <= h[:ng]`` so that those that may bind come first; returns
-    how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
-    against the largest ``G_i x`` the bounds allow: ``h_i >= LAZY * max_box G_i x`` and ``h_i >
-    0`` (obstacles beyond their influence distance, as a rule). The order does not change the
-    program; :func:`settle_rows` checks the lazy rows at the answer."""
-    near = 0
-    nx = G.shape[1]
-    for i in range(ng):
-        reach = 0.0
-        for j in range(nx):
-            g = G[i, j]
-            if g > 0.0:
-                reach += g * ub[j]
-            elif g < 0.0:
-                reach += g * lb[j]
-        if h[i] > 0.0 and h[i] >= LAZY * reach:
-            continue
-        if i != near:
-            for j in range(nx):
-                G[i, j], G[near, j] = G[near, j], G[i, j]
-            h[i], h[near] = h[near], h[i]
-        near += 1
-    return near
-
-
-@kernel
-def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> tuple[int, int]:
-    """After the active set on the rows ``G[:near]`` returned ``(code, iterations)``: unravel a
-    cycle (:func:`_unravel`), and when the answer breaks one of the lazy rows ``G[near:ng]``,
-    solve again on all of them (so the answer is the optimum of the whole program). Called only
-    for programs with rows: passing the step's buffers costs a reference count per array."""
-    if code == MAX_ITER_EXCEEDED and near > 0:
-        code, iterations = _unravel(w, near, iterations)
-    if code != OK or near == ng:
-        return code, iterations
-    for i in range(near, ng):
-        if _row_excess(w.G, w.h, i, w.x) > 0.0:
-            n = w.x.size
-            for r in range(near, ng):
-                w.qp.work[n + r] = 0
-            more, again = active_set(
-                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res
-            )
-            return more, iterations + again
-    return code, iterations
-
-
-@kernel
-def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
-    """After the active set cycled on a degenerate vertex (more constraints active than
-    variables, ties in its ratio tests): accept the point where it stopped if the certificate
-    (best multipliers over every active constraint) says it is the optimum; else solve the
-    program with every row loosened by a distinct amount (about 1e-9 of its size;
-    deterministic), then, from the working set found there, the program itself, whose warm
-    start accepts that working set only where it is the exact optimum."""
-    G, h = w.G[:near], w.h[:near]
-    certify(w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res)
-    if max(w.res[0], w.res[1], w.res[2]) <= KKT_TOL and w.res[3] <= BOUND_TOL:
-        return OK, iterations  # where it stopped is the optimum: a degenerate vertex (more
-        # constraints active than variables) whose multipliers the certificate finds
-    exact = w.h[:near].copy()  # a rare path: it may allocate
-    for i in range(near):
-        w.h[i] += 1e-9 * (1.0 + abs(w.h[i])) * (1.0 + (i * 7919) % 97) / 97.0
-    code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
-    )
-    for i in range(near):
-        w.h[i] = exact[i]
-    iterations += more
-    if code != OK:
-        return MAX_ITER_EXCEEDED, iterations
-    w.qp.warm[0] = True
-    code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
-    )
-    return code, iterations + more
-
-
-@kernel
-def _row_excess(G: F64, h: F64, i: int, x: F64) -> float:
-    acc = -h[i]
-    for j in range(x.size):
-        acc += G[i, j] * x[j]
-    return float(acc)
 
 
 @kernel
