@@ -173,13 +173,24 @@ def obstacle_sentence(name: str, event: dict[str, Any] | None) -> str | None:
         f"link {event['link']} came within {event['min_clearance']:.4f} m of obstacle "
         f"{event['obstacle']} (a {event['shape']}) at t = {event['t_min']:.2f} s"
     )
+    return _verdict(
+        name, where, event, "obstacles", event["sees_obstacles"],
+        "in front of an obstacle" if event["stalled_at_obstacle"] else None,
+    )  # fmt: skip
+
+
+def _verdict(
+    name: str, where: str, event: dict[str, Any], what: str, sees: bool, stalled: str | None
+) -> str:
+    """The line shared by obstacles and planes: entered (and whether the controller sees the
+    rows), stalled at them, or kept outside the stop distance."""
     if event["entered"]:
         return f"{name}: {where}, inside the stop distance ({event['stop']:g} m): it " + (
-            "does not see the obstacles." if not event["sees_obstacles"] else "was entered."
+            f"does not see the {what}." if not sees else "was entered."
         )
-    if event["stalled_at_obstacle"]:
+    if stalled:
         return (
-            f"{name}: stalled in front of an obstacle ({where}; its rows held the task back on "
+            f"{name}: stalled {stalled} ({where}; its rows held the task back on "
             f"{event['active_row_steps']} steps)."
         )
     return f"{name}: {where}, outside the stop distance ({event['stop']:g} m)."
@@ -217,16 +228,10 @@ def plane_sentence(name: str, event: dict[str, Any] | None) -> str | None:
         f"the end effector came within {event['min_distance']:.4f} m of plane {event['plane']} "
         f"at t = {event['t_min']:.2f} s"
     )
-    if event["entered"]:
-        return f"{name}: {where}, inside the stop distance ({event['stop']:g} m): it " + (
-            "does not see the planes." if not event["sees_planes"] else "was entered."
-        )
-    if event["stalled_at_plane"]:
-        return (
-            f"{name}: stalled at a plane ({where}; its rows held the task back on "
-            f"{event['active_row_steps']} steps)."
-        )
-    return f"{name}: {where}, outside the stop distance ({event['stop']:g} m)."
+    return _verdict(
+        name, where, event, "planes", event["sees_planes"],
+        "at a plane" if event["stalled_at_plane"] else None,
+    )  # fmt: skip
 
 
 def singular(run: Run) -> dict[str, Any]:
