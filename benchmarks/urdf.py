@@ -35,7 +35,8 @@ import urdf_reference as ref  # noqa: E402
 
 import emdm  # noqa: E402
 from emdm import SerialArm  # noqa: E402
-from emdm.core.scenario import load_scenario, scenario_from_dict  # noqa: E402
+from emdm.core.loading import load_scenario  # noqa: E402
+from emdm.core.scenario import scenario_from_dict  # noqa: E402
 from emdm.core.urdf import read_urdf  # noqa: E402
 from emdm.studies.bench import _median_time  # noqa: E402
 

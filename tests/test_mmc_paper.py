@@ -10,7 +10,7 @@ import pytest
 from qpsolvers import solve_qp
 
 from emdm.cli.main import main
-from emdm.core.scenario import load_scenario
+from emdm.core.loading import load_scenario
 from emdm.studies.mmc_paper import (
     CONTROLLERS,
     PI,

@@ -14,8 +14,9 @@ from scipy.optimize import linprog, minimize
 from emdm import simulate
 from emdm.core.controllers import get_controller, joint_bounds, program_at
 from emdm.core.distance import closest_points
+from emdm.core.loading import load_scenario
 from emdm.core.obstacles import distance_jacobian
-from emdm.core.scenario import load_scenario, scenario_from_dict
+from emdm.core.scenario import scenario_from_dict
 from emdm.errors import ScenarioError
 from emdm.solvers import KKT_TOL
 

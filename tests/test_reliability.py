@@ -90,7 +90,7 @@ def test_runs_hold_every_invariant(sc):
 
 
 # ------------------------------------------------------------------------------ loader fuzzing
-SECTION_KEYS = {s: list(keys) for s, keys in emdm.core.scenario.SCHEMA.items()}
+SECTION_KEYS = {s: list(keys) for s, keys in emdm.core.schema.SCHEMA.items()}
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers(-(10**6), 10**6) | st.floats() | st.text(max_size=8),
     lambda children: (

@@ -10,7 +10,7 @@ import pytest
 
 import emdm
 from emdm import ScenarioError, load_scenario, scenario_from_dict
-from emdm.core.scenario import ScenarioWarning, parse_override
+from emdm.core.loading import ScenarioWarning, parse_override
 
 
 def test_task1_is_table_1_of_the_brief():

@@ -19,7 +19,8 @@ import urdf_reference as ref
 
 import emdm
 from emdm import ScenarioError, SerialArm
-from emdm.core.scenario import load_scenario, scenario_from_dict
+from emdm.core.loading import load_scenario
+from emdm.core.scenario import scenario_from_dict
 from emdm.core.urdf import read_urdf
 
 pin = pytest.importorskip("pinocchio")

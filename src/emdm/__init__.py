@@ -21,8 +21,9 @@ from .core.controllers import (
     step_program,
 )
 from .core.feasibility import feasible_point, task_scale
+from .core.loading import PRESETS, ScenarioWarning, load_scenario
 from .core.problem import QP, Objective
-from .core.scenario import PRESETS, Scenario, ScenarioWarning, load_scenario, scenario_from_dict
+from .core.scenario import Scenario, scenario_from_dict
 from .core.serial import SerialArm
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
 from .sim.batch import BatchResult, simulate_batch

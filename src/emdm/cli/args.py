@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from ..core.controllers import BASELINES, CONTROLLERS, get_controller
-from ..core.scenario import PRESETS
+from ..core.loading import PRESETS
 from ..errors import EmdmError, one_line
 from ..solvers import get_solver
 

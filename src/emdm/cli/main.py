@@ -23,7 +23,8 @@ import numpy as np
 
 from .. import __version__
 from ..core.controllers import BASELINES, CONTROLLERS, Name, get_controller
-from ..core.scenario import PRESETS, Scenario, load_scenario, parse_override
+from ..core.loading import PRESETS, load_scenario, parse_override
+from ..core.scenario import Scenario
 from ..core.terms import TermKind
 from ..errors import EmdmError, NoSolution
 from ..outputs.records import (

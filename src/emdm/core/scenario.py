@@ -1,21 +1,19 @@
-"""Scenarios: frozen, validated descriptions of one control task (schema: README, "Scenario files").
+"""Scenarios: frozen, validated descriptions of one control task (schema: README, "Scenario files";
+its keys: :mod:`emdm.core.schema`).
 
 A scenario comes from a TOML file, a built-in preset (``task1``, ``task2``: Tables 1 and 2 of the
-brief), ``--set section.key=value`` overrides or the Python API; all of them go through the same
-validation in :func:`scenario_from_dict`, which raises :class:`~emdm.errors.ScenarioError` naming the
+brief), ``--set section.key=value`` overrides or the Python API (reading them:
+:mod:`emdm.core.loading`); all of them go through the same validation in
+:func:`scenario_from_dict`, which raises :class:`~emdm.errors.ScenarioError` naming the
 source, the key and the problem. Per-joint values may be given as one scalar.
 """
 
 from __future__ import annotations
 
 import math
-import tomllib
-import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import StrEnum
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +22,20 @@ import numpy as np
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
 from .distance import pack as pack_obstacles
-from .kernels import TASK_PLANAR, TASK_POSE, TASK_POSITION, ArmData, Geometry, rotation_vector
+from .kernels import ArmData, Geometry
 from .obstacles import Obstacle, check_damper, check_start, pack_rows, parse_obstacles
 from .obstacles import distances as obstacle_distances
 from .robot import Robot
+from .schema import (
+    AXES,
+    SCHEMA,
+    SECTION_TYPES,
+    SPATIAL_ONLY,
+    TASK_CODES,
+    TASK_ROWS,
+    plain,
+    toml_value,
+)
 from .sections import (
     ArmSpec,
     ControllerSettings,
@@ -49,101 +57,6 @@ from .validation import (
     _name,
     _show,
 )
-
-PLANAR_PRESETS = ("task1", "task2")
-"""The brief's planar tasks (Tables 1 and 2)."""
-SPATIAL_PRESETS = ("panda", "ur5")
-"""Spatial arms: Franka Emika Panda (modified DH) and Universal Robots UR5 (standard DH)."""
-OBSTACLE_PRESETS = ("obstacle", "panda-obstacles")
-"""Scenes with obstacles (docs/mathematics.md, "Obstacles")."""
-PRESETS = PLANAR_PRESETS + SPATIAL_PRESETS + OBSTACLE_PRESETS
-
-
-TASK_ROWS = {Task.PLANAR: 2, Task.POSITION: 3, Task.POSE: 6}
-TASK_CODES = {Task.PLANAR: TASK_PLANAR, Task.POSITION: TASK_POSITION, Task.POSE: TASK_POSE}
-AXES = ("all", "trans", "rot")
-SPATIAL_ONLY = (
-    "arm.dh",
-    "arm.convention",
-    "arm.urdf",
-    "arm.base_link",
-    "arm.tip_link",
-    "arm.tool",
-    "motion.task",
-    "motion.axes",
-)
-"""Keys of spatial arms only (a planar scenario neither needs nor writes them)."""
-
-
-class ScenarioWarning(UserWarning):
-    """A scenario that is valid but probably not what was meant (e.g. an unreachable goal)."""
-
-
-# ---------------------------------------------------------------------------------------- schema
-# kind: "joints" (n values, scalar allowed), "task" (one value per task row: 2 planar, 3 position,
-# 6 pose), "dh" (n rows of 4), "tool" (3 numbers or 4 rows of 4), "number", "str", "rows" (any
-# number of rows of one value per axis of the workspace: 2 planar, 3 spatial), "list" (any number
-# of values). Missing optional keys take the default (the brief's values); "" marks a key that
-# is optional without a default.
-@dataclass(frozen=True)
-class _Key:
-    kind: str
-    default: Any = None  # None: required
-    scalar_ok: bool = True
-
-
-SCHEMA: dict[str, dict[str, _Key]] = {
-    "arm": {
-        "lengths": _Key("joints", "", scalar_ok=False),
-        "dh": _Key("dh", ""),
-        "convention": _Key("str", "standard"),
-        "urdf": _Key("str", ""),
-        "base_link": _Key("str", ""),
-        "tip_link": _Key("str", ""),
-        "tool": _Key("tool", [0.0, 0.0, 0.0]),
-        "q_min": _Key("joints"),
-        "q_max": _Key("joints"),
-        "qd_min": _Key("joints"),
-        "qd_max": _Key("joints"),
-    },
-    "motion": {
-        "q0": _Key("joints", scalar_ok=False),
-        "task": _Key("str", ""),
-        "axes": _Key("str", "all"),
-        "goal": _Key("task", scalar_ok=False),
-        "dt": _Key("number", 0.05),
-        "kp": _Key("task", 1.0),
-        "tolerance": _Key("number", 1e-3),
-        "max_time": _Key("number", 30.0),
-    },
-    "weights": {
-        "effort": _Key("number", 0.1),
-        "manipulability": _Key("number", 5.0),
-        "slack": _Key("number", 10.0),
-        "centring": _Key("number", 0.0),
-        "clearance": _Key("number", 0.0),
-    },
-    "slack": {"min": _Key("task", -1.0), "max": _Key("task", 1.0)},
-    "damper": {
-        "influence": _Key("joints", 0.785398),
-        "stop": _Key("joints", 0.0872665),
-        "gain": _Key("joints", 1.0),
-    },
-    "controller": {"on_infeasible": _Key("str", "scale")},
-    "planes": {
-        "normals": _Key("rows", []),
-        "offsets": _Key("list", []),
-        "influence": _Key("number", 0.1),
-        "stop": _Key("number", 0.02),
-        "gain": _Key("number", 1.0),
-    },
-    "obstacle_damper": {
-        "influence": _Key("number", 0.15),
-        "stop": _Key("number", 0.03),
-        "gain": _Key("number", 1.0),
-        "link_radius": _Key("number", 0.0),
-    },
-}
 
 
 @dataclass(frozen=True, eq=False)
@@ -312,7 +225,7 @@ class Scenario:
                 continue  # none: the file stays as it was before planes and obstacles existed
             obj = getattr(self, section)
             out[section] = {
-                key: _plain(getattr(obj, key))
+                key: plain(getattr(obj, key))
                 for key in SCHEMA[section]
                 if getattr(obj, key) is not None
                 and not (SCHEMA[section][key].kind == "str" and getattr(obj, key) == "")
@@ -332,17 +245,17 @@ class Scenario:
 
     def to_toml(self) -> str:
         """The scenario as a TOML document that :func:`load_scenario` reads back identically."""
-        lines = [f"name = {_toml_value(self.name)}"]
+        lines = [f"name = {toml_value(self.name)}"]
         for section, values in self.to_dict().items():
             if section == "name":
                 continue
             if section == "obstacles":
                 for table in values:
                     lines.append("\n[[obstacles]]")
-                    lines.extend(f"{key} = {_toml_value(v)}" for key, v in table.items())
+                    lines.extend(f"{key} = {toml_value(v)}" for key, v in table.items())
                 continue
             lines.append(f"\n[{section}]")
-            lines.extend(f"{key} = {_toml_value(value)}" for key, value in values.items())
+            lines.extend(f"{key} = {toml_value(value)}" for key, value in values.items())
         return "\n".join(lines) + "\n"
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Scenario:
@@ -409,32 +322,6 @@ class Scenario:
                         f"gives {n} joints where the scenario has {self.n}, and {dotted} "
                         f"differs per joint: set {dotted} ({n} values) as well",
                     )
-
-
-_SECTION_TYPES: dict[str, Callable[..., Any]] = {
-    "arm": ArmSpec,
-    "motion": Motion,
-    "weights": Weights,
-    "slack": SlackBounds,
-    "damper": Damper,
-    "controller": ControllerSettings,
-    "planes": Planes,
-    "obstacle_damper": ObstacleDamper,
-}
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, np.ndarray):
-        return [_plain(v) if isinstance(v, np.ndarray) else float(v) for v in value]
-    return str(value) if isinstance(value, StrEnum) else value
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    return repr(float(value))
 
 
 # ------------------------------------------------------------------------------ validation
@@ -570,7 +457,7 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     warnings_found = _check_consistency(check, parsed, n)
     parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
     name = data.get("name") or Path(source).stem or "scenario"
-    sections = {s: _SECTION_TYPES[s](**values) for s, values in parsed.items()}
+    sections = {s: SECTION_TYPES[s](**values) for s, values in parsed.items()}
     obstacles = (
         parse_obstacles(check, data["obstacles"], 3 if spatial else 2)
         if "obstacles" in data
@@ -635,100 +522,3 @@ def _read_robot(check: _Checker, raw_arm: dict[str, Any], source: str) -> UrdfAr
             )
         raw_arm[key] = [float(v) for v in values]
     return robot
-
-
-def urdf_template(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
-    """A scenario for the robot of a URDF file: the file's chain and limits (``arm.base_link``,
-    ``arm.tip_link`` from ``overrides`` where the file leaves a choice), a start ``q0``, and a
-    goal the arm reaches:
-    the pose (6 or more joints; else the position) at ``q0`` moved a fifth of the way to the
-    upper limits. The other settings are the defaults; ``emdm scenario robot.urdf`` prints it.
-    The start is the most dexterous (largest manipulability) of ``q = 0`` and 64 seeded draws in
-    the middle of the limits: a straight arm at 0 (many robots' zero) is singular."""
-    overrides = dict(overrides or {})
-    source = str(path)
-    arm: dict[str, Any] = {"urdf": str(Path(path).resolve())}
-    for key in ("base_link", "tip_link"):
-        if f"arm.{key}" in overrides:
-            arm[key] = overrides.pop(f"arm.{key}")
-    check = _Checker(source)
-    robot = _read_robot(check, arm, "")
-    lo, hi = np.asarray(arm["q_min"]), np.asarray(arm["q_max"])
-    model = SerialArm.from_chain(robot.chain)
-    task = "pose" if robot.chain.n >= 6 else "position"
-    axes: Any = "all" if task == "pose" else "trans"
-    # the start: of 0 and 64 seeded draws in the middle 60 % of the limits, the most dexterous
-    draws = np.random.default_rng(0).uniform(0.2, 0.8, (64, lo.size)) * (hi - lo) + lo
-    zero = np.clip(0.0, lo, hi)
-    q0 = max((zero, *draws), key=lambda q: model.manipulability(q, axes))
-    reach = model.forward(q0 + 0.2 * (hi - q0))
-    goal = reach[:3, 3].tolist()
-    if task == "pose":
-        rotvec = np.empty(3)
-        rotation_vector(np.ascontiguousarray(reach), rotvec, 0)
-        goal += rotvec.tolist()
-    data = {
-        "name": Path(path).stem,
-        "arm": arm,
-        "motion": {"task": task, "q0": q0.tolist(), "goal": goal},
-    }
-    scenario = scenario_from_dict(data, source=source)
-    return scenario.with_overrides(overrides) if overrides else scenario
-
-
-# ----------------------------------------------------------------------------------- loading
-def parse_override(text: str) -> tuple[str, Any]:
-    """``"section.key=value"`` -> ``("section.key", value)``; the value is read as TOML, else a string."""
-    dotted, sep, raw = text.partition("=")
-    dotted, raw = dotted.strip(), raw.strip()
-    if not sep or not dotted:
-        raise ScenarioError("--set", text, "expected section.key=value")
-    try:
-        value = tomllib.loads(f"v = {raw}")["v"]
-    except (ValueError, RecursionError):  # not TOML (or too deep, or an integer of more than
-        value = raw  # 4300 digits): kept as text, which validation then refuses by name
-    return dotted, value
-
-
-def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
-    """Load a preset (``"task1"``, ``"task2"``), a TOML file or a URDF file (a template scenario
-    for the robot, :func:`urdf_template`), apply overrides, validate.
-
-    Raises :class:`~emdm.errors.ScenarioError` for a missing file, a file that is not TOML, or invalid
-    content. Valid but suspicious settings are kept in ``scenario.warnings`` and issued as
-    :class:`ScenarioWarning`.
-    """
-    text_name = str(name_or_path)
-    if Path(text_name).suffix.lower() == ".urdf":
-        scenario = urdf_template(text_name, overrides)
-        for message in scenario.warnings:
-            warnings.warn(f"{text_name}: {message}", ScenarioWarning, stacklevel=2)
-        return scenario
-    if text_name in PRESETS and not Path(text_name).exists():
-        text = resources.files("emdm.core").joinpath("scenarios", f"{text_name}.toml").read_text()
-        source = text_name
-    else:
-        path = Path(name_or_path)
-        source = str(path)
-        if not path.is_file():
-            hint = f" (presets: {', '.join(PRESETS)})" if path.suffix == "" else ""
-            raise ScenarioError(source, "", f"no such scenario file{hint}")
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ScenarioError(source, "", f"cannot be read: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except ValueError as exc:  # TOMLDecodeError, or an integer of more than 4300 digits
-        raise ScenarioError(source, "", f"not a valid TOML file: {exc}") from None
-    except RecursionError:
-        raise ScenarioError(
-            source, "", "not a scenario: its arrays or tables nest too deeply"
-        ) from None
-    data.setdefault("name", Path(source).stem)
-    scenario = scenario_from_dict(data, source=source)
-    if overrides:
-        scenario = scenario.with_overrides(overrides)
-    for message in scenario.warnings:
-        warnings.warn(f"{source}: {message}", ScenarioWarning, stacklevel=2)
-    return scenario

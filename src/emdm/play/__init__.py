@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import warnings
 
-from ..core.scenario import PLANAR_PRESETS, Scenario, load_scenario
+from ..core.loading import PLANAR_PRESETS, load_scenario
+from ..core.scenario import Scenario
 from ..errors import EmdmError
 
 

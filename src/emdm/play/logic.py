@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from ..core.controllers import Controller, Name, get_controller
-from ..core.scenario import Scenario, parse_override, scenario_from_dict
+from ..core.loading import parse_override
+from ..core.scenario import Scenario, scenario_from_dict
 from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
 from ..sim.loop import Run, simulate

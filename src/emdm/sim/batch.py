@@ -118,7 +118,7 @@ def run_all(
 
 def _warm_up_batch() -> None:
     """Compile (or load) the batch kernel on a two-step run of each kind of program."""
-    from ..core.scenario import load_scenario
+    from ..core.loading import load_scenario
 
     for task in WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})

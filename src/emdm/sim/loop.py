@@ -547,7 +547,7 @@ WARM_UP_PRESETS = ("task1", "task2", "panda", "ur5")
 
 def _warm_up() -> None:
     """Compile (or load) every kernel of the loop: one short run of each kind of program."""
-    from ..core.scenario import load_scenario
+    from ..core.loading import load_scenario
 
     seconds_per_tick()
     for task in WARM_UP_PRESETS:

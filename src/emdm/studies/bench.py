@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import __version__
 from ..core.controllers import CONTROLLERS, Name, get_controller, program_at, state_at
-from ..core.scenario import load_scenario
+from ..core.loading import load_scenario
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
 from ..solvers import DEFAULT_FALLBACK, DEFAULT_SOLVER, solve_chain

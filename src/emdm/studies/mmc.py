@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..core.controllers import Name, goal_of
-from ..core.scenario import load_scenario
+from ..core.loading import load_scenario
 from ..errors import ScenarioError
 from ..sim.batch import simulate_batch
 

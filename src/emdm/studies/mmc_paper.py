@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.scenario import load_scenario
+from ..core.loading import load_scenario
 
 Vector = NDArray[np.float64]
 Y, PS, PI, GAIN, THRESHOLD, DT = 0.01, 0.05, 0.9, 1.0, 0.17, 0.05

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from ..core.controllers import Controller, Name, get_controller
-from ..core.scenario import Scenario, load_scenario, scenario_from_dict
+from ..core.loading import load_scenario
+from ..core.scenario import Scenario, scenario_from_dict
 from ..errors import NoSolution, ScenarioError
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate

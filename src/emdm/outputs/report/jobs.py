@@ -26,7 +26,8 @@ import numpy as np
 
 from ... import __version__
 from ...core.controllers import CONTROLLERS, Name
-from ...core.scenario import Scenario, load_scenario
+from ...core.loading import load_scenario
+from ...core.scenario import Scenario
 from ...errors import EmdmError, NoSolution
 from ...sim.loop import Run, simulate
 from ...sim.metrics import metrics
