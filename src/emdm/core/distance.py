@@ -44,7 +44,7 @@ POINT = 5
 (its tightening and reach of the point, written by :mod:`emdm.core.terms.obstacle`)."""
 
 
-@kernel
+@kernel(refcount=False)
 def chain_points(geo: Geometry, p: F64, w: KinWork, sw: SpatialWork, pts: F64, axes: F64) -> None:
     """``pts`` and ``axes`` (see the module notes) from the kinematics just computed: the planar
     tip vectors ``w.rx, w.ry`` and tip ``p``, or a spatial arm's frames ``sw.frames`` and end
@@ -86,7 +86,7 @@ def chain_points_of(lengths: F64, geo: Geometry, q: F64, pts: F64, axes: F64) ->
     chain_points(geo, p, w, sw, pts, axes)
 
 
-@kernel
+@kernel(refcount=False)
 def segment_params(
     px: float,
     py: float,
@@ -131,7 +131,7 @@ def segment_params(
     return s, t
 
 
-@kernel
+@kernel(refcount=False)
 def closest_points(P: F64, Q: F64, A: F64, B: F64, x: F64, y: F64) -> float:
     """Closest points ``x`` on segment ``[P, Q]`` and ``y`` on ``[A, B]`` (3-D; either may be a
     point); returns ``||x - y||`` (:func:`segment_params`)."""
@@ -143,7 +143,7 @@ def closest_points(P: F64, Q: F64, A: F64, B: F64, x: F64, y: F64) -> float:
     return math.sqrt((x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2)
 
 
-@kernel
+@kernel(refcount=False)
 def link_gap(
     pts: F64, i: int, data: F64, o: int, t: float
 ) -> tuple[float, float, float, float, float, float, float]:
@@ -162,7 +162,7 @@ def link_gap(
     return math.sqrt(dx * dx + dy * dy + dz * dz), dx, dy, dz, cx, cy, cz
 
 
-@kernel
+@kernel(refcount=False)
 def obstacle_at(data: F64, o: int, t: float, A: F64, B: F64) -> float:
     """Obstacle ``o``'s segment at time ``t`` (s) into ``A, B``; returns its radius (m)."""
     at = HEADER + o * STRIDE
@@ -173,7 +173,7 @@ def obstacle_at(data: F64, o: int, t: float, A: F64, B: F64) -> float:
     return float(data[at + 6])
 
 
-@kernel
+@kernel(refcount=False)
 def link_distances(data: F64, t: float, pts: F64, out: F64) -> float:
     """``out[i, o]``: the distance (m) of link ``i`` (``pts[i]`` to ``pts[i + 1]``) to obstacle
     ``o`` at time ``t``, radii subtracted; returns the smallest (``inf`` without obstacles), the

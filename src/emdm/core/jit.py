@@ -24,7 +24,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar, cast
+from typing import Any, TypeVar, cast, overload
 
 import numba
 from llvmlite import ir
@@ -90,17 +90,43 @@ _register_cache_locator()  # before any kernel below (or in other modules) is de
 
 
 _uncached: list[str] = []
+BORROWING: list[Any] = []
+"""The kernels compiled without reference counting (``@kernel(refcount=False)``)."""
 
 
-def kernel(function: F) -> F:
+@overload
+def kernel(function: F) -> F: ...
+@overload
+def kernel(*, refcount: bool = True, inline: bool = False) -> Callable[[F], F]: ...
+def kernel(function: F | None = None, *, refcount: bool = True, inline: bool = False) -> Any:
     """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel).
+
+    ``@kernel(inline=True)`` compiles the function into each kernel that calls it (numba's
+    ``inline="always"``): for the small helpers that return views of a work buffer to kernels
+    that borrow, which then count no reference for them either.
+
+    ``@kernel(refcount=False)`` marks a kernel that only borrows arrays: it allocates none and
+    returns none (nor a tuple holding one), so numba's reference counting is compiled out of it.
+    That counting is an atomic increment and decrement, each a call, for every array a kernel is
+    passed, work tuples included (a ``QPWork`` is 27 arrays): it was two thirds of the active
+    set's warm solve (docs/architecture.md, "Kernels that borrow"). numba refuses to compile an
+    allocation without it, and ``tests/test_architecture.py`` checks that no such kernel returns
+    an array. The hot path's kernels are all of this kind; those that allocate (buffers, the
+    ``*_of`` entry points, the rare paths that call ``np.linalg``) keep the counting.
 
     Where no cache folder is writable (a read-only install and home, no ``NUMBA_CACHE_DIR``),
     numba refuses ``cache=True`` with a long traceback; the kernel is then compiled in memory for
     this process only, and one line on stderr says so (once) and how to keep the machine code.
     """
+    if function is None:
+        return functools.partial(kernel, refcount=refcount, inline=inline)
+    # numba hands a caller's flags down to the kernels it calls unless they set their own: a
+    # kernel that counts says so, so that it may allocate when a borrowing kernel calls it
+    options: dict[str, Any] = {"nogil": True, "error_model": "numpy", "_nrt": refcount}
+    if inline:
+        options["inline"] = "always"
     try:
-        return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
+        compiled = numba.njit(cache=True, **options)(function)
     except RuntimeError as exc:  # "cannot cache function ...: no locator available"
         if "cache" not in str(exc):
             raise
@@ -111,7 +137,10 @@ def kernel(function: F) -> F:
                 file=sys.stderr,
             )
         _uncached.append(function.__name__)
-        return cast(F, numba.njit(cache=False, nogil=True, error_model="numpy")(function))
+        compiled = numba.njit(cache=False, **options)(function)
+    if not refcount:
+        BORROWING.append(compiled)
+    return cast(F, compiled)
 
 
 @intrinsic

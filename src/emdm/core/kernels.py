@@ -70,7 +70,8 @@ class KinWork(NamedTuple):
 
 class SpatialWork(NamedTuple):
     """Scratch buffers of a spatial arm's kinematics: link frames, one link, the end-effector
-    pose, the 6 x n Jacobian, the Hessian and a rotation. Apart from :class:`KinWork`, as a kernel
+    pose, the 6 x n Jacobian, the Hessian, a rotation, and the manipulability's factor
+    (:func:`~emdm.core.serial_kernels.manipulability_gradient`). Apart from :class:`KinWork`, as a kernel
     call counts every array of the tuples it is passed and the planar path needs none of these."""
 
     frames: F64
@@ -79,6 +80,7 @@ class SpatialWork(NamedTuple):
     J6: F64
     H: F64
     R: F64
+    qr: F64
 
 
 @kernel
@@ -98,10 +100,11 @@ def spatial_work(n: int) -> SpatialWork:
         np.empty((6, n)),
         np.empty((n, 6, n)),
         np.empty((3, 3)),
+        np.empty((2 * n + 2, 6)),
     )
 
 
-@kernel
+@kernel(refcount=False)
 def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
     """Gaussian elimination with partial pivoting on ``K[:size, :size]``; ``rhs`` becomes the
     solution. False for a singular matrix."""
@@ -130,7 +133,7 @@ def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
     return True
 
 
-@kernel
+@kernel(refcount=False)
 def matrix_rank(M: F64, rows: int, cols: int, tol: float) -> int:
     """Rank of ``M[:rows, :cols]`` by Gaussian elimination with complete pivoting (in place), a
     pivot counting when above ``tol``: the one rank test of the feasibility kernels and of the
@@ -156,7 +159,7 @@ def matrix_rank(M: F64, rows: int, cols: int, tol: float) -> int:
     return rank
 
 
-@kernel
+@kernel(refcount=False)
 def kinematics(lengths: F64, q: F64, p: F64, J: F64, Jm: F64, w: KinWork) -> float:
     """``p = f(q)``, ``J`` and ``Jm`` in place; returns ``m`` (see :mod:`emdm.core.arm`).
 
@@ -206,20 +209,29 @@ def kinematics(lengths: F64, q: F64, p: F64, J: F64, Jm: F64, w: KinWork) -> flo
             for k in range(npairs):
                 s += G[k, j] * minors[k]
             Jm[j] = s / m
-    else:  # exact singularity: steepest one-sided ascent (rare; may allocate)
-        _, sv, vt = np.linalg.svd(G)
-        if sv[0] == 0.0:
-            for j in range(n):
-                Jm[j] = 0.0
-        else:
-            big = 0
-            for j in range(n):
-                if abs(vt[0, j]) > abs(vt[0, big]):
-                    big = j
-            sign = 1.0 if vt[0, big] >= 0 else -1.0
-            for j in range(n):
-                Jm[j] = sign * sv[0] * vt[0, j] + 0.0  # + 0.0 turns -0.0 into 0.0
+    else:  # exact singularity: steepest one-sided ascent (rare; allocates)
+        _singular_ascent(G, Jm)
     return m
+
+
+@kernel
+def _singular_ascent(G: F64, Jm: F64) -> None:
+    """``Jm = s1 v1`` (the leading singular pair of ``G``, signed so that its largest component is
+    positive): the planar gradient at an exact singularity. Apart from :func:`kinematics`, which
+    borrows, since the SVD allocates."""
+    n = Jm.size
+    _, sv, vt = np.linalg.svd(G)
+    if sv[0] == 0.0:
+        for j in range(n):
+            Jm[j] = 0.0
+    else:
+        big = 0
+        for j in range(n):
+            if abs(vt[0, j]) > abs(vt[0, big]):
+                big = j
+        sign = 1.0 if vt[0, big] >= 0 else -1.0
+        for j in range(n):
+            Jm[j] = sign * sv[0] * vt[0, j] + 0.0  # + 0.0 turns -0.0 into 0.0
 
 
 @kernel
@@ -229,7 +241,7 @@ def kinematics_of(lengths: F64, q: F64, p: F64, J: F64, Jm: F64) -> float:
     return kinematics(lengths, q, p, J, Jm, kin_work(q.size))
 
 
-@kernel
+@kernel(refcount=False)
 def rotation_vector(R: F64, out: F64, at: int) -> None:
     """``out[at:at+3]`` = the rotation vector ``theta u`` of the rotation matrix ``R`` (theta in
     [0, pi]): from its skew part ``sin(theta) [u]x`` away from ``theta = pi``, else from its
@@ -257,7 +269,7 @@ def rotation_vector(R: F64, out: F64, at: int) -> None:
     out[at], out[at + 1], out[at + 2] = theta * u0, theta * u1, theta * u2
 
 
-@kernel
+@kernel(refcount=False)
 def rotation_matrix(rx: float, ry: float, rz: float, R: F64) -> None:
     """``R`` = the rotation of rotation vector ``(rx, ry, rz)`` (Rodrigues' formula)."""
     theta = math.sqrt(rx * rx + ry * ry + rz * rz)
@@ -278,7 +290,7 @@ def rotation_matrix(rx: float, ry: float, rz: float, R: F64) -> None:
     R[2, 1] = b * ry * rz + a * rx
 
 
-@kernel
+@kernel(refcount=False)
 def task_kinematics(
     lengths: F64,
     geo: Geometry,
@@ -309,7 +321,7 @@ def task_kinematics(
     frames, link, T, J6, H, Rg = sw.frames, sw.link, sw.T, sw.J6, sw.H, sw.R
     chain_kinematics(geo.origins, geo.axes, geo.prismatic, geo.tool, q, frames, link, T, J6)
     serial_hessian(J6, geo.prismatic, H)
-    m = manipulability_gradient(J6, H, geo.rows, Jm)
+    m = manipulability_gradient(J6, H, geo.rows, Jm, sw.qr)
     rows = 6 if task == TASK_POSE else 3
     for i in range(rows):
         for j in range(n):

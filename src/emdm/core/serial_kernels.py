@@ -24,7 +24,7 @@ ROWS_ALL, ROWS_TRANS, ROWS_ROT = 0, 1, 2
 or the angular (last three) rows."""
 
 
-@kernel
+@kernel(refcount=False)
 def _compose(A: F64, B: F64, out: F64) -> None:
     """``out = A B`` for homogeneous 4 x 4 transforms (``out`` must not alias ``A`` or ``B``)."""
     for i in range(3):
@@ -36,7 +36,7 @@ def _compose(A: F64, B: F64, out: F64) -> None:
     out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
-@kernel
+@kernel(refcount=False)
 def chain_kinematics(
     origins: F64, axes: F64, prismatic: B8, tool: F64, q: F64, frames: F64, W: F64, T: F64, J: F64
 ) -> None:
@@ -105,7 +105,7 @@ def chain_kinematics(
             J[2, i] = zx * ry - zy * rx
 
 
-@kernel
+@kernel(refcount=False)
 def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
     """Kinematic Hessian ``H[i] = dJ/dq_i`` (n x 6 x n) of a chain, from ``J`` alone.
 
@@ -142,16 +142,16 @@ def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
             H[i, 3, k], H[i, 4, k], H[i, 5, k] = gx, gy, gz
 
 
-@kernel
-def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
+@kernel(refcount=False)
+def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64, qr: F64) -> float:
     """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` from a Householder factor
     ``Ja^T = Q R`` (``Q``: n x count, orthonormal columns): ``Ja Ja^T = R^T R``, so
     ``m = prod |R_aa|`` and ``(Ja Ja^T)^-1 Ja = R^-1 Q^T``, without forming ``Ja Ja^T`` (which
     would square the condition number). -1 when some ``|R_aa|`` is at most
     :data:`FACTOR_PIVOT` times the largest row norm of ``Ja`` (near a singularity, where the SVD
-    form is used)."""
+    form is used). ``qr`` (at least ``2 n + 2`` rows of ``count``) holds the factors."""
     n = J.shape[1]
-    A = np.empty((n, count))  # Ja^T, overwritten by R above its diagonal and the reflectors below
+    A = qr[:n]  # Ja^T, overwritten by R above its diagonal and the reflectors below
     big = 0.0
     for a in range(count):
         norm2 = 0.0
@@ -159,8 +159,7 @@ def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
             A[j, a] = J[first + a, j]
             norm2 += A[j, a] * A[j, a]
         big = max(big, norm2)
-    scales = np.empty((2, count))  # R's diagonal, the reflectors' 2 / (v^T v)
-    diag, beta = scales[0], scales[1]
+    diag, beta = qr[2 * n], qr[2 * n + 1]  # R's diagonal, the reflectors' 2 / (v^T v)
     m = 1.0
     for c in range(count):
         norm2 = 0.0
@@ -182,9 +181,10 @@ def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
                 A[j, b] -= dot * A[j, c]
         diag[c] = alpha
         m *= norm
-    Q = np.zeros((n, count))  # the thin Q: the reflectors applied to the first columns of I
-    for a in range(count):
-        Q[a, a] = 1.0
+    Q = qr[n : 2 * n]  # the thin Q: the reflectors applied to the first columns of I
+    for j in range(n):
+        for a in range(count):
+            Q[j, a] = 1.0 if j == a else 0.0
     for c in range(count - 1, -1, -1):
         for b in range(c, count):  # columns b < c of Q are still e_b, untouched by reflector c
             dot = 0.0
@@ -208,8 +208,8 @@ def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
     return m
 
 
-@kernel
-def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
+@kernel(refcount=False)
+def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64, qr: F64) -> float:
     """Manipulability ``m = sqrt(det(Ja Ja^T))`` of the rows ``rows`` (:data:`ROWS_ALL`,
     :data:`ROWS_TRANS`, :data:`ROWS_ROT`) and its gradient ``Jm`` (n,); returns ``m``.
 
@@ -218,14 +218,22 @@ def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64) -> float:
     ``Jm_i = sum_r (prod_{l != r} s_l) u_r^T Ha_i v_r``, the textbook
     ``m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` without its inverse. Where ``Ja`` loses rank (``m = 0``,
     not differentiable) this is the gradient of the signed product of singular values: finite,
-    never NaN, and along it ``m`` grows on one side of the singularity.
+    never NaN, and along it ``m`` grows on one side of the singularity. ``qr``: a buffer of at
+    least ``2 n + 2`` rows of 6 for the factor; the SVD (:func:`_gradient_by_svd`) allocates.
     """
     n = J.shape[1]
     first, count = (0, 6) if rows == ROWS_ALL else ((0, 3) if rows == ROWS_TRANS else (3, 3))
     if count <= n:
-        m = _gradient_by_qr(J, H, first, count, Jm)
+        m = _gradient_by_qr(J, H, first, count, Jm, qr)
         if m >= 0.0:
             return m
+    return _gradient_by_svd(J, H, first, count, Jm)
+
+
+@kernel
+def _gradient_by_svd(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
+    """The SVD form of :func:`manipulability_gradient` (near a singularity; allocates)."""
+    n = J.shape[1]
     k = min(count, n)
     Ja = np.ascontiguousarray(J[first : first + count, :])
     U, s, Vt = np.linalg.svd(Ja, full_matrices=False)

@@ -35,7 +35,7 @@ from .zonotope import (
 F64 = NDArray[np.float64]
 
 
-@kernel
+@kernel(refcount=False)
 def _column(A: F64, b: F64, sigma: F64, j: int, i: int) -> float:
     """Row ``i`` of column ``j`` of ``[A, -b, diag(sigma)]`` (variables, task scale, artificials)."""
     nx = A.shape[1]
@@ -46,7 +46,7 @@ def _column(A: F64, b: F64, sigma: F64, j: int, i: int) -> float:
     return float(sigma[i]) if j - nx - 1 == i else 0.0
 
 
-@kernel
+@kernel(refcount=False)
 def _basis_matrix(A: F64, b: F64, w: LPViews, transpose: bool) -> None:
     nt = A.shape[0]
     for i in range(nt):
@@ -58,7 +58,7 @@ def _basis_matrix(A: F64, b: F64, w: LPViews, transpose: bool) -> None:
                 w.Bm[i, r] = v
 
 
-@kernel
+@kernel(refcount=False)
 def _simplex(A: F64, b: F64, w: LPViews) -> bool:
     """Minimise ``cost . v`` over ``vlo <= v <= vhi`` with ``A x - alpha b + diag(sigma) a = 0``,
     ``v = (x, alpha, a)``, from the basis ``w.basis`` (``status`` 0: basic, -1 / +1: at the
@@ -147,7 +147,7 @@ def _simplex(A: F64, b: F64, w: LPViews) -> bool:
     return False
 
 
-@kernel
+@kernel(refcount=False)
 def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> tuple[int, float]:
     """``A x = alpha b``, ``lb <= x <= ub`` (every bound finite) by the simplex method: with
     ``scale``, the largest ``alpha`` in [0, 1]; without, ``alpha = 1``. Returns ``(code, alpha)``
@@ -208,7 +208,7 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
     return OK, alpha
 
 
-@kernel
+@kernel(refcount=False)
 def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> bool:
     """The program with its inequality rows made equalities, in :func:`_aug_views`: variables
     ``(x, s, t)``, rows ``A x = alpha b`` and ``G x + s - h t = 0``, with
@@ -244,7 +244,7 @@ def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> b
     return True
 
 
-@kernel
+@kernel(refcount=False)
 def rows_hold(G: F64, h: F64, x: F64) -> bool:
     """True when ``G x <= h`` up to rounding (``FEASIBILITY_TOL`` relative to the row's size)."""
     for i in range(G.shape[0]):
@@ -258,7 +258,7 @@ def rows_hold(G: F64, h: F64, x: F64) -> bool:
     return True
 
 
-@kernel
+@kernel(refcount=False)
 def task_scale_rows(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     """:func:`task_scale` for programs of any row count and with inequality rows ``G x <= h``,
     by the simplex method (:func:`_lp`); the answer's vertex is left in ``w.centre``. Kept apart
@@ -286,7 +286,7 @@ def task_scale_of(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64) -> float:
     return task_scale_rows(A, b, G, h, lb, ub, feas_work(A.shape[1], A.shape[0], G.shape[0]))
 
 
-@kernel
+@kernel(refcount=False)
 def feasible_point_rows(
     A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: FeasWork
 ) -> tuple[int, bool]:
@@ -314,7 +314,7 @@ def feasible_point_rows(
     return code, False
 
 
-@kernel
+@kernel(refcount=False)
 def _task_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
     """A feasible point of ``A x = b``, ``lb <= x <= ub`` (see :func:`feasible_point_rows`)."""
     nt, n = A.shape

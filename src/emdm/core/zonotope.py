@@ -53,14 +53,14 @@ class AugViews(NamedTuple):
     x: F64
 
 
-@kernel
+@kernel(refcount=False)
 def _lp_size(nx: int, nt: int) -> int:
     """Length of the simplex method's part of ``lpf`` for ``nx`` variables and ``nt`` rows."""
     nv = nx + 1 + nt
     return 4 * nv + 3 * nt + nt * nt + nt * nx
 
 
-@kernel
+@kernel(inline=True)
 def _aug_views(w: FeasWork, nx: int, nt: int, ng: int) -> AugViews:
     """Views of the augmented program (``nx + ng + 1`` variables, ``nt + ng`` rows)."""
     nxa, nta = nx + ng + 1, nt + ng
@@ -114,7 +114,7 @@ def feas_work(nx: int, nt: int, ng: int) -> FeasWork:
     )
 
 
-@kernel
+@kernel(inline=True)
 def _lp_views(w: FeasWork, nx: int, nt: int) -> LPViews:
     """The simplex method's arrays as views of ``w.lpf`` and ``w.lpi`` (see :class:`LPViews`)."""
     nv = nx + 1 + nt
@@ -137,7 +137,7 @@ def _lp_views(w: FeasWork, nx: int, nt: int) -> LPViews:
     )
 
 
-@kernel
+@kernel(refcount=False)
 def _ray_interval(
     G: F64, lb: F64, ub: F64, y0x: float, y0y: float, dx: float, dy: float, w: FeasWork
 ) -> tuple[float, float, float, float, bool]:
@@ -196,7 +196,7 @@ def _ray_interval(
     return t_lo, t_hi, bwx, bwy, found
 
 
-@kernel
+@kernel(refcount=False)
 def _boundary_preimage(
     G: F64,
     lb: F64,
@@ -242,7 +242,7 @@ def _boundary_preimage(
     return count
 
 
-@kernel
+@kernel(refcount=False)
 def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
     """Rank of the columns of ``A`` marked free (at most the row count ``nt``).
 
@@ -280,7 +280,7 @@ def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
     return matrix_rank(M, nt, cols, RANK_TOL * big * nt)
 
 
-@kernel
+@kernel(refcount=False)
 def _mark_free(lb: F64, ub: F64, free: NDArray[np.bool_]) -> int:
     count = 0
     for j in range(lb.size):
@@ -289,7 +289,7 @@ def _mark_free(lb: F64, ub: F64, free: NDArray[np.bool_]) -> int:
     return count
 
 
-@kernel
+@kernel(refcount=False)
 def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     """Largest ``alpha`` in [0, 1] with ``A x = alpha b``, ``lb <= x <= ub`` feasible (two rows;
     :func:`task_scale_rows` takes any).
@@ -307,7 +307,7 @@ def task_scale(A: F64, b: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     return hi if hi >= lo else lo
 
 
-@kernel
+@kernel(refcount=False)
 def feasible_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
     """Fill ``x`` with a feasible point; returns ``(OK | INFEASIBLE | NEEDS_REFERENCE, unique)``.
 

@@ -137,7 +137,7 @@ def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
     )
 
 
-@kernel
+@kernel(refcount=False)
 def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
     """``active_j`` = -1 when ``qd_j`` is at its lower bound, +1 at its upper bound, else 0: the
     one definition of "at a bound" (:data:`emdm.core.tolerances.AT_BOUND`), recorded in

@@ -84,7 +84,7 @@ class Exit(IntEnum):
 REACHED, TIMEOUT, HANDOFF, FULL = (int(e) for e in Exit)  # IntEnum does not cross numba's parfors
 
 
-@kernel
+@kernel(refcount=False)
 def run_kernel(
     arm: ArmData,
     geo: Geometry,

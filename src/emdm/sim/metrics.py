@@ -36,7 +36,7 @@ OUTCOMES = (
 """The outcomes :func:`outcomes` writes, in order."""
 
 
-@kernel
+@kernel(refcount=False)
 def outcomes(
     m: F64,
     effort: F64,

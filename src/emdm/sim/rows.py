@@ -16,7 +16,7 @@ from .buffers import StepWork
 F64 = NDArray[np.float64]
 
 
-@kernel
+@kernel(refcount=False)
 def count_active_rows(G: F64, h: F64, x: F64) -> int:
     """How many rows of ``G x <= h`` hold with equality at ``x`` (within ``AT_BOUND (1 + |h_i|)``,
     the record's definition of "at a bound")."""
@@ -30,7 +30,7 @@ def count_active_rows(G: F64, h: F64, x: F64) -> int:
     return count
 
 
-@kernel
+@kernel(refcount=False)
 def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
     """Reorder the rows ``G[:ng] x <= h[:ng]`` so that those that may bind come first; returns
     how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
@@ -57,7 +57,7 @@ def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
     return near
 
 
-@kernel
+@kernel(refcount=False)
 def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> tuple[int, int]:
     """After the active set on the rows ``G[:near]`` returned ``(code, iterations)``: unravel a
     cycle (:func:`_unravel`), and when the answer breaks one of the lazy rows ``G[near:ng]``,
@@ -110,7 +110,7 @@ def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
     return code, iterations + more
 
 
-@kernel
+@kernel(refcount=False)
 def _row_excess(G: F64, h: F64, i: int, x: F64) -> float:
     acc = -h[i]
     for j in range(x.size):

@@ -54,7 +54,7 @@ MAX_ITER_EXCEEDED = 3
 """Code of :func:`active_set` when its iteration limit ran out."""
 
 
-@kernel
+@kernel(refcount=False)
 def active_set(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
@@ -79,7 +79,7 @@ def active_set(
     return code, iterations
 
 
-@kernel
+@kernel(refcount=False)
 def _kkt_matrix(
     P: F64, A: F64, G: F64, gwork: NDArray[np.int8], idx: NDArray[np.int64], f: int, K: F64
 ) -> int:
@@ -109,7 +109,7 @@ def _kkt_matrix(
     return int(size)
 
 
-@kernel
+@kernel(refcount=False)
 def _row_value(G: F64, i: int, x: F64) -> float:
     acc = 0.0
     for j in range(x.size):
@@ -117,7 +117,7 @@ def _row_value(G: F64, i: int, x: F64) -> float:
     return acc
 
 
-@kernel
+@kernel(refcount=False)
 def _independent(
     A: F64, G: F64, gwork: NDArray[np.int8], extra: int, free: NDArray[np.bool_], w: QPWork
 ) -> bool:
@@ -159,7 +159,7 @@ def _independent(
     return matrix_rank(M, rows, cols, RANK_TOL * big * rows) == rows
 
 
-@kernel
+@kernel(refcount=False)
 def _warm_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
@@ -275,12 +275,12 @@ def _warm_start(
     return bool(max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL)
 
 
-@kernel
+@kernel(refcount=False)
 def _row_active(G: F64, h: F64, i: int, x: F64) -> bool:
     return bool(h[i] - _row_value(G, i, x) <= ACTIVE_TOL * (1.0 + abs(h[i])))
 
 
-@kernel
+@kernel(refcount=False)
 def _cold_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
@@ -508,7 +508,7 @@ def _cold_start(
     return MAX_ITER_EXCEEDED, limit
 
 
-@kernel
+@kernel(refcount=False)
 def _holdable(
     A: F64,
     G: F64,
@@ -527,7 +527,7 @@ def _holdable(
     return bool(_independent(A, G, gwork, -1, free, w))
 
 
-@kernel
+@kernel(refcount=False)
 def _trace(P: F64, c: F64, x: F64, step: float, w: QPWork, row: int) -> None:
     """Row ``row`` of the lab's trace: objective at ``x``, the step's largest component, the
     working set's size (bounds and rows held)."""

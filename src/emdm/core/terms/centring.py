@@ -12,21 +12,21 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel
+@kernel(refcount=False)
 def slope(q: float, q_min: float, q_max: float) -> float:
     """``dH/dq_j = (q_j - m_j) / r_j^2`` of one joint (1/rad)."""
     r = q_max - q_min
     return (q - 0.5 * (q_min + q_max)) / (r * r)
 
 
-@kernel
+@kernel(refcount=False)
 def gradient(q: F64, q_min: F64, q_max: F64, out: F64) -> None:
     """``out = grad H(q)`` (1/rad), the Python API's kernel."""
     for j in range(q.size):
         out[j] = slope(q[j], q_min[j], q_max[j])
 
 
-@kernel
+@kernel(refcount=False)
 def write(weight: float, data: F64, q: F64, c: F64) -> None:
     """``c[j] += weight grad(H)_j`` for every joint (``data = [q_min, q_max]``)."""
     n = q.size

@@ -14,7 +14,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel
+@kernel(refcount=False)
 def sides(
     q: float, q_min: float, q_max: float, influence: float, stop: float, gain: float
 ) -> tuple[float, float]:
@@ -27,7 +27,7 @@ def sides(
     return low, high
 
 
-@kernel
+@kernel(refcount=False)
 def write(data: F64, q: F64, lb: F64, ub: F64) -> None:
     """``lb_j = max(lb_j, low_j)``, ``ub_j = min(ub_j, high_j)`` (:func:`sides`; ``data =
     [q_min, q_max, influence, stop, gain]``, per joint)."""
@@ -40,7 +40,7 @@ def write(data: F64, q: F64, lb: F64, ub: F64) -> None:
         ub[j] = min(ub[j], high)
 
 
-@kernel
+@kernel(refcount=False)
 def bounds(
     q: F64, q_min: F64, q_max: F64, influence: F64, stop: F64, gain: F64, lo: F64, hi: F64
 ) -> None:
@@ -49,7 +49,7 @@ def bounds(
         lo[j], hi[j] = sides(q[j], q_min[j], q_max[j], influence[j], stop[j], gain[j])
 
 
-@kernel
+@kernel(refcount=False)
 def joint_bounds(arm: ArmData, q: F64, lo: F64, hi: F64) -> None:
     """The velocity box intersected with the dampers at ``q``: what a constrained controller's
     joints may do (mathematics.md eq. 10, 11)."""

@@ -59,7 +59,7 @@ class ProgramData(NamedTuple):
     rows: int
 
 
-@kernel
+@kernel(refcount=False)
 def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
     """Write the program of ``prog`` at the state ``s`` into ``out``; returns the number of
     inequality rows written (``G[:rows]``, ``h[:rows]``)."""
