@@ -155,7 +155,8 @@ def _ray_interval(
             vx, vy = 0.0, 1.0
         else:
             vx, vy = dx, dy
-        norm = math.hypot(vx, vy)
+        norm = math.sqrt(vx * vx + vy * vy)  # not hypot: of order 1 here, and hypot's care for
+        # overflow costs about 5 % of a batch's step (libm's hypot is a call of ~20 ns)
         if norm > 0:
             base[nbase, 0] = vx / norm
             base[nbase, 1] = vy / norm
@@ -219,7 +220,7 @@ def _boundary_preimage(
     count = 0
     for j in range(nb):
         s = wx * G[0, j] + wy * G[1, j]
-        gn = math.hypot(G[0, j], G[1, j])
+        gn = math.sqrt(G[0, j] * G[0, j] + G[1, j] * G[1, j])
         parallel[j] = abs(s) <= 1e-12 * max(gn, 1e-300)
         if parallel[j]:
             x[j] = centre[j]

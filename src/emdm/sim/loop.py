@@ -132,7 +132,7 @@ def run_kernel(
         for i in range(nt):
             rec.v[k, i] = motion.kp[i] * rec.e[k, i]
             err2 += rec.e[k, i] * rec.e[k, i]
-        err = math.hypot(rec.e[k, 0], rec.e[k, 1]) if nt == 2 else math.sqrt(err2)
+        err = math.sqrt(err2)
         if err < motion.tolerance:
             return REACHED, k
         if k >= motion.n_steps:
