@@ -39,12 +39,12 @@ def numpy_active_set(qp, max_iter=None):
     """``(x, status, trace)`` for a program with bounds only; ``trace`` holds per iteration
     ``(objective, max |p|, working-set size)``."""
     assert qp.n_rows == 0, "the numpy method knows bounds only"
-    x0 = feasible_point(qp.A, qp.b, qp.lb, qp.ub)
+    A, b = independent_rows(qp.A, qp.b)  # as the kernel's wrapper does, before its start
+    x0 = feasible_point(A, b, qp.lb, qp.ub)
     if x0 is None:
         return None, "infeasible", []
     x = x0.copy()
     P, c, lb, ub = qp.P, qp.c, qp.lb, qp.ub
-    A, _ = independent_rows(qp.A, qp.b)
     n = qp.n
     limit = max_iter if max_iter is not None else 10 * (n + A.shape[0]) + 20
     bound = np.maximum(

@@ -256,6 +256,7 @@ def step_program(
         np.zeros(data.rows),
         np.empty(nx),
         np.empty(nx),
+        np.zeros(data.rows),
     )
     state = StepInput(
         np.asarray(q, dtype=float),

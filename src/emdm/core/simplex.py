@@ -209,19 +209,22 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
 
 
 @kernel(refcount=False)
-def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> bool:
-    """The program with its inequality rows made equalities, in :func:`_aug_views`: variables
-    ``(x, s, t)``, rows ``A x = alpha b`` and ``G x + s - h t = 0``, with
-    ``0 <= s <= s_max``, ``t = 1``. ``s_max_i = max(0, h_i - min over the box of G_i x)`` bounds
-    the slack without cutting off any feasible ``x``. False when a variable of ``x`` is unbounded
-    (``s_max`` would be infinite; the caller hands the case to the reference)."""
+def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> int:
+    """The program with its inequality rows marked in ``w.pick`` made equalities, in
+    :func:`_aug_views`: variables ``(x, s, t)``, rows ``A x = alpha b`` and ``G_i x + s_i - h_i t
+    = 0``, with ``0 <= s_i <= s_max_i``, ``t = 1``. ``s_max_i = max(0, h_i - min over the box of
+    G_i x)`` bounds the slack without cutting off any feasible ``x``. Returns the number of rows
+    marked, or -1 when a variable of ``x`` is unbounded (``s_max`` would be infinite; the caller
+    hands the case to the reference)."""
     nt, nx = A.shape
-    ng = G.shape[0]
+    ng = 0
+    for i in range(G.shape[0]):
+        ng += w.pick[i]
     aug = _aug_views(w, nx, nt, ng)
     Ag, bg, lg, ug = aug.A, aug.b, aug.lb, aug.ub
     for j in range(nx):
         if math.isinf(lb[j]) or math.isinf(ub[j]):
-            return False
+            return -1
         lg[j], ug[j] = lb[j], ub[j]
     for i in range(nt + ng):
         for j in range(nx + ng + 1):
@@ -230,30 +233,73 @@ def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> b
         bg[i] = b[i]
         for j in range(nx):
             Ag[i, j] = A[i, j]
-    for i in range(ng):
-        r = nt + i
-        bg[r] = 0.0
+    r = 0
+    for i in range(G.shape[0]):
+        if not w.pick[i]:
+            continue
+        bg[nt + r] = 0.0
         least = 0.0
         for j in range(nx):
-            Ag[r, j] = G[i, j]
+            Ag[nt + r, j] = G[i, j]
             least += min(G[i, j] * lb[j], G[i, j] * ub[j])
-        Ag[r, nx + i] = 1.0
-        Ag[r, nx + ng] = -h[i]
-        lg[nx + i], ug[nx + i] = 0.0, max(0.0, h[i] - least)
+        Ag[nt + r, nx + r] = 1.0
+        Ag[nt + r, nx + ng] = -h[i]
+        lg[nx + r], ug[nx + r] = 0.0, max(0.0, h[i] - least)
+        r += 1
     lg[nx + ng], ug[nx + ng] = 1.0, 1.0
-    return True
+    return ng
+
+
+@kernel(refcount=False)
+def _lp_rows(
+    A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork
+) -> tuple[int, float]:
+    """:func:`_lp` for the program with inequality rows ``G x <= h``, by row generation: the
+    simplex method sees the rows marked in ``w.pick`` (the caller's first choice), then also
+    every row its answer breaks, until the answer keeps them all. A round's program is a
+    relaxation of the whole, so INFEASIBLE is final, and an answer that keeps every row is a
+    vertex of the whole program (with ``scale``, its largest ``alpha``: no row left out binds).
+    The simplex method's basis then has ``nt`` plus the rows that matter (a few) instead of every
+    row: on the Panda with 60 obstacle rows, a cold start's feasible point 5.6 ms -> about 0.1 ms.
+    """
+    nx = A.shape[1]
+    for _ in range(G.shape[0] + 1):  # every round marks at least one more row
+        ng = _augment(A, b, G, h, lb, ub, w)
+        if ng < 0:
+            return NEEDS_REFERENCE, 0.0
+        aug = _aug_views(w, nx, A.shape[0], ng)
+        code, alpha = _lp(aug.A, aug.b, aug.lb, aug.ub, scale, aug.x, w)
+        for j in range(nx):
+            x[j] = aug.x[j]
+        if code != OK:
+            return code, alpha
+        more = False
+        for i in range(G.shape[0]):
+            if not w.pick[i] and _breaks(G, h, i, x):
+                w.pick[i] = True
+                more = True
+        if not more:
+            return OK, alpha
+    return NEEDS_REFERENCE, 0.0
+
+
+@kernel(refcount=False)
+def _breaks(G: F64, h: F64, i: int, x: F64) -> bool:
+    """True when ``x`` breaks ``G_i x <= h_i`` by more than rounding (``FEASIBILITY_TOL``
+    relative to the row's size)."""
+    gx = 0.0
+    size = 1.0 + abs(h[i])
+    for j in range(G.shape[1]):  # x may be longer (a scratch buffer such as ``w.centre``)
+        gx += G[i, j] * x[j]
+        size += abs(G[i, j] * x[j])
+    return bool(gx - h[i] > FEASIBILITY_TOL * size)
 
 
 @kernel(refcount=False)
 def rows_hold(G: F64, h: F64, x: F64) -> bool:
     """True when ``G x <= h`` up to rounding (``FEASIBILITY_TOL`` relative to the row's size)."""
     for i in range(G.shape[0]):
-        gx = 0.0
-        size = 1.0 + abs(h[i])
-        for j in range(x.size):
-            gx += G[i, j] * x[j]
-            size += abs(G[i, j] * x[j])
-        if gx - h[i] > FEASIBILITY_TOL * size:
+        if _breaks(G, h, i, x):
             return False
     return True
 
@@ -261,16 +307,14 @@ def rows_hold(G: F64, h: F64, x: F64) -> bool:
 @kernel(refcount=False)
 def task_scale_rows(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     """:func:`task_scale` for programs of any row count and with inequality rows ``G x <= h``,
-    by the simplex method (:func:`_lp`); the answer's vertex is left in ``w.centre``. Kept apart
+    by the simplex method (:func:`_lp_rows`); the answer's vertex is left in ``w.centre``. Kept apart
     from the 2-D kernel, whose hot path would otherwise carry the simplex method's code."""
-    nx = A.shape[1]
-    if G.shape[0] > 0:
-        if not _augment(A, b, G, h, lb, ub, w):
-            return -2.0
-        aug = _aug_views(w, nx, A.shape[0], G.shape[0])
-        code, alpha = _lp(aug.A, aug.b, aug.lb, aug.ub, True, aug.x, w)
-        for j in range(nx):
-            w.centre[j] = aug.x[j]
+    if G.shape[0] > 0:  # first the rows that the box's point nearest zero breaks
+        for j in range(A.shape[1]):
+            w.centre[j] = min(max(0.0, lb[j]), ub[j])
+        for i in range(G.shape[0]):
+            w.pick[i] = _breaks(G, h, i, w.centre)
+        code, alpha = _lp_rows(A, b, G, h, lb, ub, True, w.centre, w)
         return alpha if code == OK else (-1.0 if code == INFEASIBLE else -2.0)
     if A.shape[0] == 2:
         return task_scale(A, b, lb, ub, w)
@@ -294,10 +338,11 @@ def feasible_point_rows(
     ``G x <= h``. Without inequality rows: the 2-D geometry, or a vertex found by the simplex
     method (:func:`_lp`; ``unique`` always False with other than two rows); unbounded variables
     whose columns span the task space take the least-norm solution for the rest of the task, the
-    bounded ones the point of their box nearest zero. With them: that point when it keeps every
-    row (an inactive row changes nothing), else a vertex of the augmented program
-    (:func:`_augment`). Kept apart from the 2-D kernel, whose hot path would otherwise carry the
-    simplex method's code."""
+    bounded ones the point of their box nearest zero; with no unbounded variable, the least-norm
+    correction of that point when it stays in the box, else a vertex. With them: that point when
+    it keeps every row (an inactive row changes nothing), else a vertex of the augmented program
+    found by row generation from the rows that point breaks (:func:`_lp_rows`). Kept apart from the 2-D
+    kernel, whose hot path would otherwise carry the simplex method's code."""
     if G.shape[0] == 0:  # the brief's programs: straight to the task's point (the hot path)
         if A.shape[0] == 2:
             return feasible_point(A, b, lb, ub, x, w)
@@ -305,12 +350,9 @@ def feasible_point_rows(
     code, unique = _task_point(A, b, lb, ub, x, w)
     if code == INFEASIBLE or (code == OK and rows_hold(G, h, x)):
         return code, unique
-    if not _augment(A, b, G, h, lb, ub, w):
-        return NEEDS_REFERENCE, False
-    aug = _aug_views(w, x.size, A.shape[0], G.shape[0])
-    code, _ = _lp(aug.A, aug.b, aug.lb, aug.ub, False, aug.x, w)
-    for j in range(x.size):
-        x[j] = aug.x[j]
+    for i in range(G.shape[0]):  # first the rows that point breaks (all when there is none)
+        w.pick[i] = code != OK or _breaks(G, h, i, x)
+    code, _ = _lp_rows(A, b, G, h, lb, ub, False, x, w)
     return code, False
 
 
@@ -347,6 +389,40 @@ def _task_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[
                 for i in range(nt):
                     acc += A[i, j] * lp.y[i]
                 x[j] = acc
+        return OK, False
+    # no free variable: the least-norm correction of the box's point nearest zero, where it
+    # stays in the box (no simplex pivot: a cold start's feasible point near the least effort)
+    lp = _lp_views(w, n, nt)
+    for i in range(nt):
+        acc = b[i]
+        for j in range(n):
+            acc -= A[i, j] * min(max(0.0, lb[j]), ub[j])
+        lp.y[i] = acc
+        for k in range(nt):
+            acc = 0.0
+            for j in range(n):
+                acc += A[i, j] * A[k, j]
+            lp.Bm[i, k] = acc
+    inside = solve_in_place(lp.Bm, lp.y, nt)
+    for j in range(n):
+        if not inside:
+            break
+        acc = min(max(0.0, lb[j]), ub[j])
+        for i in range(nt):
+            acc += A[i, j] * lp.y[i]
+        inside = lb[j] <= acc <= ub[j]
+        lp.val[j] = acc
+    for i in range(nt):  # and keeps the task to rounding (A A^T may be close to singular)
+        if not inside:
+            break
+        acc, size = -b[i], 1.0 + abs(b[i])
+        for j in range(n):
+            acc += A[i, j] * lp.val[j]
+            size += abs(A[i, j] * lp.val[j])
+        inside = abs(acc) <= FEASIBILITY_TOL * size
+    if inside:
+        for j in range(n):
+            x[j] = lp.val[j]
         return OK, False
     code, _ = _lp(A, b, lb, ub, False, x, w)
     return code, False

@@ -30,8 +30,8 @@ class FeasWork(NamedTuple):
     """Scratch buffers of the feasibility kernels (for programs of ``nx`` variables, ``nt`` task
     rows and ``ng`` inequality rows): the 2-D zonotope geometry, the simplex method of programs
     with other row counts, and at the end of ``lpf`` the program with its inequality rows made
-    equalities (:func:`_augment`, :class:`AugViews`). No array is added for the rows: a kernel
-    call pays for every array of the tuples it is passed."""
+    equalities (:func:`_augment`, :class:`AugViews`) for the rows marked in ``pick`` (the rows
+    the simplex method sees in a round of :func:`emdm.core.simplex._lp_rows`)."""
 
     cand: F64
     base: F64
@@ -40,6 +40,7 @@ class FeasWork(NamedTuple):
     centre: F64
     lpf: F64
     lpi: NDArray[np.int64]
+    pick: NDArray[np.bool_]
 
 
 class AugViews(NamedTuple):
@@ -111,6 +112,7 @@ def feas_work(nx: int, nt: int, ng: int) -> FeasWork:
         np.empty(nxa),
         np.empty(_lp_size(nxa, nta) + aug),
         np.empty(nv + nta, dtype=np.int64),
+        np.empty(ng, dtype=np.bool_),
     )
 
 

@@ -60,7 +60,8 @@ class Record(NamedTuple):
 
 class StepWork(NamedTuple):
     """One step's buffers: kinematics (planar, and spatial: empty for a planar arm), the program
-    ``(P, c, A, b, G, h, lb, ub)``, answer and residuals."""
+    ``(P, c, A, b, G, h, lb, ub)``, answer and residuals; ``rows`` holds the step's row count
+    and how many rows the last answer held (their ids in ``held``, :mod:`emdm.sim.rows`)."""
 
     kin: KinWork
     sp: SpatialWork
@@ -81,6 +82,8 @@ class StepWork(NamedTuple):
     pts: F64
     axes: F64
     dist: F64
+    ids: F64
+    held: F64
 
 
 @kernel
@@ -130,10 +133,12 @@ def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
         np.empty(nx),
         np.empty(nx),
         np.empty(4),
-        np.zeros(1, dtype=np.int64),
+        np.zeros(2, dtype=np.int64),
         np.zeros((n + 2, POINT)),
         np.zeros((n, AXIS)),
         np.zeros((n + 1, no)),
+        np.zeros(ng),
+        np.zeros(ng),
     )
 
 

@@ -64,7 +64,7 @@ from ..solvers.kernels import (
     certify,
 )
 from .buffers import Motion, Record, StepWork, mark_active, new_record, step_work
-from .rows import count_active_rows, partition_rows, settle_rows
+from .rows import count_active_rows, hold_rows, partition_rows, recall_rows, settle_rows
 
 F64 = NDArray[np.float64]
 
@@ -101,9 +101,10 @@ def run_kernel(
     nt = rec.p.shape[1]
     if k0 == 0:  # a new run: no working set to try first, so a run never depends on the last
         w.qp.warm[0] = False
+        w.rows[1] = 0
     scaled = False
     cap = rec.qd.shape[0]
-    out = ProgramOut(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub)
+    out = ProgramOut(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.ids)
     for k in range(k0, cap + 1):
         if nt == 2:  # the planar kinematics directly: the hot path carries no spatial code
             m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
@@ -145,7 +146,9 @@ def run_kernel(
             out,
         )
         G, h = w.G[:ng], w.h[:ng]
-        near = partition_rows(w.G, w.h, w.lb, w.ub, ng) if ng > 0 else 0
+        near = partition_rows(w.G, w.h, w.ids, w.lb, w.ub, ng) if ng > 0 else 0
+        if w.qp.warm[0] and (ng > 0 or w.rows[1] > 0):
+            recall_rows(w, ng)
         Gn, hn = (G, h) if near == ng else (w.G[:near], w.h[:near])  # the rows solved first
         w.rows[0] = ng
         for j in range(n):
@@ -221,6 +224,8 @@ def run_kernel(
         rec.effort[k] = 0.5 * effort
         rec.manip[k] = manip
         mark_active(rec.qd[k], w.lb, w.ub, rec.active[k])
+        if ng > 0 or w.rows[1] > 0:
+            hold_rows(w, ng)
         if ng > 0:
             rec.rows[k] = ng
             rec.rows_active[k] = count_active_rows(G, h, w.x)

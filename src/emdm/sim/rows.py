@@ -31,7 +31,7 @@ def count_active_rows(G: F64, h: F64, x: F64) -> int:
 
 
 @kernel(refcount=False)
-def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
+def partition_rows(G: F64, h: F64, ids: F64, lb: F64, ub: F64, ng: int) -> int:
     """Reorder the rows ``G[:ng] x <= h[:ng]`` so that those that may bind come first; returns
     how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
     against the largest ``G_i x`` the bounds allow: ``h_i >= LAZY * max_box G_i x`` and ``h_i >
@@ -53,8 +53,39 @@ def partition_rows(G: F64, h: F64, lb: F64, ub: F64, ng: int) -> int:
             for j in range(nx):
                 G[i, j], G[near, j] = G[near, j], G[i, j]
             h[i], h[near] = h[near], h[i]
+            ids[i], ids[near] = ids[near], ids[i]
         near += 1
     return near
+
+
+@kernel(refcount=False)
+def recall_rows(w: StepWork, ng: int) -> None:
+    """Mark in the active set's working set the rows that the last answer held, found by their
+    ids (``w.held``), wherever this step's program put them: rows come and go as links come
+    within reach of obstacles, and :func:`partition_rows` moves them, so a row's index is no
+    identity. Without it, a row count that changes by one costs a cold start (on the Panda with
+    10 spheres, about 0.5 ms against 5 us)."""
+    n = w.x.size
+    held = w.rows[1]
+    for i in range(ng):
+        flag = 0
+        for r in range(held):
+            if w.ids[i] == w.held[r]:
+                flag = 1
+                break
+        w.qp.work[n + i] = flag
+
+
+@kernel(refcount=False)
+def hold_rows(w: StepWork, ng: int) -> None:
+    """Keep the ids of the rows in the working set of the answer (for :func:`recall_rows`)."""
+    n = w.x.size
+    held = 0
+    for i in range(ng):
+        if w.qp.work[n + i]:
+            w.held[held] = w.ids[i]
+            held += 1
+    w.rows[1] = held
 
 
 @kernel(refcount=False)

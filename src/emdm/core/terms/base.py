@@ -58,6 +58,14 @@ class ProgramOut(NamedTuple):
     h: F64
     lb: F64
     ub: F64
+    ids: F64
+    """Per row, who wrote it: ``ROW_ID * code + the writer's own index`` of the row (a plane, an
+    obstacle, link and end), so that the loop recognises a row from one step to the next
+    (:func:`emdm.sim.rows.recall_rows`) whatever the rows before it."""
+
+
+ROW_ID = float(2**24)
+"""The id of a row written by the term of code ``k`` lies in ``[k ROW_ID, (k + 1) ROW_ID)``."""
 
 
 class TermKind(StrEnum):

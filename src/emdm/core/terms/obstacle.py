@@ -29,7 +29,7 @@ import math
 from ..distance import HEADER, STRIDE, link_gap
 from ..jit import kernel
 from ..scenario import Scenario
-from .base import F64
+from .base import F64, OBSTACLE, ROW_ID
 
 SLOWEST = 0.25
 """The obstacle rows slow a joint to no less than this fraction of its bound: below it, a row
@@ -92,6 +92,7 @@ def write(
     ub: F64,
     G: F64,
     h: F64,
+    ids: F64,
     rows: int,
     floor: float,
 ) -> int:
@@ -99,7 +100,8 @@ def write(
     notes); returns the new row count (the task slack's columns of a row are 0).
 
     A pair is within reach when the link is closer than ``influence`` or could come within
-    ``stop`` in one step (:func:`_reach`, plus the obstacle's own motion)."""
+    ``stop`` in one step (:func:`_reach`, plus the obstacle's own motion). A row's id names
+    its obstacle, link and end."""
     influence, stop, gain, lrad, dt = data[0], data[1], data[2], data[3], data[4]
     _reach(pts, axes, lb, ub, dt)
     n = axes.shape[0]
@@ -151,6 +153,7 @@ def write(
                         ub[j] = min(ub[j], scale * axes[j, 8])
                     c_e *= scale * scale
                 h[rows] = damp - approach - c_e
+                ids[rows] = OBSTACLE * ROW_ID + 2 * (o * pts.shape[0] + i) + (e - i)
                 rows += 1
     return rows
 

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from ..jit import kernel
 from ..scenario import Scenario
-from .base import F64
+from .base import F64, PLANE, ROW_ID
 
 
 @kernel(refcount=False)
-def write(data: F64, p: F64, J: F64, G: F64, h: F64, rows: int) -> int:
+def write(data: F64, p: F64, J: F64, G: F64, h: F64, ids: F64, rows: int) -> int:
     """One row of ``G x <= h`` at ``G[rows:]`` per plane within its influence distance; returns
-    the new row count (the task slack's columns of a row are 0)."""
+    the new row count (the task slack's columns of a row are 0). A row's id is its plane's."""
     dim = int(data[0])
     influence, stop, gain = data[1], data[2], data[3]
     n = J.shape[1]
@@ -38,6 +38,7 @@ def write(data: F64, p: F64, J: F64, G: F64, h: F64, rows: int) -> int:
         for j in range(n, G.shape[1]):
             G[rows, j] = 0.0
         h[rows] = gain * (d - stop) / (influence - stop)
+        ids[rows] = PLANE * ROW_ID + i
         rows += 1
     return rows
 

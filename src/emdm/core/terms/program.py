@@ -92,10 +92,10 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
         elif code == CENTRING:
             centring.write(weight, data, s.q, out.c)
         elif code == PLANE:
-            rows = plane.write(data, s.p, s.J, out.G, out.h, rows)
+            rows = plane.write(data, s.p, s.J, out.G, out.h, out.ids, rows)
         elif code == OBSTACLE:
             rows = obstacle.write(
-                data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, rows, s.floor
+                data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, out.ids, rows, s.floor
             )
         elif code == CLEARANCE:
             clearance.write(weight, data, s.t, s.pts, s.axes, out.c)
