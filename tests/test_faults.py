@@ -316,6 +316,55 @@ def test_files_emdm_did_not_write_are_never_replaced(tmp_path, capsys):
     assert snapshot(out) == before
 
 
+def test_a_file_that_appears_during_the_work_is_never_replaced(tmp_path, monkeypatch, capsys):
+    """Issue 25: --out is checked again just before the swap. A file put in it while the work ran
+    (or results of a nested command, emdm run --out OUT/sub during a report into OUT) means
+    refusal: the new results are not put in place, nothing of the user's is deleted."""
+    out = tmp_path / "out"
+    write(out, "v1")
+    with pytest.raises(
+        OutputError, match=r"holds notes.txt, which emdm did not write \(it appeared"
+    ):
+        with atomic_output(out) as stage:
+            (stage / "metrics.json").write_text("v2")
+            (out / "notes.txt").write_text("mine")
+    assert (out / "notes.txt").read_text() == "mine"
+    assert snapshot(out)["metrics.json"] == b'{"version": "v1"}' and leftovers(tmp_path) == []
+    (out / "notes.txt").unlink()
+    real = records.write_csv
+
+    def nested(path, *args, **kwargs):  # another emdm writes OUT/sub meanwhile
+        real(path, *args, **kwargs)
+        if not (out / "sub").exists():
+            write(out / "sub", "nested")
+
+    monkeypatch.setattr(records, "write_csv", nested)
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "it appeared while emdm was working" in err and err.count("\n") == 1, err
+    assert snapshot(out / "sub")["metrics.json"] == b'{"version": "nested"}'
+    assert snapshot(out)["metrics.json"] == b'{"version": "v1"}'
+
+
+@pytest.mark.parametrize(
+    "name", ["lost+found", ".emdm-old-x", ".emdm-partial-x", ".emdm-old-{dead}-x"]
+)
+def test_names_like_emdm_s_own_are_the_user_s(tmp_path, name):
+    """Issue 25: in a folder that is not a mount point, lost+found is the user's, and so is any
+    name like emdm's in-flight folders that no live emdm is working in (earlier results a killed
+    emdm had moved aside are shown to the user, not deleted)."""
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    name = name.format(dead=gone.pid)
+    out = tmp_path / "out"
+    write(out, "v1")
+    (out / name).mkdir()
+    (out / name / "kept.txt").write_text("mine")
+    with pytest.raises(OutputError, match="which emdm did not write"):
+        write(out, "v2")
+    assert (out / name / "kept.txt").read_text() == "mine"
+
+
 def test_out_must_not_hold_the_input(tmp_path, capsys):
     run_dir = tmp_path / "r"
     assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(run_dir)]) == 0

@@ -153,3 +153,73 @@ def test_a_signal_during_the_swap_waits_for_it(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert err == f"emdm: terminated (SIGTERM); {out} was written before that\n"
     assert (out / "metrics.json").is_file() and [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+class _Finalized:
+    """An object whose finalizer receives SIGTERM: the handler's exception is raised inside
+    ``__del__``, where Python prints "Exception ignored" and drops it."""
+
+    def __del__(self):
+        signal.raise_signal(signal.SIGTERM)
+
+
+def test_a_signal_whose_exception_is_dropped_still_stops_the_command(tmp_path, monkeypatch, capsys):
+    """Issue 25: SIGTERM landing in a finalizer (numba's cache loading, matplotlib) used to be
+    dropped; the command ran on, replaced --out and exited 0. The handler records the signal, so
+    the swap refuses and the command exits 143 with the earlier results intact."""
+    from emdm.outputs import records
+
+    out = tmp_path / "out"
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    before = snapshot(out)
+    capsys.readouterr()
+    real = records.write_csv
+
+    fired = []
+
+    def dropped(*args, **kwargs):
+        real(*args, **kwargs)
+        if not fired:  # once: a second signal would stop the process at once
+            fired.append(True)
+            _Finalized()  # collected at once: the signal lands in its finalizer
+
+    monkeypatch.setattr(records, "write_csv", dropped)
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda info: unraisable.append(info.exc_type))
+    assert main(["run", "task2", "--controller", "C-EMDM", "--out", str(out)]) == 143
+    assert [t.__name__ for t in unraisable] == ["Interrupted"]  # Python did drop it
+    err = capsys.readouterr().err
+    assert err == "emdm: terminated (SIGTERM); nothing was written\n"
+    assert snapshot(out) == before and [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_a_second_signal_stops_at_once(tmp_path):
+    """A command that does not stop on the first signal (its exception dropped, a cleanup that
+    hangs) stops on the second, with its status and one line."""
+    script = (
+        "import time\n"
+        "from emdm.cli.boundary import run_command\n"
+        "def command():\n"
+        "    try:\n"
+        "        print('ready', flush=True); time.sleep(60)\n"
+        "    except KeyboardInterrupt:\n"
+        "        time.sleep(60)  # a cleanup that hangs\n"
+        "    return 0\n"
+        "raise SystemExit(run_command(command))\n"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        assert process.stdout.readline().strip() == "ready"
+        process.send_signal(signal.SIGTERM)
+        time.sleep(0.5)
+        assert process.poll() is None  # the first one is handled, and the cleanup hangs
+        start = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=20)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 130 and time.monotonic() - start < 10
+    assert err.strip() == "emdm: interrupted again; stopped at once"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 
@@ -43,3 +44,36 @@ class NoSolution(EmdmError):
         self.run: Any = None  # the run up to the failing step, set by emdm.simulate
         self.controller: str | None = None
         self.step: int | None = None
+
+
+class Interrupted(KeyboardInterrupt):
+    """The command was stopped by the signal ``signum`` (SIGINT, SIGTERM or SIGHUP)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+class _Stop:
+    signum = 0  # the first stopping signal of this command (0: none)
+
+
+def request_stop(signum: int) -> None:
+    """Record a stopping signal (the signal handler does, before it raises :class:`Interrupted`):
+    where its exception lands in a finalizer or a callback, Python drops it, but the record
+    stays, and :func:`check_stop` raises it again at the next safe point."""
+    if not _Stop.signum:
+        _Stop.signum = signum
+
+
+def clear_stop() -> None:
+    """Forget a recorded signal (a new command starts)."""
+    _Stop.signum = 0
+
+
+def check_stop() -> None:
+    """A safe point: raise :class:`Interrupted` when a stopping signal has arrived (in the main
+    thread only; elsewhere it waits for the main thread's next safe point). Called before results
+    are put in place, between chunks of work and when a command returns."""
+    if _Stop.signum and threading.current_thread() is threading.main_thread():
+        raise Interrupted(_Stop.signum)

@@ -4,7 +4,11 @@ Every failure becomes one line on stderr and an exit status: 2 for what the user
 input, the environment: a full disk, a permission, a missing program; a run that stopped), 1 and
 "internal error" only for a bug. SIGINT, SIGTERM and SIGHUP stop the command the same way: worker
 processes (process pools, Dask workers, ffmpeg) are stopped, the staging folder is removed, the
-earlier results stay, and the exit status is 128 + the signal (130, 143, 129).
+earlier results stay, and the exit status is 128 + the signal (130, 143, 129). The handler
+records the signal before it raises, so a signal whose exception Python drops (it landed in a
+finalizer or a callback) still stops the command at its next safe point
+(:func:`emdm.errors.check_stop`: before results are put in place, between chunks, at the end);
+a second signal stops it at once.
 """
 
 from __future__ import annotations
@@ -22,7 +26,15 @@ from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import Any
 
-from ..errors import EmdmError, NoSolution, one_line
+from ..errors import (
+    EmdmError,
+    Interrupted,
+    NoSolution,
+    check_stop,
+    clear_stop,
+    one_line,
+    request_stop,
+)
 from ..outputs import records
 from .args import ArgumentsError
 
@@ -31,14 +43,6 @@ HANDLED: dict[int, str] = {
     signal.SIGTERM: "terminated (SIGTERM)",
     signal.SIGHUP: "hung up (SIGHUP)",
 }
-
-
-class Interrupted(KeyboardInterrupt):
-    """The command was stopped by ``signum``."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = signum
 
 
 class RunStopped(EmdmError):
@@ -142,9 +146,14 @@ def _handler(signum: int, frame: FrameType | None) -> None:
     if records.deferring():  # results are being swapped in: finish that first
         records.defer(signum)
         return
-    if _State.stopping:  # already stopping: let the cleanup finish
-        return
+    if _State.stopping:  # a second signal: the first one's cleanup hangs, or its exception was
+        # dropped where it landed and the work runs on; stop at once (a staging folder left
+        # behind is swept by the next command that writes there)
+        stop_children(grace=0.0)
+        _print(f"emdm: {HANDLED.get(signum, 'stopped')} again; stopped at once")
+        os._exit(128 + signum)
     _State.stopping = True
+    request_stop(signum)
     logging.disable(logging.CRITICAL)  # workers that vanish are expected now, not news
     for name in ("asyncio", "distributed"):  # a worker stopped while starting is reported by
         logging.getLogger(name).disabled = True  # asyncio when its task is collected, at exit
@@ -269,17 +278,20 @@ def _quiet_stdout() -> None:
 def run_command(command: Callable[[], int]) -> int:
     """Run ``command`` inside the boundary; returns the exit status."""
     records.COMMITTED.clear()
+    clear_stop()
     try:
         with handling_signals():
             try:
                 with contextlib.redirect_stdout(_GuardedStdout(sys.stdout)):
                     status = int(command())
                     sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
+                check_stop()  # a signal whose exception was dropped still stops the command
                 return status
             except BaseException:
                 _close_dask()
                 raise
             finally:
+                clear_stop()  # the record is this command's (library calls check it too)
                 if descendants():  # nothing this command started outlives it
                     stop_children()
     except SystemExit as exc:  # --help, --version

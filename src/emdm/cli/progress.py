@@ -10,6 +10,8 @@ from typing import Any
 
 from tqdm import tqdm
 
+from ..errors import check_stop
+
 
 def shown() -> bool:
     """Progress is drawn when stderr is a terminal (and ``EMDM_PROGRESS`` is not ``0``)."""
@@ -59,10 +61,12 @@ class Progress:
                 return
 
     def note(self, text: str) -> None:
+        check_stop()  # a safe point: every long command reports its progress
         if self.enabled:
             self.bar.set_postfix_str(text, refresh=True)
 
     def step(self, count: int = 1, note: str | None = None) -> None:
+        check_stop()
         if note is not None and self.enabled:
             self.bar.set_postfix_str(note, refresh=False)
         self.bar.update(count)

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import EmdmError, one_line
+from ..errors import EmdmError, check_stop, one_line
 from ..sim.loop import Run
 
 
@@ -175,10 +175,14 @@ def write_json(path: Path, data: Any) -> None:
 MARKER = ".emdm-results"
 """The file emdm leaves in every folder it writes: only such folders (or empty ones) are replaced."""
 IGNORED = frozenset({"lost+found"})
-"""Entries of an output folder that emdm neither counts nor moves (a mount point's lost+found)."""
+"""Entries of an output folder that is a mount point that emdm neither counts nor moves (its
+lost+found). In any other folder they are the user's: the folder is replaced as a whole."""
 DESKTOP_FILES = frozenset({".DS_Store", "Thumbs.db", "desktop.ini"})
 """Files a file browser leaves in any folder it shows: not the user's, replaced with the rest."""
-_OURS = (".emdm-partial-", ".emdm-old-", ".emdm-copy-", ".emdm-probe-")
+_OURS = re.compile(r"\.emdm-(partial|old|copy|probe)-(\d+)-")
+"""The folders emdm makes inside an output folder while it works (staging inside a mount point,
+the earlier results moved aside, a copy across filesystems, a probe): named with the process id,
+so that only those of a live emdm are passed over; any other name is the user's."""
 _NO_EXCHANGE = {errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EXDEV}
 COMMITTED: list[Path] = []
 """Every folder :func:`atomic_output` has put in place in this process, in order."""
@@ -208,11 +212,21 @@ def _is_mount(path: Path) -> bool:
         return False
 
 
+def _in_flight(name: str) -> bool:
+    """``name`` is a folder a live emdm is working in (:data:`_OURS`)."""
+    found = _OURS.match(name)
+    return found is not None and _alive(int(found.group(2)))
+
+
+def _passed_over(folder: Path, name: str) -> bool:
+    """An entry of the output folder ``folder`` that is not results: ours in flight, or a mount
+    point's lost+found."""
+    return _in_flight(name) or (name in IGNORED and _is_mount(folder))
+
+
 def _entries(folder: Path) -> list[str]:
-    """The entries of an output folder that are results (not ours in flight, not lost+found)."""
-    return sorted(
-        name for name in os.listdir(folder) if name not in IGNORED and not name.startswith(_OURS)
-    )
+    """The entries of an output folder that are results (see :func:`_passed_over`)."""
+    return sorted(name for name in os.listdir(folder) if not _passed_over(folder, name))
 
 
 def _size(number: float) -> str:
@@ -247,11 +261,47 @@ def _files(folder: Path) -> list[str]:
     for root, subfolders, files in os.walk(folder):
         here = Path(root).relative_to(folder)
         if root == str(folder):
-            subfolders[:] = [d for d in subfolders if d not in IGNORED and not d.startswith(_OURS)]
-            files = [f for f in files if f != MARKER and not f.startswith(_OURS)]
+            subfolders[:] = [d for d in subfolders if not _passed_over(folder, d)]
+            files = [f for f in files if f != MARKER and not _passed_over(folder, f)]
         found += [(here / name).as_posix() for name in files]
         found += [(here / d).as_posix() for d in subfolders if os.path.islink(Path(root) / d)]
     return sorted(found)
+
+
+def _foreign(target: Path, files: list[str], entries: list[str]) -> str:
+    """What in the output folder ``target`` emdm did not write ("" when nothing): its files
+    ``files`` (:func:`_files`) against the list in its marker."""
+    listed = _manifest(target)
+    if entries and listed is None:
+        return f"holds {len(entries)} file(s) or folder(s) emdm did not write (no {MARKER})"
+    foreign = [
+        name
+        for name in files
+        if name not in (listed or set()) and Path(name).name not in DESKTOP_FILES
+    ]
+    if not foreign:
+        return ""
+    more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+    return f"holds {foreign[0]}{more}, which emdm did not write"
+
+
+def _recheck(out: Path) -> None:
+    """Just before the swap: ``out`` still holds nothing but emdm's results (a file may have been
+    put there while the work ran: refused, not replaced). The staging folder, inside ``out`` when
+    it is a mount point, is in flight and passed over."""
+    if not os.path.lexists(out):
+        return
+    try:
+        files, entries = _files(out), _entries(out)
+    except OSError as exc:
+        raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
+    problem = _foreign(out, files, entries)
+    if problem:
+        raise OutputError(
+            out,
+            f"{problem} (it appeared while emdm was working); the new results were not put "
+            "in place and the earlier ones are unchanged: move it away and run again",
+        )
 
 
 def check_out(out: Path, *, need: int | None = None) -> None:
@@ -277,24 +327,12 @@ def check_out(out: Path, *, need: int | None = None) -> None:
             entries = _entries(target)
         except OSError as exc:
             raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
-        listed = _manifest(target)
-        if entries and listed is None:
+        problem = _foreign(target, files, entries)
+        if problem:
             raise OutputError(
                 out,
-                f"holds {len(entries)} file(s) or folder(s) emdm did not write (no {MARKER}); "
-                "emdm replaces its output folder as a whole, so give a new or empty folder",
-            )
-        foreign = [
-            name
-            for name in files
-            if name not in (listed or set()) and Path(name).name not in DESKTOP_FILES
-        ]
-        if foreign:
-            raise OutputError(
-                out,
-                f"holds {foreign[0]}{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}"
-                ", which emdm did not write; emdm replaces its output folder as a whole, so move "
-                "it away or give another folder",
+                f"{problem}; emdm replaces its output folder as a whole, so move it away or "
+                "give another folder",
             )
         for folder, subfolders, _ in os.walk(target):
             for sub in (folder, *(os.path.join(folder, s) for s in subfolders)):
@@ -310,7 +348,7 @@ def check_out(out: Path, *, need: int | None = None) -> None:
     places = [ancestor, target] if _is_mount(target) else [ancestor]
     for place in places:
         try:
-            os.rmdir(tempfile.mkdtemp(prefix=".emdm-probe-", dir=place))
+            os.rmdir(tempfile.mkdtemp(prefix=f".emdm-probe-{os.getpid()}-", dir=place))
         except OSError as exc:
             raise OutputError(out, f"cannot create folders in {place} ({_reason(exc)})") from None
     free = shutil.disk_usage(places[-1]).free
@@ -332,14 +370,20 @@ def _alive(pid: int) -> bool:
 
 
 def _sweep(out: Path) -> None:
-    """Tidy what an emdm killed outright (SIGKILL, a power cut) left beside ``out``: its staging
-    folder is removed; the earlier results it had moved aside are put back if ``out`` is missing
+    """Tidy what an emdm killed outright (SIGKILL, a power cut) left beside ``out``, or inside it
+    (a staging folder or a copy named :data:`_OURS` with the id of a process that is gone): its
+    staging folder is removed; the earlier results it had moved aside are put back if ``out`` is missing
     (killed between two renames), else removed (killed after the swap)."""
     pattern = re.compile(rf"\.{re.escape(out.name[:80])}\.(partial|old)-(\d+)-")
     try:
         names = sorted(os.listdir(out.parent))
     except OSError:
         return
+    with contextlib.suppress(OSError):  # inside a mount point: staging and copies of dead runs
+        for name in os.listdir(out):
+            found = _OURS.match(name)
+            if found and found.group(1) != "old" and not _alive(int(found.group(2))):
+                _remove(out / name)
     for name in names:
         found = pattern.match(name)
         if not found or _alive(int(found.group(2))):
@@ -418,7 +462,7 @@ def _make_parents(folder: Path) -> list[Path]:
 def _swap_entries(new: Path, out: Path) -> None:
     """Replace the entries of ``out`` by those of ``new`` (same filesystem), undoing it all on any
     failure: for an ``out`` that cannot itself be renamed (a mount point)."""
-    old = Path(tempfile.mkdtemp(prefix=".emdm-old-", dir=out))
+    old = Path(tempfile.mkdtemp(prefix=f".emdm-old-{os.getpid()}-", dir=out))
     moved_old: list[str] = []
     moved_new: list[str] = []
     try:
@@ -451,7 +495,7 @@ def _swap_entries(new: Path, out: Path) -> None:
 
 def _copy_and_swap(staging: Path, out: Path) -> None:
     """Copy ``staging`` onto the filesystem of ``out``, then swap the entries in."""
-    copy = Path(tempfile.mkdtemp(prefix=".emdm-copy-", dir=out))
+    copy = Path(tempfile.mkdtemp(prefix=f".emdm-copy-{os.getpid()}-", dir=out))
     try:
         shutil.copytree(staging, copy, dirs_exist_ok=True)
         _swap_entries(copy, out)
@@ -529,7 +573,9 @@ def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
     inside = _is_mount(out)
     staging = Path(
         tempfile.mkdtemp(
-            prefix=".emdm-partial-" if inside else f".{out.name[:80]}.partial-{os.getpid()}-",
+            prefix=f".emdm-partial-{os.getpid()}-"
+            if inside
+            else f".{out.name[:80]}.partial-{os.getpid()}-",
             dir=out if inside else out.parent,
         )
     )
@@ -551,7 +597,9 @@ def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
                 + "".join(f"{name}\n" for name in written),
                 encoding="utf-8",
             )
-            with critical_section():
+            with critical_section():  # no signal lands from here to the end of the swap
+                check_stop()  # a signal whose exception was dropped: the earlier results stay
+                _recheck(out)
                 _commit(staging, out, inside)
                 done = True
                 COMMITTED.append(out)

@@ -32,7 +32,7 @@ from ..core.arm import Vector
 from ..core.controllers import Controller, get_controller, program_at
 from ..core.problem import QP
 from ..core.scenario import Scenario
-from ..errors import NoSolution, ScenarioError
+from ..errors import NoSolution, ScenarioError, check_stop
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 
@@ -269,6 +269,7 @@ def run_lab(
             futures = {pool.submit(_study, *job): job[2] for job in jobs}
             done = {}
             for future in as_completed(futures):
+                check_stop()  # a safe point (a signal's exception may have been dropped)
                 done[futures[future]] = future.result()
                 if progress is not None:
                     progress(futures[future])
@@ -276,6 +277,7 @@ def run_lab(
     else:
         parts = []
         for job in jobs:
+            check_stop()
             parts.append(_study(*job))
             if progress is not None:
                 progress(job[2])

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core.controllers import CONTROLLERS, goal_of
 from ..core.scenario import Scenario, scenario_from_dict
-from ..errors import EmdmError
+from ..errors import EmdmError, check_stop
 
 BLOCK = 256
 """Runs per random block: the unit of the draws (chunks are whole numbers of blocks)."""
@@ -239,6 +239,7 @@ def run_chunks(
     pending: dict[int, dict[str, Any]] = {}
     position = done = 0
     for first, result in source:
+        check_stop()  # a safe point between chunks (a signal's exception may have been dropped)
         pending[first] = result
         done += 1
         if progress:
