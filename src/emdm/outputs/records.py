@@ -268,9 +268,13 @@ def _files(folder: Path) -> list[str]:
     return sorted(found)
 
 
-def _foreign(target: Path, files: list[str], entries: list[str]) -> str:
-    """What in the output folder ``target`` emdm did not write ("" when nothing): its files
-    ``files`` (:func:`_files`) against the list in its marker."""
+def _foreign(out: Path, target: Path) -> str:
+    """What in the output folder ``target`` (named ``out`` to the user) emdm did not write, against
+    the list in its marker ("" when nothing)."""
+    try:
+        files, entries = _files(target), _entries(target)
+    except OSError as exc:
+        raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
     listed = _manifest(target)
     if entries and listed is None:
         return f"holds {len(entries)} file(s) or folder(s) emdm did not write (no {MARKER})"
@@ -291,11 +295,7 @@ def _recheck(out: Path) -> None:
     it is a mount point, is in flight and passed over."""
     if not os.path.lexists(out):
         return
-    try:
-        files, entries = _files(out), _entries(out)
-    except OSError as exc:
-        raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
-    problem = _foreign(out, files, entries)
+    problem = _foreign(out, out)
     if problem:
         raise OutputError(
             out,
@@ -322,12 +322,7 @@ def check_out(out: Path, *, need: int | None = None) -> None:
     if os.path.lexists(target):
         if not target.is_dir():
             raise OutputError(out, "exists and is not a folder")
-        try:
-            files = _files(target)
-            entries = _entries(target)
-        except OSError as exc:
-            raise OutputError(out, f"cannot be read ({_reason(exc)})") from None
-        problem = _foreign(target, files, entries)
+        problem = _foreign(out, target)
         if problem:
             raise OutputError(
                 out,
