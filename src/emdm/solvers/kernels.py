@@ -110,6 +110,111 @@ def _kkt_matrix(
 
 
 @kernel(refcount=False)
+def _kkt_solve(
+    P: F64,
+    A: F64,
+    G: F64,
+    gwork: NDArray[np.int8],
+    idx: NDArray[np.int64],
+    f: int,
+    K: F64,
+    rhs: F64,
+) -> int:
+    """Solve the KKT system of :func:`_kkt_matrix` for ``rhs = [-g_F, r]`` in place: ``rhs``
+    becomes ``[x_F, lam, nu]``; returns the system's size, or -1 for a singular one.
+
+    Where ``P_FF`` is diagonal and positive (every objective term of the controllers), by the
+    range-space method: with ``D = P_FF``, ``E = [A_F; G_WF]`` and ``y = [lam; -nu]``,
+    ``x = D^-1 (E^T y - g)`` and ``E D^-1 E^T y = r + E D^-1 g``, solved through the Householder
+    factor ``D^-1/2 E^T = Q [R; 0]`` (never forming ``E D^-1 E^T``, so the accuracy is that of the
+    whole system, not its square). About a third of the work of Gaussian elimination on the
+    whole matrix (docs/mathematics.md, "The active-set method"). Otherwise the whole matrix by
+    Gaussian elimination with partial pivoting."""
+    nt = A.shape[0]
+    nw = 0
+    for i in range(G.shape[0]):
+        nw += gwork[i]
+    m = nt + nw
+    size = f + m
+    diagonal = m <= f and max(m, f) + 2 <= K.shape[0]  # and its scratch fits in K (below)
+    for a in range(f):
+        if not diagonal:
+            break
+        ja = idx[a]
+        if not P[ja, ja] > 0.0:
+            diagonal = False
+        for a2 in range(f):
+            if a2 != a and P[ja, idx[a2]] != 0.0:
+                diagonal = False
+    if not diagonal:
+        size = _kkt_matrix(P, A, G, gwork, idx, f, K)
+        return size if solve_in_place(K, rhs, size) else -1
+    # K[:m, :f] = E D^-1/2 (row k: the k-th column of D^-1/2 E^T, then its reflector);
+    # K[k, f] = R_kk, K[k, f + 1] = v^T v of reflector k; row m: sqrt(D); row m + 1: D^-1/2 g,
+    # then Q^T D^-1/2 g, then -Q^T z
+    sd, gt = K[m], K[m + 1]
+    for a in range(f):
+        sd[a] = math.sqrt(P[idx[a], idx[a]])
+        gt[a] = -rhs[a] / sd[a]
+    for k in range(nt):
+        for a in range(f):
+            K[k, a] = A[k, idx[a]] / sd[a]
+    r = nt
+    for i in range(G.shape[0]):
+        if gwork[i]:
+            for a in range(f):
+                K[r, a] = G[i, idx[a]] / sd[a]
+            r += 1
+    for k in range(m):
+        norm2 = 0.0
+        for a in range(k, f):
+            norm2 += K[k, a] * K[k, a]
+        if norm2 == 0.0 or not math.isfinite(norm2):
+            return -1
+        x0 = K[k, k]
+        alpha = -math.sqrt(norm2) if x0 >= 0.0 else math.sqrt(norm2)
+        v0 = x0 - alpha
+        K[k, k] = v0
+        vv = norm2 - x0 * x0 + v0 * v0
+        K[k, f], K[k, f + 1] = alpha, vv
+        for row in range(k + 1, m + 2):
+            if row == m:
+                continue  # sqrt(D)
+            acc = 0.0
+            for a in range(k, f):
+                acc += K[k, a] * K[row, a]
+            acc = 2.0 * acc / vv
+            for a in range(k, f):
+                K[row, a] -= acc * K[k, a]
+    # R^T u = r (R[i, k] = K[k, i] above the diagonal), u into rhs[f:]
+    for k in range(m):
+        acc = rhs[f + k]
+        for i in range(k):
+            acc -= K[k, i] * rhs[f + i]
+        rhs[f + k] = acc / K[k, f]
+    # R y = u + (Q^T g~)[:m] in place of gt[:m]
+    for k in range(m - 1, -1, -1):
+        acc = rhs[f + k] + gt[k]
+        for j in range(k + 1, m):
+            acc -= K[j, k] * gt[j]
+        gt[k] = acc / K[k, f]
+    for k in range(m):  # y out, -z~ = [-u, (Q^T g~)[m:]] in
+        rhs[f + k], gt[k] = gt[k], -rhs[f + k]
+    for k in range(m - 1, -1, -1):  # -z = Q (-z~)
+        acc = 0.0
+        for a in range(k, f):
+            acc += K[k, a] * gt[a]
+        acc = 2.0 * acc / K[k, f + 1]
+        for a in range(k, f):
+            gt[a] -= acc * K[k, a]
+    for a in range(f):
+        rhs[a] = -gt[a] / sd[a]
+    for k in range(nt, m):
+        rhs[f + k] = -rhs[f + k]
+    return int(size)
+
+
+@kernel(refcount=False)
 def _row_value(G: F64, i: int, x: F64) -> float:
     acc = 0.0
     for j in range(x.size):
@@ -198,7 +303,10 @@ def _warm_start(
         else:
             idx[f] = j
             f += 1
-    size = _kkt_matrix(P, A, G, gwork, idx, f, K)
+    nw = 0
+    for i in range(ng):
+        nw += gwork[i]
+    size = f + nt + nw
     if f < size - f:
         return False
     for i in range(nt):
@@ -223,7 +331,7 @@ def _warm_start(
             if work[i] != 0:
                 acc += P[j, i] * x[i]
         rhs[a] = -acc
-    if not solve_in_place(K, rhs, size):
+    if _kkt_solve(P, A, G, gwork, idx, f, K, rhs) < 0:
         return False
     for a in range(f):
         j = idx[a]
@@ -370,12 +478,12 @@ def _cold_start(
             lam[0] = (g[i0] * A[1, i1] - g[i1] * A[1, i0]) / det
             lam[1] = (A[0, i0] * g[i1] - A[0, i1] * g[i0]) / det
         else:
-            size = _kkt_matrix(P, A, G, gwork, idx, f, K)
+            size = f + nt + nw
             for a in range(f):
                 rhs[a] = -g[idx[a]]
             for i in range(f, size):
                 rhs[i] = 0.0
-            if not solve_in_place(K, rhs, size):
+            if _kkt_solve(P, A, G, gwork, idx, f, K, rhs) < 0:
                 return NEEDS_REFERENCE, iteration
             for a in range(f):
                 p[idx[a]] = rhs[a]
