@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
-from .distance import AXIS, POINT, chain_points_of
+from .distance import AXIS, GAP, POINT, chain_points_of, link_gaps
 from .feasibility import task_scale
 from .kernels import task_kinematics_of
 from .limits import Bounds
@@ -242,10 +242,12 @@ def step_program(
     data = controller.program_data(scenario, weights)
     n, nt = scenario.n, scenario.nt
     pts, axes = np.zeros((n + 2, POINT)), np.zeros((n, AXIS))
+    gaps = np.zeros((len(scenario.obstacles), n + 1, GAP))
     if scenario.obstacles:
         chain_points_of(
             scenario.arm_data.lengths, scenario.geometry, np.asarray(q, dtype=float), pts, axes
         )
+        link_gaps(np.array(scenario.obstacle_data), float(t), pts, gaps)
     nx = n + nt if data.slack else n
     out = ProgramOut(
         np.empty((nx, nx)),
@@ -268,6 +270,7 @@ def step_program(
         float(t),
         pts,
         axes,
+        gaps,
         float(floor),
     )
     rows = build_program(data, state, out)

@@ -39,6 +39,9 @@ STRIDE = 10
 AXIS = 9
 """Numbers per joint in ``axes``: the axis point (3), its unit direction (3), the point's index,
 then two numbers of the obstacle term's own (the joint's bounds before its rows)."""
+GAP = 7
+"""Numbers per link and obstacle in the gaps of :func:`link_gaps`: the distance, the unit
+normal (3), the obstacle's closest point (3)."""
 POINT = 5
 """Numbers per point in ``pts``: the position (3), then two numbers of the obstacle term's own
 (its tightening and reach of the point, written by :mod:`emdm.core.terms.obstacle`)."""
@@ -174,17 +177,25 @@ def obstacle_at(data: F64, o: int, t: float, A: F64, B: F64) -> float:
 
 
 @kernel(refcount=False)
-def link_distances(data: F64, t: float, pts: F64, out: F64) -> float:
-    """``out[i, o]``: the distance (m) of link ``i`` (``pts[i]`` to ``pts[i + 1]``) to obstacle
-    ``o`` at time ``t``, radii subtracted; returns the smallest (``inf`` without obstacles), the
-    record's clearance."""
+def link_gaps(data: F64, t: float, pts: F64, gaps: F64) -> float:
+    """``gaps[o, i] = [d, n (3), w* (3)]`` (:data:`GAP`) for link ``i`` (``pts[i]`` to
+    ``pts[i + 1]``) and obstacle ``o`` at time ``t``: the distance ``d`` (m, radii subtracted),
+    the unit vector ``n`` from the obstacle's closest point ``w*`` to the link's (0 where they
+    meet) and ``w*``; returns the smallest ``d`` (``inf`` without obstacles), the record's
+    clearance. Computed once per step, read by the obstacle rows."""
     least = math.inf
     for o in range(int(data[5])):
         r = data[HEADER + o * STRIDE + 6] + data[3]
         for i in range(pts.shape[0] - 1):
-            span = link_gap(pts, i, data, o, t)[0]
+            span, dx, dy, dz, cx, cy, cz = link_gap(pts, i, data, o, t)
             d = span - r
-            out[i, o] = d
+            g = gaps[o, i]
+            g[0] = d
+            if span > 0.0:
+                g[1], g[2], g[3] = dx / span, dy / span, dz / span
+            else:
+                g[1], g[2], g[3] = 0.0, 0.0, 0.0
+            g[4], g[5], g[6] = cx, cy, cz
             if d < least:
                 least = d
     return least

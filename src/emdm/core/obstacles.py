@@ -145,18 +145,17 @@ def check_damper(check: _Checker, damper: dict[str, float], dt: float) -> None:
 def distances(scenario: Any, q: Vector, t: float = 0.0) -> Vector:
     """``D[i, o]``: the distance (m) of link ``i`` (base to first joint first; a last row for the
     tool's segment) to obstacle ``o`` at configuration ``q`` and time ``t`` (s)."""
-    from .distance import AXIS, POINT, chain_points_of, link_distances
+    from .distance import AXIS, GAP, POINT, chain_points_of, link_gaps
 
     n = scenario.n
     pts, axes = np.zeros((n + 2, POINT)), np.zeros((n, AXIS))
     chain_points_of(
         scenario.arm_data.lengths, scenario.geometry, np.asarray(q, dtype=float), pts, axes
     )
-    out = np.zeros((n + 1, len(scenario.obstacles)))
+    gaps = np.zeros((len(scenario.obstacles), n + 1, GAP))
     if scenario.obstacles:
-        data = np.array(scenario.obstacle_data)
-        link_distances(data, float(t), pts, out)
-    return out
+        link_gaps(np.array(scenario.obstacle_data), float(t), pts, gaps)
+    return gaps[:, :, 0].T.copy()
 
 
 def distance_jacobian(

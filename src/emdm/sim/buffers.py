@@ -9,7 +9,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.distance import AXIS, POINT
+from ..core.distance import AXIS, GAP, POINT
 from ..core.jit import kernel
 from ..core.kernels import KinWork, SpatialWork, kin_work, spatial_work
 from ..core.tolerances import AT_BOUND
@@ -81,7 +81,7 @@ class StepWork(NamedTuple):
     rows: NDArray[np.int64]
     pts: F64
     axes: F64
-    dist: F64
+    gaps: F64
     ids: F64
     held: F64
 
@@ -136,7 +136,7 @@ def step_work(n: int, nx: int, nt: int, ng: int, no: int) -> StepWork:
         np.zeros(2, dtype=np.int64),
         np.zeros((n + 2, POINT)),
         np.zeros((n, AXIS)),
-        np.zeros((n + 1, no)),
+        np.zeros((no, n + 1, GAP)),
         np.zeros(ng),
         np.zeros(ng),
     )

@@ -38,7 +38,7 @@ from ..core.controllers import (
     state_at,
     step_program,
 )
-from ..core.distance import chain_points, link_distances
+from ..core.distance import chain_points, link_gaps
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
@@ -128,7 +128,7 @@ def run_kernel(
         t = k * motion.dt
         if motion.obstacles.size:
             chain_points(geo, rec.p[k], w.kin, w.sp, w.pts, w.axes)
-            rec.clearance[k] = link_distances(motion.obstacles, t, w.pts, w.dist)
+            rec.clearance[k] = link_gaps(motion.obstacles, t, w.pts, w.gaps)
         err2 = 0.0
         for i in range(nt):
             rec.v[k, i] = motion.kp[i] * rec.e[k, i]
@@ -142,7 +142,9 @@ def run_kernel(
             return FULL, k
         ng = build_program(
             prog,
-            StepInput(rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes, SLOWEST),
+            StepInput(
+                rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes, w.gaps, SLOWEST
+            ),
             out,
         )
         G, h = w.G[:ng], w.h[:ng]

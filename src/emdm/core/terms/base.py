@@ -29,10 +29,11 @@ class StepInput(NamedTuple):
     manipulability Jacobian ``Jm`` (n), the desired task velocity ``v`` (nt; m/s, rad/s for a
     pose's rotation), the task error's norm ``error_norm`` (m), the task's value ``p`` (its first
     entries are the end effector's position, m), the time ``t`` (s), and the arm as points and
-    joint axes ``pts``, ``axes`` (:mod:`emdm.core.distance`; filled only in a scenario with
-    obstacles), and ``floor``, the smallest fraction of its bound the obstacle rows may slow a
-    joint to (:data:`emdm.core.terms.obstacle.SLOWEST`; 0 on the loop's second try of a step
-    whose rows left no admissible command)."""
+    joint axes ``pts``, ``axes`` and the links' ``gaps`` to the obstacles
+    (:mod:`emdm.core.distance`; filled only in a scenario with obstacles), and ``floor``, the
+    smallest fraction of its bound the obstacle rows may slow a joint to
+    (:data:`emdm.core.terms.obstacle.SLOWEST`; 0 on the loop's second try of a step whose rows
+    left no admissible command)."""
 
     q: F64
     J: F64
@@ -43,6 +44,7 @@ class StepInput(NamedTuple):
     t: float
     pts: F64
     axes: F64
+    gaps: F64
     floor: float
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 
-from ..distance import HEADER, STRIDE, link_gap
+from ..distance import HEADER, STRIDE
 from ..jit import kernel
 from ..scenario import Scenario
 from .base import F64, OBSTACLE, ROW_ID
@@ -85,9 +85,9 @@ def _reach(pts: F64, axes: F64, lb: F64, ub: F64, dt: float) -> None:
 @kernel(refcount=False)
 def write(
     data: F64,
-    t: float,
     pts: F64,
     axes: F64,
+    gaps: F64,
     lb: F64,
     ub: F64,
     G: F64,
@@ -99,9 +99,11 @@ def write(
     """Rows of ``G x <= h`` at ``G[rows:]`` for every link and obstacle within reach (module
     notes); returns the new row count (the task slack's columns of a row are 0).
 
-    A pair is within reach when the link is closer than ``influence`` or could come within
-    ``stop`` in one step (:func:`_reach`, plus the obstacle's own motion). A row's id names
-    its obstacle, link and end."""
+    ``gaps`` are this step's distances and closest points
+    (:func:`emdm.core.distance.link_gaps`, computed once for the rows and the record). A pair is
+    within reach when the link is closer than ``influence`` or could come within ``stop`` in
+    one step (:func:`_reach`, plus the obstacle's own motion). A row's id names its obstacle,
+    link and end."""
     influence, stop, gain, lrad, dt = data[0], data[1], data[2], data[3], data[4]
     _reach(pts, axes, lb, ub, dt)
     n = axes.shape[0]
@@ -114,12 +116,11 @@ def write(
         vx, vy, vz = data[at + 7], data[at + 8], data[at + 9]
         drift = dt * math.sqrt(vx * vx + vy * vy + vz * vz)
         for i in range(pts.shape[0] - 1):
-            span, dx, dy, dz, cx, cy, cz = link_gap(pts, i, data, o, t)
-            d = span - r
+            gap = gaps[o, i]
+            d, nx_, ny_, nz_, cx, cy, cz = gap[0], gap[1], gap[2], gap[3], gap[4], gap[5], gap[6]
             reach = max(pts[i, 4], pts[i + 1, 4]) + drift
-            if (d >= influence and d - stop >= reach) or span == 0.0:
+            if (d >= influence and d - stop >= reach) or (nx_ == 0.0 and ny_ == 0.0 and nz_ == 0.0):
                 continue
-            nx_, ny_, nz_ = dx / span, dy / span, dz / span
             approach = nx_ * vx + ny_ * vy + nz_ * vz
             for e in (i, i + 1):
                 if e == 0:
@@ -128,18 +129,21 @@ def write(
                     if pts[e, 2] == pts[i, 2]:
                         continue  # a link of length 0: one point, one row
                 d_e = (nx_ * (pts[e, 0] - cx) + ny_ * (pts[e, 1] - cy) + nz_ * (pts[e, 2] - cz)) - r
-                for j in range(min(e, n)):
+                top = 0.0  # the largest G_i x the joint bounds allow (they only shrink from
+                for j in range(min(e, n)):  # here on): a row above it is implied, left out
                     ax, ay, az = axes[j, 3], axes[j, 4], axes[j, 5]
                     rx, ry, rz = (
                         pts[e, 0] - axes[j, 0],
                         pts[e, 1] - axes[j, 1],
                         pts[e, 2] - axes[j, 2],
                     )
-                    G[rows, j] = -(
+                    g = -(
                         nx_ * (ay * rz - az * ry)
                         + ny_ * (az * rx - ax * rz)
                         + nz_ * (ax * ry - ay * rx)
                     )
+                    G[rows, j] = g
+                    top += max(g * lb[j], g * ub[j])
                 for j in range(min(e, n), nx):
                     G[rows, j] = 0.0
                 damp = gain * (d_e - stop) / (influence - stop)
@@ -153,6 +157,8 @@ def write(
                         ub[j] = min(ub[j], scale * axes[j, 8])
                     c_e *= scale * scale
                 h[rows] = damp - approach - c_e
+                if h[rows] > top:
+                    continue
                 ids[rows] = OBSTACLE * ROW_ID + 2 * (o * pts.shape[0] + i) + (e - i)
                 rows += 1
     return rows

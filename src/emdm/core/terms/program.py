@@ -95,7 +95,7 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
             rows = plane.write(data, s.p, s.J, out.G, out.h, out.ids, rows)
         elif code == OBSTACLE:
             rows = obstacle.write(
-                data, s.t, s.pts, s.axes, out.lb, out.ub, out.G, out.h, out.ids, rows, s.floor
+                data, s.pts, s.axes, s.gaps, out.lb, out.ub, out.G, out.h, out.ids, rows, s.floor
             )
         elif code == CLEARANCE:
             clearance.write(weight, data, s.t, s.pts, s.axes, out.c)
