@@ -415,8 +415,15 @@ def test_random_scenes_are_seeded_and_valid():
     first = random_scenes("obstacle", 2, 2, (0.03, 0.05), seed=7)
     again = random_scenes("obstacle", 2, 2, (0.03, 0.05), seed=7)
     assert repr(first) == repr(again)  # equal, NaN medians included
-    assert set(first["controllers"]) == {"C-EMDM", "C-EMDM blind", "NEO", "NEO blind"}
+    assert set(first["controllers"]) == {
+        "C-EMDM",
+        "C-EMDM task held",
+        "C-EMDM blind",
+        "NEO",
+        "NEO blind",
+    }
     assert first["controllers"]["C-EMDM"]["collisions"] == 0.0
+    assert first["emdm_equals_neo"]  # one program in a scene with obstacles (docs)
 
 
 def test_run_folder_keeps_clearance_and_rows_and_the_command_line_says_how_each_run_fared(
@@ -465,3 +472,23 @@ def test_a_link_caught_between_rows_is_stood_still_not_stopped():
     assert not run.reached and run.steps == sc.max_steps
     assert run.clearance.min() >= sc.obstacle_damper.stop
     assert run.fallback.any() and np.all(run.kkt <= KKT_TOL)
+
+
+def test_a_stall_whose_largest_scale_cannot_be_certified_stands_still():
+    """A random scene (seed 0 of the benchmark) where C-IVKC stalls at the stop distance with a
+    largest task scale of about 3e-11: its feasible set is narrower than the certificate's bound
+    tolerance, so every solver's answer was refused and the run stopped at step 222. The scale 0
+    is admissible there (standing still keeps every bound and row) and certified."""
+    circles = [
+        ([-0.4917033136329308, 0.2842445653397682], 0.07020646336685524),
+        ([0.7146022368084359, 0.935592144741955], 0.040640553176577596),
+        ([0.12852753254429894, 0.18198289229653125], 0.05188169529708199),
+    ]
+    sc = with_obstacles(
+        "task1", [{"shape": "circle", "center": c, "radius": r} for c, r in circles]
+    )
+    run = simulate(sc, "C-IVKC")  # raised NoSolution at step 222 before
+    assert run.steps == sc.max_steps and not run.reached
+    assert run.alpha[222] == 0.0 and run.policy[222] == "scale"  # stood still there
+    assert run.clearance.min() >= sc.obstacle_damper.stop - 1e-12
+    assert np.all(run.kkt <= KKT_TOL) and np.all(run.bound_excess <= 1e-12)

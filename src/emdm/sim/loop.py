@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
 from ..core.controllers import (
+    Admissible,
     Controller,
     Name,
     admissible,
@@ -435,6 +436,18 @@ def simulate(
     return _run(scenario, ctrl, rec, k, steps, reached=code == Exit.REACHED)
 
 
+def _standstill(nominal: QP, policy: str) -> Admissible:
+    """The task scaled to zero, when standing still is admissible and the policy scales: a stall
+    in front of an obstacle can leave a largest scale of order 1e-11 whose feasible set is
+    narrower than the certificate's tolerance, so that no solver's answer is certified
+    (docs/mathematics.md, "Obstacles"); the scale 0 is admissible and its program certifiable.
+    Raises :class:`NoSolution` otherwise."""
+    zero = np.zeros(nominal.lb.size)
+    if policy != "scale" or nominal.bound_excess(zero) > 0.0:
+        raise NoSolution("standing still is not admissible either", problem=nominal)
+    return Admissible(nominal.with_rhs(np.zeros_like(nominal.b)), 0.0, "scale")
+
+
 def _chain_step(
     scenario: Scenario,
     ctrl: Controller,
@@ -475,8 +488,12 @@ def _chain_step(
         nominal = step_program(
             ctrl, scenario, rec.q[k], state.kin, rec.v[k], error_norm, t=t, floor=0.0
         )
-        program = admissible(nominal, policy, slack_weight=weight, step=k)
-        result = solve_chain(program.qp, chain, context=context, certify=certify)
+        try:
+            program = admissible(nominal, policy, slack_weight=weight, step=k)
+            result = solve_chain(program.qp, chain, context=context, certify=certify)
+        except NoSolution:
+            program = _standstill(nominal, policy)
+            result = solve_chain(program.qp, chain, context=context, certify=certify)
         rec.lo[k], rec.hi[k] = nominal.lb[:n], nominal.ub[:n]
     x = result.x
     rec.qd[k] = x[:n]
