@@ -14,12 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from ..core.controllers import Controller, Name, get_controller
+from ..core.controllers import Controller, Name, Term, When, get_controller
 from ..core.loading import load_scenario
 from ..core.scenario import Scenario, scenario_from_dict
+from ..core.terms.base import TermKind
 from ..errors import NoSolution, ScenarioError
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
+from .solvable import proved_solvable
 
 SPREAD = 0.3
 """Obstacles of the random scenes lie within this fraction of the path's length of the straight
@@ -103,24 +105,50 @@ def wilson(successes: int, trials: int, z: float = 1.96) -> tuple[float, float]:
     return float(centre - half), float(centre + half)
 
 
+def held(controller: Controller) -> Controller:
+    """``controller`` with its task held exactly on a redundant arm (``"<name> task held"``):
+    the brief's C-EMDM, whose slack serves only a non-redundant arm, for the evidence that a
+    scene with obstacles needs the slack (docs/mathematics.md, "A way around")."""
+    terms = tuple(
+        Term(t.kind, t.weight, When.NON_REDUNDANT, t.optional) if t.kind is TermKind.SLACK else t
+        for t in controller.terms
+    )
+    return Controller(f"{controller.name} task held", terms)
+
+
 def random_scenes(
-    preset: str, scenes: int, count: int, radius: tuple[float, float], seed: int = 0
+    preset: str,
+    scenes: int,
+    count: int,
+    radius: tuple[float, float],
+    seed: int = 0,
+    *,
+    prove: bool = False,
 ) -> dict[str, Any]:
     """``scenes`` seeded random scenes of ``count`` obstacles around ``preset``'s start and goal
-    (:func:`scene`, the preset's own obstacles removed): per controller (C-EMDM, NEO and both
-    blind) success (reached, never inside the stop distance), collisions (a state inside the
-    stop distance), clearance, time to goal and mean manipulability, with 95 % intervals."""
+    (:func:`scene`, the preset's own obstacles removed): per controller (C-EMDM, NEO, C-EMDM
+    with its task held, and C-EMDM and NEO blind) success (reached, never inside the stop
+    distance), collisions (a state inside the stop distance), clearance, time to goal and mean
+    manipulability, with 95 % intervals. With ``prove`` (a 3-link planar arm), each scene is
+    also searched for a collision-free motion (:func:`.solvable.proved_solvable`) and success is
+    counted again over the scenes proved solvable."""
     rng = np.random.default_rng(seed)
     base = load_scenario(preset)
     data = base.to_dict()
     data.pop("obstacles", None)
-    controllers: list[Controller] = []
-    for kind in (Name.C_EMDM, Name.NEO):
-        controllers += [get_controller(kind), get_controller(kind).blind()]
+    emdm, neo = get_controller(Name.C_EMDM), get_controller(Name.NEO)
+    controllers = [emdm, neo, held(emdm), emdm.blind(), neo.blind()]
     rows: dict[str, list[dict[str, float]]] = {c.name: [] for c in controllers}
     stop = base.obstacle_damper.stop
+    proved: list[bool] = []
+    margin: list[float] = []
+    cells = 0
     for _ in range(scenes):
         sc = scene_from(data, base, count, rng, radius)
+        if prove:
+            grid = proved_solvable(sc)
+            proved.append(grid["proved"])
+            margin, cells = grid["margin"], grid["cells"]
         for ctrl in controllers:
             try:
                 run = simulate(sc, ctrl)
@@ -130,7 +158,7 @@ def random_scenes(
             rows[ctrl.name].append(
                 {
                     "reached": float(run.reached),
-                    "collided": float(run.clearance.min() < stop),
+                    "collided": float(run.clearance.min() < stop - ROUNDING),
                     "stopped": float(stopped),
                     "clearance": float(run.clearance.min()),
                     "time": float(run.t[-1]) if run.reached else float("nan"),
@@ -153,6 +181,15 @@ def random_scenes(
             "time_to_goal_median": float(np.nanmedian(times)) if np.any(success) else float("nan"),
             "mean_manipulability": float(np.mean([v["mean_m"] for v in values])),
         }
+        if prove:
+            mask = np.array(proved, dtype=bool)
+            summary[name]["success_proved"] = float(success[mask].mean()) if mask.any() else 0.0
+            summary[name]["success_proved_ci"] = wilson(int(success[mask].sum()), int(mask.sum()))
+            summary[name]["success_not_proved"] = int(success[~mask].sum())
+    same = all(
+        np.array_equal(list(a.values()), list(b.values()), equal_nan=True)
+        for a, b in zip(rows[emdm.name], rows[neo.name], strict=True)
+    )
     return {
         "preset": preset,
         "scenes": scenes,
@@ -160,6 +197,10 @@ def random_scenes(
         "radius": radius,
         "seed": seed,
         "controllers": summary,
+        "proved_solvable": int(sum(proved)) if prove else None,
+        "proof_margin": margin,
+        "proof_cells": cells,
+        "emdm_equals_neo": bool(same),
     }
 
 
