@@ -14,6 +14,7 @@ from emdm.core.loading import load_scenario
 from emdm.studies.mmc_paper import (
     CONTROLLERS,
     PI,
+    PROTOCOLS,
     PS,
     Y,
     command,
@@ -90,3 +91,34 @@ def test_the_protocol_counts_every_trial_once_and_is_seeded(tmp_path, capsys):
     printed = json.loads(capsys.readouterr().out)
     assert printed["protocol"] == "paper" and set(printed["results"]["panda"]) == set(CONTROLLERS)
     assert main(["mmc", "--protocol", "paper", "--arm", "task1"]) == 2
+
+
+def test_the_ur5_runs_under_its_scripts_limits_and_subset_and_alone_as_with_the_panda():
+    """expUR.py loads the joint-limited UR5 (+-pi), shrinks by 0.27 and caps at 100 steps, and
+    averages over the trials where RRMC and MMC arrived; seeded by name, the UR5's rows do not
+    depend on whether the Panda ran first."""
+    assert PROTOCOLS["ur5"].limit == pytest.approx(np.pi) and PROTOCOLS["ur5"].cap == 100
+    alone = run_paper_protocol(arms=("ur5",), trials=6, seed=2)["results"]["ur5"]
+    both = run_paper_protocol(arms=("panda", "ur5"), trials=6, seed=2)["results"]["ur5"]
+    assert repr(alone) == repr(both)
+    assert alone["MMC"]["subset"] == ["RRMC", "MMC"]
+    for c in CONTROLLERS:
+        lo, hi = alone[c]["failure_rate_ci"]
+        assert lo <= alone[c]["failure_rate"] <= hi
+
+
+def test_confidence_intervals_against_scipy():
+    from scipy import stats
+
+    from emdm.studies.stats import mean_interval, wilson
+
+    x = np.random.default_rng(0).normal(0.05, 0.01, 40)
+    lo, hi = stats.t.interval(0.95, len(x) - 1, loc=x.mean(), scale=stats.sem(x))
+    assert mean_interval(x) == pytest.approx((lo, hi), rel=1e-12)
+    # Wilson's interval is the set of p whose score test accepts the observed count
+    k, n = 23, 90
+    a, b = wilson(k, n)
+    for p, inside in ((a + 1e-9, True), (b - 1e-9, True), (a - 1e-6, False), (b + 1e-6, False)):
+        z = (k / n - p) / np.sqrt(p * (1 - p) / n)
+        assert (abs(z) <= 1.96) == inside
+    assert np.isnan(mean_interval([1.0])[0]) and np.isnan(wilson(0, 0)[0])

@@ -405,7 +405,8 @@ def test_clearance_objective_is_the_gradient_of_the_nearness_potential():
 
 
 def test_random_scenes_are_seeded_and_valid():
-    from emdm.studies.obstacle_bench import random_scenes, scene, wilson
+    from emdm.studies.obstacle_bench import random_scenes, scene
+    from emdm.studies.stats import wilson
 
     lo, hi = wilson(74, 100)
     assert 0.64 < lo < 0.66 and 0.81 < hi < 0.83  # Wilson's interval of 74/100

@@ -1,12 +1,14 @@
 """``emdm mmc --protocol paper``: Haviland & Corke's manipulability benchmark under its authors'
-protocol, as their experiment script states it (robotics-toolbox-python, ``examples/exp1.py``,
-for the Panda; the same study's UR5 script differs in the two numbers marked below).
+protocol, as their experiment scripts state it (robotics-toolbox-python, ``examples/exp1.py`` for
+the Panda and ``examples/expUR.py`` for the UR5, commit 733f395 of that repository).
 
 Per trial, every controller starts from the same joint angles and servos to the same pose:
 
-- start and goal angles uniform inside the limits shrunk by ``shrink`` times each joint's range
-  ``|q_min| + |q_max|`` on each side (0.27 for the Panda, 0.15 for the UR5); the goal pose is the
-  forward kinematics of the goal angles;
+- start and goal angles uniform inside the limits shrunk by 0.27 times each joint's range
+  ``|q_min| + |q_max|`` on each side; the goal pose is the forward kinematics of the goal angles.
+  The limits are the model's: the Panda's, and for the UR5 those of the model ``expUR.py`` loads
+  (``rp.models.UR5()``, built from ur_description's ``ur5_joint_limited_robot.urdf.xacro``:
+  +-pi on every joint), not the +-2 pi of emdm's ``ur5`` preset;
 - every step (50 ms, Euler): ``p_servo`` with gain 1: the error ``e`` is the translation and the
   roll-pitch-yaw angles (``zyx``) of ``T^-1 T*`` in the end-effector frame, ``v = e``, and the
   controller has *arrived* once ``sum |e| < 0.17``; the joint velocity comes from the
@@ -28,11 +30,11 @@ Per trial, every controller starts from the same joint angles and servos to the 
 - a controller *fails* at a step where one of the first ``n - 2`` joints is at or beyond a limit,
   or where its step has no solution or a NaN (*singular*); one that has arrived or failed stands
   still;
-- a trial ends when both RRMC and MMC have arrived or failed, or after ``cap`` steps (100 for the
-  Panda, 500 for the UR5); a controller still moving then has *missed*;
+- a trial ends when both RRMC and MMC have arrived or failed, or after 100 steps (the scripts'
+  ``itmax``); a controller still moving then has *missed*;
 - the mean manipulability of a controller (its mean ``m`` over its steps) and its final
-  manipulability are averaged over the trials in which every controller arrived; its failure rate
-  counts every trial it did not arrive in.
+  manipulability are averaged over the trials in which every controller arrived (RRMC and MMC on
+  the UR5, the two its script runs); its failure rate counts every trial it did not arrive in.
 
 The kinematics are emdm's (:class:`~emdm.core.serial.SerialArm` of the presets, equal to
 robotics-toolbox-python's models to 1e-15); nothing else of emdm's loop takes part.
@@ -42,6 +44,7 @@ from __future__ import annotations
 
 import math
 import time
+import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -51,6 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.loading import load_scenario
+from .stats import mean_interval, wilson
 
 Vector = NDArray[np.float64]
 Y, PS, PI, GAIN, THRESHOLD, DT = 0.01, 0.05, 0.9, 1.0, 0.17, 0.05
@@ -70,13 +74,23 @@ CONTROLLERS = tuple(Paper)
 
 @dataclass(frozen=True)
 class Protocol:
-    """The numbers that differ between the authors' Panda and UR5 scripts."""
+    """The numbers of the authors' scripts for one arm: the shrink of the limits for starts and
+    goals, the step cap, and the joint limits when the script's model has other ones than the
+    preset (rad, symmetric; ``None``: the preset's)."""
 
     shrink: float
     cap: int
+    limit: float | None = None
+    subset: tuple[str, ...] = tuple(Paper)
+    """The controllers whose arrival puts a trial in the averaged subset: all four in exp1.py
+    (``rarr == 4``), RRMC and MMC in expUR.py (``rarr == 2``: the only two it runs; on the
+    non-redundant UR5 PARK and BAUR are RRMC, as the published table's equal columns show)."""
 
 
-PROTOCOLS = {"panda": Protocol(0.27, 100), "ur5": Protocol(0.15, 500)}
+PROTOCOLS = {
+    "panda": Protocol(0.27, 100),
+    "ur5": Protocol(0.27, 100, math.pi, (Paper.RRMC, Paper.MMC)),
+}
 
 
 def rpy_zyx(R: np.ndarray) -> np.ndarray:
@@ -234,15 +248,18 @@ def run_paper_protocol(
 
     say = progress or (lambda _m: None)
     results: dict[str, Any] = {}
-    for index, name in enumerate(arms):
+    for name in arms:
         if name not in PROTOCOLS:
             raise ValueError(f"the paper protocol is stated for panda and ur5, not {name!r}")
         protocol = PROTOCOLS[name]
         sc = load_scenario(name)
         arm = sc.serial_arm
         lo, hi = np.asarray(sc.arm.q_min, float), np.asarray(sc.arm.q_max, float)
+        if protocol.limit is not None:
+            lo, hi = np.full(sc.n, -protocol.limit), np.full(sc.n, protocol.limit)
         off = protocol.shrink * (np.abs(lo) + np.abs(hi))
-        rng = np.random.default_rng(np.random.SeedSequence([seed, index]))
+        # seeded by the arm's name, so that one arm's tasks do not depend on the others run
+        rng = np.random.default_rng(np.random.SeedSequence([seed, zlib.crc32(name.encode())]))
         start = time.perf_counter()
         trials_out = []
         for _ in range(trials):
@@ -250,24 +267,35 @@ def run_paper_protocol(
             goal = arm.forward(rng.uniform(lo + off, hi - off))
             trials_out.append(run_trial(arm, lo, hi, q0, goal, protocol.cap))
         seconds = time.perf_counter() - start
-        every = [all(t[c]["arrived"] for c in CONTROLLERS) for t in trials_out]
+        every = [all(t[c]["arrived"] for c in protocol.subset) for t in trials_out]
+        kept_trials = [t for t, ok in zip(trials_out, every, strict=True) if ok]
         results[name] = {}
         for c in CONTROLLERS:
             rows = [t[c] for t in trials_out]
-            kept = [r for r, ok in zip(rows, every, strict=True) if ok]
+            kept = [t[c] for t in kept_trials]
             keys = ("arrived", "failed", "joint_limit", "singular", "missed")
             count = {k: int(sum(r[k] for r in rows)) for k in keys}
+            # paired: the same tasks for every controller, so differences to MMC per trial
+            diff = [t[c]["mean_m"] - t[Paper.MMC]["mean_m"] for t in kept_trials]
             results[name][c] = {
                 "trials": trials,
                 "mean_manipulability": float(np.mean([r["mean_m"] for r in kept]))
                 if kept
                 else None,
+                "mean_manipulability_ci": mean_interval([r["mean_m"] for r in kept]),
                 "mean_final_manipulability": float(np.mean([r["final_m"] for r in kept]))
                 if kept
                 else None,
+                "mean_final_manipulability_ci": mean_interval([r["final_m"] for r in kept]),
+                "mean_manipulability_minus_mmc": float(np.mean(diff)) if diff else None,
+                "mean_manipulability_minus_mmc_ci": mean_interval(diff),
                 "failure_rate": 100.0 * (trials - count["arrived"]) / trials,
+                "failure_rate_ci": tuple(
+                    100.0 * b for b in wilson(trials - count["arrived"], trials)
+                ),
                 **count,
                 "all_arrived_trials": int(sum(every)),
+                "subset": list(protocol.subset),
                 "published": PUBLISHED.get(name, {}).get(c),
             }
         say(f"{name}: {trials} trials in {seconds:.1f} s")
@@ -277,28 +305,43 @@ def run_paper_protocol(
 def paper_table(data: dict[str, Any]) -> str:
     """The benchmark under the authors' protocol beside the published table, as Markdown."""
     lines = [
-        f"Manipulability benchmark under Haviland & Corke's protocol (their exp1.py): "
+        f"Manipulability benchmark under Haviland & Corke's protocol (their exp1.py and expUR.py): "
         f"{data['trials']} random tasks per arm (seed {data['seed']}), published values in "
         "brackets (the Baur column of the published table is not in emdm's copy). Mean and final "
-        "m over the trials in which every controller arrived; failed: did not arrive (a joint at "
-        "a limit, a singular step, or the step cap).",
+        "m over the trials in which every controller arrived (on the UR5 RRMC and MMC, the "
+        "two its script runs; the same tasks for every controller), with Student's 95 % "
+        "interval; the paired difference to MMC over those "
+        "trials; failed: did not arrive (a joint at a limit, a singular step, or the step cap), "
+        "with Wilson's 95 % interval.",
         "",
-        "| arm | controller | mean m | mean final m | failed % | joint limit | singular | "
-        "missed (cap) | trials all arrived |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| arm | controller | mean m | 95 % CI | mean final m | m - m(MMC), paired | 95 % CI "
+        "| failed % | 95 % CI | joint limit | singular | missed (cap) | trials all arrived |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
 
     def show(value: float | None, published: float | None, fmt: str) -> str:
         text = "-" if value is None else format(value, fmt)
         return text + (f" ({format(published, fmt)})" if published is not None else "")
 
+    def interval(bounds: Sequence[float], fmt: str) -> str:
+        lo, hi = bounds
+        return "-" if math.isnan(lo) else f"{format(lo, fmt)} to {format(hi, fmt)}"
+
     for arm, rows in data["results"].items():
         for c, r in rows.items():
             pub = r["published"] or (None, None, None)
+            paired = (
+                "0 (itself)"
+                if c == Paper.MMC
+                else show(r["mean_manipulability_minus_mmc"], None, "+.4f")
+            )
             lines.append(
                 f"| {arm} | {c} | {show(r['mean_manipulability'], pub[0], '.4f')} | "
-                f"{show(r['mean_final_manipulability'], pub[1], '.4f')} | "
-                f"{show(r['failure_rate'], pub[2], '.1f')} | {r['joint_limit']} | "
+                f"{interval(r['mean_manipulability_ci'], '.4f')} | "
+                f"{show(r['mean_final_manipulability'], pub[1], '.4f')} | {paired} | "
+                f"{'-' if c == Paper.MMC else interval(r['mean_manipulability_minus_mmc_ci'], '+.4f')} | "
+                f"{show(r['failure_rate'], pub[2], '.1f')} | "
+                f"{interval(r['failure_rate_ci'], '.1f')} | {r['joint_limit']} | "
                 f"{r['singular']} | {r['missed']} | {r['all_arrived_trials']} |"
             )
     return "\n".join(lines)

@@ -22,6 +22,7 @@ from ..errors import NoSolution, ScenarioError
 from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
 from .solvable import proved_solvable
+from .stats import wilson
 
 SPREAD = 0.3
 """Obstacles of the random scenes lie within this fraction of the path's length of the straight
@@ -93,16 +94,6 @@ def obstacle_speed(*, repeats: int = 20, batch_runs: int = 2000) -> dict[str, An
         "handed_to_the_chain": int(result.reference_runs.size),
     }
     return out
-
-
-def wilson(successes: int, trials: int, z: float = 1.96) -> tuple[float, float]:
-    """Wilson's 95 % interval of a proportion."""
-    if trials == 0:
-        return (float("nan"), float("nan"))
-    p = successes / trials
-    centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
-    half = z * np.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / (1 + z * z / trials)
-    return float(centre - half), float(centre + half)
 
 
 def held(controller: Controller) -> Controller:
