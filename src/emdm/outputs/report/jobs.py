@@ -253,10 +253,12 @@ def _job_mmc(stage: Path, cfg: ReportConfig) -> list[str]:
     and the Panda's baselines on its preset task (a figure for the page)."""
     from ...studies.mmc import CONTROLLERS as BENCH
     from ...studies.mmc import PUBLISHED, run_mmc_benchmark
+    from ...studies.mmc_paper import run_paper_protocol
     from ..plots import spatial_path_figure
 
     data = run_mmc_benchmark(trials=cfg.mmc_trials, seed=0)
     data["published"] = PUBLISHED
+    data["paper"] = run_paper_protocol(trials=cfg.mmc_trials, seed=0)
     sc = load_scenario("panda")
     runs = {name: simulate(sc, name) for name in BENCH}
     data["panda_preset"] = {name: metrics(run) for name, run in runs.items()}
