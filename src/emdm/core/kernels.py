@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .jit import kernel
-from .serial_kernels import chain_kinematics, manipulability_gradient, serial_hessian
+from .serial_kernels import chain_kinematics, manipulability_gradient
 from .tolerances import SINGULAR_RELATIVE
 
 F64 = NDArray[np.float64]
@@ -320,8 +320,7 @@ def task_kinematics(
     n = q.size
     frames, link, T, J6, H, Rg = sw.frames, sw.link, sw.T, sw.J6, sw.H, sw.R
     chain_kinematics(geo.origins, geo.axes, geo.prismatic, geo.tool, q, frames, link, T, J6)
-    serial_hessian(J6, geo.prismatic, H)
-    m = manipulability_gradient(J6, H, geo.rows, Jm, sw.qr)
+    m = manipulability_gradient(J6, geo.prismatic, H, geo.rows, Jm, sw.qr)
     rows = 6 if task == TASK_POSE else 3
     for i in range(rows):
         for j in range(n):

@@ -242,7 +242,8 @@ class SerialArm:
             )
         J = self.jacobian(q)
         H = np.empty((self.n, 6, self.n))
-        serial_hessian(J, self._prismatic, H)
         Jm = np.empty(self.n)
-        m = manipulability_gradient(J, H, _ROWS[axes], Jm, np.empty((2 * self.n + 2, 6)))
+        m = manipulability_gradient(
+            J, self._prismatic, H, _ROWS[axes], Jm, np.empty((2 * self.n + 2, 6))
+        )
         return float(m), Jm

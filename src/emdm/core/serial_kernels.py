@@ -143,7 +143,7 @@ def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
 
 
 @kernel(refcount=False)
-def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64, qr: F64) -> float:
+def _gradient_by_qr(J: F64, prismatic: B8, first: int, count: int, Jm: F64, qr: F64) -> float:
     """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` from a Householder factor
     ``Ja^T = Q R`` (``Q``: n x count, orthonormal columns): ``Ja Ja^T = R^T R``, so
     ``m = prod |R_aa|`` and ``(Ja Ja^T)^-1 Ja = R^-1 Q^T``, without forming ``Ja Ja^T`` (which
@@ -199,17 +199,71 @@ def _gradient_by_qr(J: F64, H: F64, first: int, count: int, Jm: F64, qr: F64) ->
             for c in range(a + 1, count):
                 acc -= A[a, c] * Q[j, c]
             Q[j, a] = acc / diag[a]
-    for i in range(n):
-        acc = 0.0
-        for a in range(count):
-            for b in range(n):
-                acc += Q[b, a] * H[i, first + a, b]
-        Jm[i] = m * acc
+    _contract(J, prismatic, first, count, Q, m, Jm)
     return m
 
 
 @kernel(refcount=False)
-def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64, qr: F64) -> float:
+def _contract(J: F64, prismatic: B8, first: int, count: int, B: F64, m: float, Jm: F64) -> None:
+    """``Jm_i = m sum_{a,k} B[k, a] H[i, first + a, k]`` without forming ``H``
+    (:func:`serial_hessian`'s entries are cross products): with ``b_k``, ``c_k`` the linear and
+    angular parts of row ``k`` of ``B`` (``Ja^+``), ``v_k``, ``z_k`` those of column ``k`` of ``J``,
+
+    ``S_i = z_i . (sum_{k >= i} v_k x b_k + sum_{k > i} z_k x c_k) + v_i . sum_{k < i} b_k x z_k``
+
+    (by ``a . (x x y) = x . (y x a)``; the term ``k = i`` and every ``z_i`` term only for a revolute
+    ``i``, the ``z_k`` sums only over revolute ``k``), in O(n) instead of O(6 n^2)."""
+    n = J.shape[1]
+    ax = ay = az = 0.0  # suffix sum of v_k x b_k + z_k x c_k over k > i
+    for i in range(n - 1, -1, -1):
+        bx = by = bz = cx = cy = cz = 0.0
+        for a in range(count):
+            r = first + a
+            if r == 0:
+                bx = B[i, a]
+            elif r == 1:
+                by = B[i, a]
+            elif r == 2:
+                bz = B[i, a]
+            elif r == 3:
+                cx = B[i, a]
+            elif r == 4:
+                cy = B[i, a]
+            else:
+                cz = B[i, a]
+        vx, vy, vz = J[0, i], J[1, i], J[2, i]
+        zx, zy, zz = J[3, i], J[4, i], J[5, i]
+        # v_i x b_i, which the sum for i itself includes (a revolute i only)
+        wx, wy, wz = vy * bz - vz * by, vz * bx - vx * bz, vx * by - vy * bx
+        Jm[i] = 0.0
+        if not prismatic[i]:
+            Jm[i] = zx * (ax + wx) + zy * (ay + wy) + zz * (az + wz)
+            ax += zy * cz - zz * cy
+            ay += zz * cx - zx * cz
+            az += zx * cy - zy * cx
+        ax, ay, az = ax + wx, ay + wy, az + wz
+    px = py = pz = 0.0  # prefix sum of b_k x z_k over revolute k < i
+    for i in range(n):
+        vx, vy, vz = J[0, i], J[1, i], J[2, i]
+        Jm[i] = m * (Jm[i] + vx * px + vy * py + vz * pz)
+        if not prismatic[i]:
+            bx = by = bz = 0.0
+            for a in range(count):
+                r = first + a
+                if r == 0:
+                    bx = B[i, a]
+                elif r == 1:
+                    by = B[i, a]
+                elif r == 2:
+                    bz = B[i, a]
+            zx, zy, zz = J[3, i], J[4, i], J[5, i]
+            px += by * zz - bz * zy
+            py += bz * zx - bx * zz
+            pz += bx * zy - by * zx
+
+
+@kernel(refcount=False)
+def manipulability_gradient(J: F64, prismatic: B8, H: F64, rows: int, Jm: F64, qr: F64) -> float:
     """Manipulability ``m = sqrt(det(Ja Ja^T))`` of the rows ``rows`` (:data:`ROWS_ALL`,
     :data:`ROWS_TRANS`, :data:`ROWS_ROT`) and its gradient ``Jm`` (n,); returns ``m``.
 
@@ -219,14 +273,17 @@ def manipulability_gradient(J: F64, H: F64, rows: int, Jm: F64, qr: F64) -> floa
     ``m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` without its inverse. Where ``Ja`` loses rank (``m = 0``,
     not differentiable) this is the gradient of the signed product of singular values: finite,
     never NaN, and along it ``m`` grows on one side of the singularity. ``qr``: a buffer of at
-    least ``2 n + 2`` rows of 6 for the factor; the SVD (:func:`_gradient_by_svd`) allocates.
+    least ``2 n + 2`` rows of 6 for the factor; ``H`` (n x 6 x n): a buffer for the kinematic
+    Hessian, filled only on the SVD path (the factor's path contracts without it,
+    :func:`_contract`); the SVD (:func:`_gradient_by_svd`) allocates.
     """
     n = J.shape[1]
     first, count = (0, 6) if rows == ROWS_ALL else ((0, 3) if rows == ROWS_TRANS else (3, 3))
     if count <= n:
-        m = _gradient_by_qr(J, H, first, count, Jm, qr)
+        m = _gradient_by_qr(J, prismatic, first, count, Jm, qr)
         if m >= 0.0:
             return m
+    serial_hessian(J, prismatic, H)
     return _gradient_by_svd(J, H, first, count, Jm)
 
 
