@@ -36,6 +36,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
+from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
 from .style import CONTROLLER_STYLE, FAMILY_COLOR, OKABE_ITO, RC
@@ -166,42 +167,55 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
 
 
 def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
-    """A pair in one 2x2 composite: (a) m(t), (b) E(t), (c) q(t), (d) qd(t), one row per joint."""
+    """A pair in one composite: (a) m(t), (b) E(t), (c) the tracking error ||e||(t) above,
+    (d) q(t) and (e) qd(t) below, one strip per joint."""
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.8 if n == 3 else 2.45) if medium is PAPER else 3.4
+    height = (2.9 if n == 3 else 2.5) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)
-        outer = fig.add_gridspec(2, 2, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
-        ax_m = fig.add_subplot(outer[0, 0])
-        ax_e = fig.add_subplot(outer[0, 1])
-        q_axes = _column(fig, outer[1, 0], n)
-        qd_axes = _column(fig, outer[1, 1], n)
+        outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
+        upper = outer[0].subgridspec(1, 3)
+        lower = outer[1].subgridspec(1, 2)
+        ax_m = fig.add_subplot(upper[0, 0])
+        ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
+        ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
+        q_axes = _column(fig, lower[0, 0], n)
+        qd_axes = _column(fig, lower[0, 1], n)
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
+            ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             for j in range(n):
                 q_axes[j].plot(run.t, run.q[:, j], **st)
                 qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
-        for ax in (ax_m, ax_e, *q_axes, *qd_axes):
+        for ax in (ax_m, ax_e, ax_err, *q_axes, *qd_axes):
             _shade(ax, spans)
-        ax_m.set_ylabel(r"$m$ (m$^2$)")
-        ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)")
+        ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
+        ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
+        ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
+        ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
+        for ax in (ax_m, ax_e, ax_err):
+            ax.set_xlabel(r"$t$ (s)", labelpad=1)
+        ax_m.yaxis.set_major_locator(MaxNLocator(3))
+        for ax in (ax_e, ax_err):
+            ax.yaxis.set_major_locator(LogLocator(numticks=3))
+            ax.yaxis.set_minor_locator(NullLocator())
         # time in seconds on every panel: its label only under the joint strips
         lo, hi = sc.arm.q_min, sc.arm.q_max
         for j in range(n):
             ax = q_axes[j]
             infl, stop = sc.damper.influence[j], sc.damper.stop[j]
             for a, b, shade in (
-                (hi[j] - infl, hi[j], 0.10),
-                (lo[j], lo[j] + infl, 0.10),
-                (hi[j] - stop, hi[j], 0.35),
-                (lo[j], lo[j] + stop, 0.35),
+                (hi[j] - infl, hi[j], 0.12),
+                (lo[j], lo[j] + infl, 0.12),
+                (hi[j] - stop, hi[j], 0.40),
+                (lo[j], lo[j] + stop, 0.40),
             ):
-                ax.axhspan(a, b, color="#D55E00", alpha=shade * 0.6, linewidth=0, zorder=0)
+                ax.axhspan(a, b, color="#D55E00", alpha=shade, linewidth=0, zorder=0)
             for bound in (lo[j], hi[j]):
                 ax.axhline(bound, color="black", linewidth=0.6)
             ax.set_ylabel(rf"$q_{j + 1}$", labelpad=1)
@@ -227,12 +241,15 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
                     a.tick_params(labelbottom=False)
         q_axes[-1].set_xlabel(r"$t$ (s)")
         qd_axes[-1].set_xlabel(r"$t$ (s)")
-        q_axes[0].set_title(r"$q$ (rad), limits, damper zones", fontsize=medium.small)
-        qd_axes[0].set_title(r"$\dot q$ (rad/s), limits dotted", fontsize=medium.small)
-        _label(ax_m, "(a)", medium)
-        _label(ax_e, "(b)", medium)
-        _label(q_axes[0], "(c)", medium)
-        _label(qd_axes[0], "(d)", medium)
+        q_axes[0].set_title(
+            r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
+        )
+        qd_axes[0].set_title(
+            r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
+        )
+        # panel letters above the axes, where no curve can hide them
+        for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
+            ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         if spans:
             handles.append(
@@ -261,7 +278,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 2.2 if medium is PAPER else 2.7
+    height = 1.95 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -483,7 +500,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.25 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.3 * len(names) + 0.3) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)
@@ -497,8 +514,7 @@ def pareto_figure(
                 ax.set_title(rf"$k={step['k']}$, $t={step['t']:.2f}$ s", fontsize=medium.small)
                 if col == 0:
                     ax.set_ylabel(f"{name}\n" + r"$E$ (rad$^2$/s$^2$)")
-                if row == len(names) - 1:
-                    ax.set_xlabel(r"$M$ (m$^2$/s)")
+                ax.set_xlabel(r"$M$ (m$^2$/s)", labelpad=1)  # every row: its own scale
             ax = axes[row, whole]
             rows = grids[name]
             ok = [r for r in rows if "error" not in r and r.get("reached")]
@@ -540,14 +556,13 @@ def pareto_figure(
                 )
             ax.set_title("whole runs", fontsize=medium.small)
             ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
-            if row == len(names) - 1:
-                ax.set_xlabel(r"mean $m$ (m$^2$)")
+            ax.set_xlabel(r"mean $m$ (m$^2$)", labelpad=1)
             ax.set_ylabel(r"$\sum E\,\Delta t$ (rad$^2$/s)", labelpad=1)
         assert sc is not None
         bar = fig.colorbar(sc, ax=axes, shrink=0.8, pad=0.01, aspect=30)
         bar.set_label(r"$\log_{10} w_M/w_E$ (circle: nominal)")
-        fig.canvas.draw()  # the formatters now know their scale: fold it into the bottom labels
-        for ax in axes[-1, :whole]:
+        fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
+        for ax in axes[:, :whole].ravel():
             power = getattr(ax.xaxis.get_major_formatter(), "orderOfMagnitude", 0)
             if power:
                 ax.xaxis.get_offset_text().set_visible(False)

@@ -46,11 +46,15 @@ class Pitch:
         ]
         out.bullets["task1"] = [
             sentence(
-                "Tracking unchanged: both pairs reach the goal together (",
+                "Tracking unchanged: goal at ",
+                s.ttg(t1, Name.UC_IVKC),
+                " / ",
                 s.ttg(t1, Name.UC_EMDM),
                 " unconstrained, ",
+                s.ttg(t1, Name.C_IVKC),
+                " / ",
                 s.ttg(t1, Name.C_EMDM),
-                " constrained)",
+                " constrained (IVKC / EMDM)",
             ),
             sentence(
                 "EMDM raises mean ",
