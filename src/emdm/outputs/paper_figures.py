@@ -611,35 +611,37 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         left.set_xscale("log")
         right.set_xscale("log")
         _log_axis(right.xaxis)
+        # three labelled decades at most on the gap axis: more run together at this width
+        right.xaxis.set_major_locator(matplotlib.ticker.LogLocator(numticks=3))
         left.axvline(dt * 1e3, color="black", linestyle="--", linewidth=0.8)
-        left.text(
-            dt * 1e3, y[0] + 0.4, r"$\Delta t$ ", fontsize=medium.small, va="bottom", ha="right"
-        )
+        left.text(dt * 1e3, y[0], r"$\Delta t$ ", fontsize=medium.small, va="center", ha="right")
         left.set_xlabel("median time (ms)")
-        right.set_xlabel(r"largest gap $f-f^\star$")
+        slowest = max(r["median_time"] for r in rows.values() if math.isfinite(r["median_time"]))
+        left.set_xlim(None, 3e3 * max(slowest, dt))  # no marker clipped at the edge
+        right.set_xlabel(r"gap $f-f^{*}$")
         right.axvspan(floor / 4, floor * 4, color="#0072B2", alpha=0.10, linewidth=0)
-        right.set_xlim(floor / 10, None)
+        finite = [
+            v
+            for r in rows.values()
+            for v in (r["max_abs_gap"], r["max_violation"])
+            if math.isfinite(v) and v > 0
+        ]
+        right.set_xlim(floor / 10, 30 * max([1.0, *finite]))  # no marker clipped at the edge
         left.set_ylim(-0.6, len(order) - 0.1)
         handles = [
             Line2D([], [], color="#D55E00", marker="x", linestyle="none", label="bound violation")
         ]
-        right.legend(
-            handles=handles,
-            loc="center right",  # the inexact solvers' markers sit in the lower right
-            frameon=True,
-            framealpha=0.9,
+        fig.legend(  # below the panels, where it hides no marker
+            handles=[
+                *handles,
+                Patch(color="#0072B2", alpha=0.25, label=r"gap $\leq 10^{-12}$"),
+            ],
+            loc="outside lower center",
+            ncols=2,
+            frameon=False,
             fontsize=medium.tiny,
-            handletextpad=0.2,
-            borderpad=0.3,
-        )
-        right.text(
-            floor,
-            y[0] + 0.4,
-            r"$\leq10^{-12}$",
-            fontsize=medium.tiny,
-            color="#0072B2",
-            va="bottom",
-            ha="center",
+            handletextpad=0.3,
+            columnspacing=1.0,
         )
     return stem
 
