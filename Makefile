@@ -28,7 +28,8 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 unit: $(STAMP)
-	$(BIN)/pytest -n 2   # both cores (pytest-xdist): each worker compiles the kernels once
+	$(BIN)/python -c "import emdm; emdm.precompile()"   # once, so the workers only load them
+	$(BIN)/pytest -n 2   # both cores (pytest-xdist)
 
 test: lint typecheck unit
 

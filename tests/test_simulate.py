@@ -142,3 +142,19 @@ def test_one_definition_of_scaled_and_stalled():
     )
     assert emdm.metrics(run)["scaled_steps"] == int(run.scaled.sum()) == int((run.alpha < 1).sum())
     assert emdm.simulate(sc, "C-EMDM").stalled_from is None  # it reaches the goal
+
+
+def test_precompile_loads_every_loop_kernel_once(monkeypatch):
+    import emdm
+    from emdm.core import jit
+    from emdm.sim.batch import _warm_up_batch
+    from emdm.sim.loop import _warm_up
+
+    emdm.precompile()
+    assert _warm_up in jit._compiled and _warm_up_batch in jit._compiled
+
+    def again(*_args: object) -> None:
+        raise AssertionError("warmed up twice")
+
+    monkeypatch.setattr(jit, "_first_use", again)
+    emdm.precompile()  # a second call does nothing

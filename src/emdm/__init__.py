@@ -26,7 +26,7 @@ from .core.problem import QP, Objective
 from .core.scenario import Scenario, scenario_from_dict
 from .core.serial import SerialArm
 from .errors import EmdmError, NoSolution, ScenarioError, SolverNotFound
-from .sim.batch import BatchResult, simulate_batch
+from .sim.batch import BatchResult, precompile, simulate_batch
 from .sim.loop import Run, simulate
 from .sim.metrics import metrics
 from .solvers import available_solvers, get_solver, kkt_report, solve_chain
@@ -58,6 +58,7 @@ __all__ = [
     "kkt_report",
     "load_scenario",
     "metrics",
+    "precompile",
     "scenario_from_dict",
     "simulate",
     "simulate_batch",

@@ -116,6 +116,15 @@ def run_all(
             job.result()
 
 
+def precompile() -> None:
+    """Compile every kernel of :func:`emdm.simulate` and :func:`simulate_batch` now (or load
+    them from the cache): once, before many processes start (``make test`` before its workers,
+    an image build, a Dask cluster's set-up), so that each of them loads the kernels in under a
+    second instead of compiling them again."""
+    ensure_compiled(_warm_up)
+    ensure_compiled(_warm_up_batch, what="the batch loop")
+
+
 def _warm_up_batch() -> None:
     """Compile (or load) the batch kernel on a two-step run of each kind of program."""
     from ..core.loading import load_scenario
