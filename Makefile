@@ -7,7 +7,7 @@ STAMP  := $(VENV)/.installed-stamp
 OUT    ?= results
 ARGS   ?=
 
-.PHONY: install study test lint typecheck unit clean
+.PHONY: install study test lint typecheck unit fuzz clean
 
 install: $(STAMP)
 
@@ -32,6 +32,9 @@ unit: $(STAMP)
 	$(BIN)/pytest -n 2   # both cores (pytest-xdist)
 
 test: lint typecheck unit
+
+fuzz: $(STAMP)   # the long fuzzing profile: 10,000 cases per test (EMDM_FUZZ_EXAMPLES=N for more)
+	EMDM_FUZZ_EXAMPLES=$${EMDM_FUZZ_EXAMPLES:-10000} $(BIN)/pytest -n 2 tests/test_fuzz.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

@@ -398,8 +398,8 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
             value = raw_section.get(key, spec.default)
             if value is None:
                 raise check.fail(dotted, "is required")
-            if value == "" and spec.kind != "str":
-                parsed[section][key] = None
+            if value == "" and spec.kind != "str" and spec.default == "":
+                parsed[section][key] = None  # an optional key left out (arm.lengths or arm.dh)
             elif spec.kind == "joints":
                 parsed[section][key] = check.vector(dotted, value, n, spec.scalar_ok)
             elif spec.kind == "task":
