@@ -172,7 +172,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.9 if n == 3 else 2.5) if medium is PAPER else 3.4
+    height = (2.75 if n == 3 else 2.45) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)

@@ -164,7 +164,7 @@ class Pitch:
                         ": exact optimum in ",
                         self.d.ms(f, "solvers", grad, "median_time"),
                         ", ",
-                        self.d.num(f, "solvers", grad, "median_iterations", fmt=".0f"),
+                        self.d.num(f, "solvers", grad, "median_iterations", fmt=".4g"),
                         " iterations",
                     )
                 )
@@ -185,7 +185,7 @@ class Pitch:
                         ", ",
                         self.d.ms(f, "solvers", best_free, "median_time"),
                         ", ",
-                        self.d.num(f, "solvers", best_free, "median_evaluations", fmt=".0f"),
+                        self.d.num(f, "solvers", best_free, "median_evaluations", fmt=".4g"),
                         " evaluations",
                     )
                 )
