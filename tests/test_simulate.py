@@ -158,3 +158,39 @@ def test_precompile_loads_every_loop_kernel_once(monkeypatch):
 
     monkeypatch.setattr(jit, "_first_use", again)
     emdm.precompile()  # a second call does nothing
+
+
+def test_buffer_estimates_and_a_run_too_large_for_the_machine_is_refused_up_front(monkeypatch):
+    """An arm whose buffers would not fit is one ScenarioError naming the key, before anything
+    is allocated (a 2,000-link planar arm needs about 32 GB: its gradient's minors grow with the
+    cube of the joints); the estimates are within 25 % of what is allocated."""
+    import pytest
+
+    from emdm.sim import buffers
+
+    def allocated(x: object) -> int:
+        if isinstance(x, np.ndarray):
+            return x.nbytes
+        if isinstance(x, tuple):
+            return sum(allocated(y) for y in x)
+        return 0
+
+    for n, nt, ng, spatial in (
+        (50, 2, 0, False),
+        (200, 2, 0, False),
+        (40, 6, 0, True),
+        (20, 2, 100, False),
+    ):
+        nx = n + nt
+        real = allocated(buffers.step_work(n, nx, nt, ng, 0))
+        assert 0.8 <= buffers.work_bytes(n, nx, nt, ng, spatial) / real <= 1.25
+    monkeypatch.setattr(buffers, "memory_available", lambda: 2_000_000)
+    sc = emdm.load_scenario(
+        "task1",
+        {"arm.lengths": [0.02] * 60, "motion.q0": [0.02] * 60, "damper.influence": 0.5},
+    )
+    with pytest.raises(emdm.ScenarioError, match=r"arm: 60 joints need about .* use fewer joints"):
+        emdm.simulate(sc, "C-EMDM")
+    with pytest.raises(emdm.ScenarioError, match=r"task1: (arm|motion\.max_time): .* GB"):
+        emdm.simulate_batch(sc, "C-EMDM")  # a full-length record per thread: the larger part
+    assert emdm.simulate(emdm.load_scenario("task1"), "C-EMDM").reached  # small runs go on

@@ -23,7 +23,7 @@ from ..core.scenario import Scenario
 from ..core.terms import ProgramData
 from ..core.validation import Policy
 from ..errors import NoSolution
-from .buffers import Motion, new_record, step_work
+from .buffers import Motion, new_record, require_memory, step_work
 from .loop import (
     REACHED,
     TIMEOUT,
@@ -204,6 +204,18 @@ def simulate_batch(
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
         prog = ctrl.program_data(scenario)
         threads = min(numba.get_num_threads(), runs)
+        nx = n + scenario.nt if prog.slack else n
+        steps = motion_data(scenario).n_steps
+        require_memory(
+            scenario.name,
+            n,
+            nx,
+            scenario.nt,
+            prog.rows,
+            scenario.spatial,
+            copies=threads,
+            steps=steps,
+        )
         run_all(
             scenario.arm_data,
             scenario.geometry,

@@ -4,6 +4,7 @@ definition of a joint at a bound (:func:`mark_active`)."""
 
 from __future__ import annotations
 
+import os
 from typing import NamedTuple
 
 import numpy as np
@@ -13,6 +14,7 @@ from ..core.distance import AXIS, GAP, POINT
 from ..core.jit import kernel
 from ..core.kernels import KinWork, SpatialWork, kin_work, spatial_work
 from ..core.tolerances import AT_BOUND
+from ..errors import ScenarioError
 from ..solvers.kernels import QPWork, qp_work
 
 F64 = NDArray[np.float64]
@@ -154,3 +156,54 @@ def mark_active(qd: F64, lo: F64, hi: F64, active: NDArray[np.int8]) -> None:
             active[j] = 1
         else:
             active[j] = 0
+
+
+def work_bytes(n: int, nx: int, nt: int, ng: int, spatial: bool) -> int:
+    """About the bytes :func:`step_work` allocates (within 25 %, tested): the planar gradient's
+    ``n (n - 1) / 2`` minors by ``n`` joints, the spatial Hessian, and the program's matrices."""
+    pairs = n * (n - 1) // 2  # the planar kinematics buffers exist for every arm
+    cols = 2 * nt + 2 * nx + ng
+    size = nx + nt + ng
+    words = pairs * (n + 1) + (6 * n * n if spatial else 0)
+    words += (
+        2 * (nx + ng) * (cols + 1) + size * size + nx * nx + (nt + ng) * nx + 40 * (size + cols)
+    )
+    return 8 * words
+
+
+def record_bytes(steps: int, n: int, nt: int) -> int:
+    """About the bytes :func:`new_record` allocates for ``steps`` commands."""
+    return 8 * (steps + 1) * (5 * n + 4 * nt + 14)
+
+
+def memory_available() -> int:
+    """The machine's physical memory (bytes), or 0 when the system does not say."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def require_memory(
+    source: str, n: int, nx: int, nt: int, ng: int, spatial: bool, *, copies: int, steps: int
+) -> None:
+    """Refuse, in one line naming the key to change, a run whose buffers (``copies`` sets of
+    work and of a record of ``steps`` commands) would take more than half of this machine's
+    memory, before anything is allocated."""
+    have = memory_available()
+    work = copies * work_bytes(n, nx, nt, ng, spatial)
+    record = copies * record_bytes(steps, n, nt)
+    if not have or work + record <= have // 2:
+        return
+    key, what, hint = (
+        ("arm", f"{n} joints need", "use fewer joints")
+        if work >= record
+        else ("motion.max_time", f"a record of {steps} steps needs", "use a shorter one")
+    )
+    sets = f"{copies} sets, one per thread" if copies > 1 else "1 set"
+    raise ScenarioError(
+        source,
+        key,
+        f"{what} about {(work + record) / 1e9:.3g} GB of buffers ({sets}), more than half of "
+        f"this machine's {have / 1e9:.3g} GB: {hint}",
+    )

@@ -64,7 +64,15 @@ from ..solvers.kernels import (
     active_set,
     certify,
 )
-from .buffers import Motion, Record, StepWork, mark_active, new_record, step_work
+from .buffers import (
+    Motion,
+    Record,
+    StepWork,
+    mark_active,
+    new_record,
+    require_memory,
+    step_work,
+)
 from .rows import count_active_rows, hold_rows, partition_rows, recall_rows, settle_rows
 
 F64 = NDArray[np.float64]
@@ -411,6 +419,7 @@ def simulate(
     policy = scenario.controller.on_infeasible
     in_kernel = solver == DEFAULT_SOLVER
     cap = min(motion.n_steps, FIRST_CHUNK)
+    require_memory(scenario.name, n, nx, nt, prog.rows, scenario.spatial, copies=1, steps=cap)
     rec = plain(new_record)(cap, n, nt)
     rec.q[0] = scenario.motion.q0
     work = _work(n, nx, nt, prog.rows, len(scenario.obstacles))
