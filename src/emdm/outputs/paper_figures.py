@@ -711,7 +711,7 @@ def manipulability_figure(
                 ax.plot(run.t, run.m, **_style(run, medium))
             ax.set_title(title)
             ax.set_xlabel(r"$t$ (s)")
-            ax.legend(loc="lower right", frameon=True, framealpha=0.9)
+            ax.legend(loc="best", frameon=True, framealpha=0.9)  # where it hides least
         axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
     return stem
 
