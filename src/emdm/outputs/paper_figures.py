@@ -544,10 +544,11 @@ def pareto_figure(
             _value_axis(ax, [r["total_effort"] for r in ok])
             if bad:
                 text = ", ".join(_ratio_tex(r["w_manip"] / r["w_effort"]) for r in bad)
+                # the runs that fail are not drawn (their effort would flatten the others)
                 ax.text(
                     0.03,
                     0.97,
-                    rf"$w_M/w_E={text}$" + "\nnot reached",
+                    rf"$w_M/w_E={text}$" + "\nnot reached (not drawn)",
                     transform=ax.transAxes,
                     ha="left",
                     va="top",
@@ -738,11 +739,11 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
         for ax, run in zip(axes, runs, strict=True):
             # each run's own instants: a run that ends early is not drawn at times it never had
             instants = np.linspace(0.0, float(run.t[-1]), times)
+            drawn = [min(round(t / sc.motion.dt), run.steps) for t in instants]
             st = _style(run, medium)
             ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
             ax.plot(run.p[:, 0], run.p[:, 1], color=st["color"], linewidth=medium.line * 0.8)
-            for i, t in enumerate(instants):
-                k = min(round(t / sc.motion.dt), run.steps)
+            for i, k in enumerate(drawn):
                 pts = arm.joint_positions(run.q[k])
                 shade = 0.25 + 0.75 * i / max(times - 1, 1)
                 ax.plot(
@@ -773,7 +774,7 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_xticks([])
             ax.set_yticks([])
             ax.set_xlabel(  # below the workspace, where no arm can cover it
-                r"arm at $t$ = " + ", ".join(f"{t:.1f}" for t in instants) + " s",
+                r"arm at $t$ = " + ", ".join(f"{run.t[k]:.2f}" for k in drawn) + " s",
                 fontsize=medium.tiny,
                 color="#444444",
             )
