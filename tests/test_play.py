@@ -300,6 +300,17 @@ def test_bad_address_values_are_listed_on_the_page(session):
     assert s.scenario.weights.effort == 0.1  # the defaults are shown
 
 
+def test_one_refused_address_value_keeps_the_others(session):
+    """A teacher's link with one bad value: the page says which, and applies the rest."""
+    s = session(**{"weights.manipulability": "0.5", "weights.effort": "abc"})
+    text = html.unescape(s.banner.text)
+    assert "Not applied: weights.effort: must be a number" in text
+    assert s.scenario.weights.manipulability == 0.5 and s.scenario.weights.effort == 0.1
+    s = session(**{"motion.goal": "[0.2, 0.6]", "damper.stop": "2"})
+    assert "Not applied: damper.stop" in html.unescape(s.banner.text)
+    assert s.scenario.motion.goal.tolist() == [0.2, 0.6]
+
+
 def test_a_failing_callback_is_shown_and_the_session_survives(session, monkeypatch):
     s = session()
 

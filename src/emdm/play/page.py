@@ -432,14 +432,9 @@ class Session:
         self.choose = Select(
             title="Scenario", options=list[Any](self.bases), value=self.settings.scenario, width=260
         )
-        self.links = Spinner(
-            title="Number of links",
-            low=logic.MIN_LINKS,
-            high=logic.MAX_LINKS,
-            step=1,
-            value=2,
-            width=260,
-        )
+        # no low/high: the browser would drop an out-of-range value without a word; the server
+        # refuses it with a message instead (_on_links)
+        self.links = Spinner(title="Number of links", step=1, value=2, width=260)
         self.pair = RadioButtonGroup(
             labels=["C: constrained", "UC: unconstrained"], active=0, width=260
         )
@@ -561,7 +556,7 @@ class Session:
             self._show(
                 [
                     f"Not applied: Number of links must be a whole number from {logic.MIN_LINKS} "
-                    f"to {logic.MAX_LINKS}, got {'nothing' if new is None else new!r} (the page "
+                    f"to {logic.MAX_LINKS}, got {'an empty field' if new is None else new!r} (the page "
                     "shows the last valid settings)"
                 ],
                 [],
@@ -672,8 +667,12 @@ class Session:
         except EmdmError as exc:
             shown = "the page shows the last valid settings" if self.scenario else "nothing to show"
             self._show([f"Not applied: {logic.message(exc)} ({shown})"], notes)
-            if self.scenario is None:
-                self.settings = Settings(scenario=self.settings.scenario)
+            if self.scenario is None:  # the address's values: drop the refused one, keep the rest
+                key = getattr(exc, "key", "")
+                if key in self.settings.overrides:
+                    del self.settings.overrides[key]
+                else:
+                    self.settings = Settings(scenario=self.settings.scenario)
                 self._recompute(replay=replay, notes=[*notes, f"Not applied: {logic.message(exc)}"])
                 return
             # back to the settings in force, and every control showing them (a refused slider
