@@ -48,7 +48,8 @@ log = logging.getLogger("emdm.play")
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 JOINT_COLORS = ("white", "#F0E442", "#CC79A7", "black", "#444444")
 """Fill of the joint markers by state (see :data:`emdm.play.logic.JOINT_STATES`)."""
-SCENE, PLOT_W, PLOT_H = 560, 290, 210
+SCENE, PLOT_W, PLOT_H = 460, 250, 180
+"""Sizes (px) that fit a projector's 1280 x 720 with the explanation in view."""
 
 
 @cache
@@ -146,16 +147,17 @@ class Session:
         controls = self._controls()
         transport = self._transport()
         sheet: list[Any] = [InlineStyleSheet(css=asset("play.css"))]
-        self.status = Div(width=2 * PLOT_W, stylesheets=sheet, name="status")
+        self.status = Div(width=SCENE, stylesheets=sheet, name="status")
         self.banner = Div(width=280 + SCENE + 2 * PLOT_W, stylesheets=sheet, name="banner")
-        self.legend = Div(width=SCENE, stylesheets=sheet)
+        self.legend = Div(width=2 * PLOT_W, stylesheets=sheet)
         header = Div(
             text="<b>emdm playground</b> &nbsp; drag the &#9733; goal or the hollow joints of "
             "the start pose; move a slider; press Play",
             styles={"font-size": "18px"},
         )
-        middle = column(self.scene, transport, self.legend)
-        layout = column(header, self.banner, row(controls, middle, column(self.plots, self.status)))
+        # the explanation under the scene, in view at 1280 x 720; the legend under the plots
+        middle = column(self.scene, transport, self.status)
+        layout = column(header, self.banner, row(controls, middle, column(self.plots, self.legend)))
         frame = CustomJS(
             args={
                 "scrub": self.scrub,
@@ -299,7 +301,7 @@ class Session:
             text_color="#222222",
         )
         self.scale_note = Label(
-            x=SCENE - 300,
+            x=SCENE - 270,
             y=8,
             x_units="screen",
             y_units="screen",
@@ -858,8 +860,9 @@ class Session:
             f'(both runs <span class="runs">{ms["runs"]}</span> ms); Pareto front '
             f'<span class="front">{ms["front"]}</span> ms</p>'
         )
+        # the explanation first: it is what a teacher reads out, and it stays in view
         self.status.text = (
-            f'<table class="status"><tr><th></th>{head}</tr>{body}</table>{why}{timing}'
+            f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>{timing}'
         )
 
     def _refresh_front(self) -> None:
