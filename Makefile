@@ -33,8 +33,9 @@ unit: $(STAMP)
 
 test: lint typecheck unit
 
-fuzz: $(STAMP)   # the long fuzzing profile: 10,000 cases per test (EMDM_FUZZ_EXAMPLES=N for more)
+fuzz: $(STAMP)   # the long profiles: 10,000 cases per fuzz test, signals at 200 random moments
 	EMDM_FUZZ_EXAMPLES=$${EMDM_FUZZ_EXAMPLES:-10000} $(BIN)/pytest -n 2 tests/test_fuzz.py
+	EMDM_SIGNAL_MOMENTS=$${EMDM_SIGNAL_MOMENTS:-200} $(BIN)/pytest tests/test_signals.py -k random_moment
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from emdm.cli import main
@@ -223,3 +224,85 @@ def test_a_second_signal_stops_at_once(tmp_path):
             process.kill()
     assert process.returncode == 130 and time.monotonic() - start < 10
     assert err.strip() == "emdm: interrupted again; stopped at once"
+
+
+MOMENTS = int(os.environ.get("EMDM_SIGNAL_MOMENTS", "3"))
+
+
+def handled(process: subprocess.Popen[str], timeout: float) -> None:
+    """Wait until ``process`` catches SIGTERM (Linux: its ``SigCgt`` mask), i.e. until the
+    command's handler is installed, or it has ended."""
+    deadline = time.monotonic() + timeout
+    while process.poll() is None and time.monotonic() < deadline:
+        try:
+            status = Path(f"/proc/{process.pid}/status").read_text()
+        except OSError:
+            return
+        mask = next(
+            (int(line.split()[1], 16) for line in status.splitlines() if line.startswith("SigCgt")),
+            0,
+        )
+        if mask & (1 << (signal.SIGTERM - 1)):
+            return
+        time.sleep(0.01)
+
+
+"""Random moments per run of :func:`test_a_signal_at_a_random_moment_loses_nothing` (``make fuzz``
+sets 200)."""
+
+
+def test_a_signal_at_a_random_moment_loses_nothing(tmp_path):
+    """SIGINT, SIGTERM, SIGHUP or SIGKILL at a random moment of ``emdm run`` (kernels loading,
+    the runs, writing, the swap) over earlier results: the command either finished (exit 0,
+    complete new results) or stopped (128 + signal and one line, or killed) with the earlier
+    results byte for byte; no staging folder survives a catchable signal, no process is left.
+
+    The moment is drawn after the command has installed its handler. Not covered: the first
+    second, while ``import emdm`` (numba) runs before it can; a SIGINT there still prints
+    Python's traceback (issue 25)."""
+    rng = np.random.default_rng(int.from_bytes(os.urandom(4), "little"))
+    out = tmp_path / "out"
+    assert main(["run", "task1", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    env = {**os.environ, "EMDM_PROGRESS": "0"}
+    signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGKILL]
+    for _ in range(MOMENTS):
+        before = snapshot(out)
+        sig = signals[int(rng.integers(len(signals)))]
+        delay = float(rng.uniform(0.0, 1.6))
+        process = subprocess.Popen(
+            [*COMMAND, "run", "task1", "--controller", "C-EMDM,C-IVKC", "--out", str(out)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        handled(process, timeout=60.0)
+        time.sleep(delay)
+        kids = descendants(process.pid) if process.poll() is None else set()
+        if process.poll() is None:
+            process.send_signal(sig)
+        _, err = process.communicate(timeout=60)
+        code = process.returncode
+        moment = f"{sig.name} after {delay:.2f} s: exit {code}, {err!r}"
+        assert "Traceback" not in err, moment
+        assert gone(kids) == [], moment
+        after = snapshot(out)
+        if code == 0:
+            assert "trajectories/C-IVKC.csv" in after and ".emdm-results" in after, moment
+        else:
+            complete = "trajectories/C-IVKC.csv" in after and ".emdm-results" in after
+            if sig == signal.SIGKILL:  # killed at once: the earlier results or the new ones
+                assert code == -signal.SIGKILL and (after == before or complete), moment
+            else:  # 128 + signal and one line that says what is on disk
+                assert code == 128 + sig, moment
+                line = err.strip().splitlines()[-1]
+                assert line.startswith("emdm: "), moment
+                if after != before:  # the signal came during or after the swap
+                    assert complete and "was written before that" in line, moment
+        if sig != signal.SIGKILL:
+            left = [p.name for p in tmp_path.iterdir() if p.name != "out"]
+            assert left == [], moment
+        # what a killed command left is tidied by the next one (tested above); start clean
+        for p in tmp_path.iterdir():
+            if p.name != "out":
+                subprocess.run(["rm", "-rf", str(p)], check=True)

@@ -1,7 +1,5 @@
 """``python -m emdm.cli``: the same as the ``emdm`` command."""
 
-import sys
+from .main import console
 
-from .main import main
-
-sys.exit(main())
+console()

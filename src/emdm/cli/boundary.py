@@ -52,6 +52,7 @@ class RunStopped(EmdmError):
 class _State:
     owner = 0
     stopping = False
+    late = False  # a signal came after the command (_late)
 
 
 # ------------------------------------------------------------------------------ child processes
@@ -163,9 +164,20 @@ def _handler(signum: int, frame: FrameType | None) -> None:
     raise Interrupted(signum)
 
 
+def _late(signum: int, frame: FrameType | None) -> None:
+    """After the command of a process that ends with it: its outcome and exit status are
+    decided (and its results in place), so a first signal is ignored rather than let kill the
+    process with a status that says it stopped; a second one stops at once."""
+    if _State.late:
+        os._exit(128 + signum)
+    _State.late = True
+
+
 @contextlib.contextmanager
-def handling_signals() -> Iterator[None]:
-    """SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` (in the main thread only)."""
+def handling_signals(final: bool = False) -> Iterator[None]:
+    """SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` (in the main thread only). With
+    ``final`` (the ``emdm`` process, which ends with the command), :func:`_late` handles them
+    afterwards instead of the handlers in force before."""
     import threading
 
     if threading.current_thread() is not threading.main_thread():
@@ -181,7 +193,7 @@ def handling_signals() -> Iterator[None]:
         yield
     finally:
         for signum, old in previous.items():
-            signal.signal(signum, old)
+            signal.signal(signum, _late if final else old)
         if _State.stopping:  # the handler silenced logging and warnings while stopping
             logging.disable(logging.NOTSET)
             warnings.filters[:] = filters  # type: ignore[index]
@@ -275,12 +287,13 @@ def _quiet_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
 
 
-def run_command(command: Callable[[], int]) -> int:
-    """Run ``command`` inside the boundary; returns the exit status."""
+def run_command(command: Callable[[], int], *, final: bool = False) -> int:
+    """Run ``command`` inside the boundary; returns the exit status (``final``: the process
+    ends with it, :func:`handling_signals`)."""
     records.COMMITTED.clear()
     clear_stop()
     try:
-        with handling_signals():
+        with handling_signals(final):
             try:
                 with contextlib.redirect_stdout(_GuardedStdout(sys.stdout)):
                     status = int(command())

@@ -9,9 +9,11 @@ work; results are staged and replace ``--out`` as a whole only when the command 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import shutil
+import signal
 import sys
 import time
 import warnings
@@ -51,7 +53,7 @@ from .args import (
     scenario_name,
     text,
 )
-from .boundary import RunStopped, run_command
+from .boundary import HANDLED, RunStopped, run_command
 from .progress import Progress, say
 from .tables import lab_table, summary_table
 
@@ -949,14 +951,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``emdm`` command; returns the exit status."""
+def main(argv: Sequence[str] | None = None, *, final: bool = False) -> int:
+    """The ``emdm`` command; returns the exit status (``final``: this process ends with it,
+    :func:`console`)."""
 
     def command() -> int:
         args = build_parser().parse_args(argv)
         return int(args.func(args))
 
-    return run_command(command)
+    return run_command(command, final=final)
 
 
-__all__ = ["build_parser", "main", "safe", "say"]
+def console() -> None:
+    """Entry point of the ``emdm`` executable and of ``python -m emdm.cli``: the command, then
+    the exit with its status. A signal after the command no longer changes it: Python resets
+    every handler written in Python to the default action when it finalizes, which would kill
+    the process with its results already in place, so the signals are ignored from here on."""
+    status = main(final=True)
+    for signum in HANDLED:
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(signum, signal.SIG_IGN)
+    sys.exit(status)
+
+
+__all__ = ["build_parser", "console", "main", "safe", "say"]
