@@ -27,6 +27,8 @@ LAYERS = {
     "emdm.outputs": 5,
     "emdm.play": 6,
     "emdm.cli": 7,  # the entry point: may start the playground
+    "emdm.entry": 8,  # the executable's first lines: signal handlers, then the command line
+    "emdm.__main__": 8,  # python -m emdm
 }
 """Rank of each layer: a module may import modules of its own layer or of lower ranks."""
 
@@ -145,7 +147,7 @@ print(json.dumps({"pyplot": "matplotlib.pyplot" in sys.modules, "changed": chang
 
 def test_every_module_imports_without_side_effects():
     """Importing any module loads no pyplot and changes no matplotlib setting (the backend)."""
-    names = [n for n in modules() if n != "emdm.cli.__main__"]  # that one runs the command
+    names = [n for n in modules() if n not in ("emdm.cli.__main__", "emdm.__main__")]  # they run
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
     proc = subprocess.run(
         [sys.executable, "-c", IMPORT_ALL, json.dumps(names)],

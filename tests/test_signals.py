@@ -252,14 +252,14 @@ sets 200)."""
 
 
 def test_a_signal_at_a_random_moment_loses_nothing(tmp_path):
-    """SIGINT, SIGTERM, SIGHUP or SIGKILL at a random moment of ``emdm run`` (kernels loading,
-    the runs, writing, the swap) over earlier results: the command either finished (exit 0,
+    """SIGINT, SIGTERM, SIGHUP or SIGKILL at a random moment of ``emdm run`` (imports, kernels
+    loading, the runs, writing, the swap) over earlier results: the command either finished (exit 0,
     complete new results) or stopped (128 + signal and one line, or killed) with the earlier
     results byte for byte; no staging folder survives a catchable signal, no process is left.
 
-    The moment is drawn after the command has installed its handler. Not covered: the first
-    second, while ``import emdm`` (numba) runs before it can; a SIGINT there still prints
-    Python's traceback (issue 25)."""
+    The moment is drawn from when the executable's first lines have installed their handler
+    (:mod:`emdm.entry`, before ``import emdm`` loads numba): loading, the runs, writing, the
+    swap and the exit are all covered."""
     rng = np.random.default_rng(int.from_bytes(os.urandom(4), "little"))
     out = tmp_path / "out"
     assert main(["run", "task1", "--controller", "C-EMDM", "--out", str(out)]) == 0
@@ -268,9 +268,10 @@ def test_a_signal_at_a_random_moment_loses_nothing(tmp_path):
     for _ in range(MOMENTS):
         before = snapshot(out)
         sig = signals[int(rng.integers(len(signals)))]
-        delay = float(rng.uniform(0.0, 1.6))
-        process = subprocess.Popen(
-            [*COMMAND, "run", "task1", "--controller", "C-EMDM,C-IVKC", "--out", str(out)],
+        delay = float(rng.uniform(0.0, 2.8))
+        argv = ["run", "task1", "--controller", "C-EMDM,C-IVKC", "--out", str(out)]
+        process = subprocess.Popen(  # python -m emdm: the executable's own first lines
+            [sys.executable, "-m", "emdm", *argv],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
