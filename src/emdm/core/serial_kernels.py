@@ -203,6 +203,14 @@ def _gradient_by_qr(J: F64, prismatic: B8, first: int, count: int, Jm: F64, qr: 
     return m
 
 
+@kernel(refcount=False, inline=True)
+def _part(B: F64, k: int, first: int, count: int, row: int) -> float:
+    """Entry ``row`` of the 6 rows of column ``k`` of ``B^T`` whose rows ``first`` to
+    ``first + count - 1`` are stored (0 for the others)."""
+    a = row - first
+    return B[k, a] if 0 <= a < count else 0.0
+
+
 @kernel(refcount=False)
 def _contract(J: F64, prismatic: B8, first: int, count: int, B: F64, m: float, Jm: F64) -> None:
     """``Jm_i = m sum_{a,k} B[k, a] H[i, first + a, k]`` without forming ``H``
@@ -216,21 +224,16 @@ def _contract(J: F64, prismatic: B8, first: int, count: int, B: F64, m: float, J
     n = J.shape[1]
     ax = ay = az = 0.0  # suffix sum of v_k x b_k + z_k x c_k over k > i
     for i in range(n - 1, -1, -1):
-        bx = by = bz = cx = cy = cz = 0.0
-        for a in range(count):
-            r = first + a
-            if r == 0:
-                bx = B[i, a]
-            elif r == 1:
-                by = B[i, a]
-            elif r == 2:
-                bz = B[i, a]
-            elif r == 3:
-                cx = B[i, a]
-            elif r == 4:
-                cy = B[i, a]
-            else:
-                cz = B[i, a]
+        bx, by, bz = (
+            _part(B, i, first, count, 0),
+            _part(B, i, first, count, 1),
+            _part(B, i, first, count, 2),
+        )
+        cx, cy, cz = (
+            _part(B, i, first, count, 3),
+            _part(B, i, first, count, 4),
+            _part(B, i, first, count, 5),
+        )
         vx, vy, vz = J[0, i], J[1, i], J[2, i]
         zx, zy, zz = J[3, i], J[4, i], J[5, i]
         # v_i x b_i, which the sum for i itself includes (a revolute i only)
@@ -247,15 +250,11 @@ def _contract(J: F64, prismatic: B8, first: int, count: int, B: F64, m: float, J
         vx, vy, vz = J[0, i], J[1, i], J[2, i]
         Jm[i] = m * (Jm[i] + vx * px + vy * py + vz * pz)
         if not prismatic[i]:
-            bx = by = bz = 0.0
-            for a in range(count):
-                r = first + a
-                if r == 0:
-                    bx = B[i, a]
-                elif r == 1:
-                    by = B[i, a]
-                elif r == 2:
-                    bz = B[i, a]
+            bx, by, bz = (
+                _part(B, i, first, count, 0),
+                _part(B, i, first, count, 1),
+                _part(B, i, first, count, 2),
+            )
             zx, zy, zz = J[3, i], J[4, i], J[5, i]
             px += by * zz - bz * zy
             py += bz * zx - bx * zz

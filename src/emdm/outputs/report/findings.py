@@ -105,6 +105,10 @@ class Story:
     def evidn(self, key: str, *path: str | int, fmt: str, unit: str = "") -> Num:
         return self.d.num("data/evidence.json", "runs", key, *path, fmt=fmt, unit=unit)
 
+    def evid_goal(self, key: str, ctrl: str) -> Num:
+        """The time to goal of ``ctrl`` in the evidence run ``key``."""
+        return self.evid_goal(key, ctrl)
+
     def pct(self, task: str, a: str, b: str, key: str) -> Num:
         f = f"data/{task}/metrics.json"
         return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
@@ -223,14 +227,7 @@ class Story:
             if e4.get("reached"):
                 out += sentence(
                     " (with a slack instead it arrives in ",
-                    self.evidn(
-                        "t2-c-ivkc-slack-policy",
-                        "runs",
-                        Name.C_IVKC,
-                        "time_to_goal",
-                        fmt=".2f",
-                        unit="s",
-                    ),
+                    self.evid_goal("t2-c-ivkc-slack-policy", Name.C_IVKC),
                     ")",
                 )
             out += sentence(
@@ -241,14 +238,7 @@ class Story:
             if e6.get("reached") and e6["time_to_goal"] < self.mv(t2, Name.C_EMDM, "time_to_goal"):
                 out += sentence(
                     "; without the dexterity term it arrives sooner (",
-                    self.evidn(
-                        "t2-c-emdm-no-manip",
-                        "runs",
-                        Name.C_EMDM,
-                        "time_to_goal",
-                        fmt=".2f",
-                        unit="s",
-                    ),
+                    self.evid_goal("t2-c-emdm-no-manip", Name.C_EMDM),
                     ")",
                 )
             out += sentence(". ")
@@ -1328,9 +1318,7 @@ class Story:
                 " behaves like ",
                 ivkc,
                 " (goal in ",
-                self.evidn(
-                    "t2-uc-emdm-stiff-slack", "runs", emdm, "time_to_goal", fmt=".2f", unit="s"
-                ),
+                self.evid_goal("t2-uc-emdm-stiff-slack", emdm),
                 ", effort ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
@@ -1937,9 +1925,7 @@ class Story:
                     "identical steps: ", self.evidn(key, "pair", "coincide_steps", fmt="d")
                 )
             elif run.get("reached"):
-                out = sentence(
-                    "goal in ", self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
-                )
+                out = sentence("goal in ", self.evid_goal(key, ctrl))
             else:
                 out = sentence(
                     "stalls, ",

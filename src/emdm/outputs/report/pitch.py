@@ -104,14 +104,7 @@ class Pitch:
             ev.append(
                 sentence(
                     "C-IVKC with free slack instead of task scaling: goal in ",
-                    s.evidn(
-                        "t2-c-ivkc-slack-policy",
-                        "runs",
-                        Name.C_IVKC,
-                        "time_to_goal",
-                        fmt=".2f",
-                        unit="s",
-                    ),
+                    s.evid_goal("t2-c-ivkc-slack-policy", Name.C_IVKC),
                 )
             )
         e6 = s.evid("t2-c-emdm-no-manip", "runs", Name.C_EMDM)
@@ -121,14 +114,7 @@ class Pitch:
                     "C-EMDM without the dexterity term (",
                     W_M,
                     " = 0): goal in ",
-                    s.evidn(
-                        "t2-c-emdm-no-manip",
-                        "runs",
-                        Name.C_EMDM,
-                        "time_to_goal",
-                        fmt=".2f",
-                        unit="s",
-                    ),
+                    s.evid_goal("t2-c-emdm-no-manip", Name.C_EMDM),
                     ", sooner",
                 )
             )
