@@ -107,7 +107,7 @@ class Story:
 
     def evid_goal(self, key: str, ctrl: str) -> Num:
         """The time to goal of ``ctrl`` in the evidence run ``key``."""
-        return self.evid_goal(key, ctrl)
+        return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
 
     def pct(self, task: str, a: str, b: str, key: str) -> Num:
         f = f"data/{task}/metrics.json"
