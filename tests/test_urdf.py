@@ -380,6 +380,16 @@ def test_a_urdf_file_is_a_template_scenario_and_every_command_takes_it(tmp_path:
     assert batch.reached.all()
 
 
+def test_a_template_for_fewer_than_six_joints_measures_the_rows_it_tracks() -> None:
+    """A position task's manipulability is that of the three linear rows: with all six, a
+    five-joint arm's m is 0 on every step (found by the example notebooks)."""
+    path, _, _ = robot("so100")
+    sc = load_scenario(path, {"arm.tip_link": "gripper"})  # the arm without its jaw: 5 joints
+    assert sc.n == 5 and sc.motion.task == "position" and sc.motion.axes == "trans"
+    run = emdm.simulate(sc, "C-EMDM")
+    assert run.reached and run.m.min() > 0
+
+
 def test_obstacles_need_revolute_joints(tmp_path: Path) -> None:
     path = _write(
         tmp_path, _robot(("j1", "revolute", "a", "b"), ("j2", "prismatic", "b", "c")), "p.urdf"

@@ -65,7 +65,7 @@ def urdf_template(path: str | Path, overrides: Mapping[str, Any] | None = None) 
     data = {
         "name": Path(path).stem,
         "arm": arm,
-        "motion": {"task": task, "q0": q0.tolist(), "goal": goal},
+        "motion": {"task": task, "axes": axes, "q0": q0.tolist(), "goal": goal},
     }
     scenario = scenario_from_dict(data, source=source)
     return scenario.with_overrides(overrides) if overrides else scenario
