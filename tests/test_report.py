@@ -252,3 +252,36 @@ def test_a_bad_title_is_one_line_and_nothing_runs(tmp_path, capsys):
     assert main(["report", "--quick", "--title", "a\nb", "--out", str(out)]) == 2
     assert "--title: the title must be one line" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_byline_from_a_config_file(tmp_path, capsys):
+    """``emdm report --config FILE`` reads ``authors`` and ``title``; a bad file is one line with
+    exit status 2 naming the file and the key, before anything runs."""
+    from emdm.cli import main
+    from emdm.errors import ScenarioError
+    from emdm.outputs.report.config import read_byline
+
+    good = tmp_path / "byline.toml"
+    good.write_text('authors = ["Ada Lovelace", "Alan Turing"]\ntitle = "Ours"\n', "utf-8")
+    assert read_byline(good) == {"authors": ["Ada Lovelace", "Alan Turing"], "title": "Ours"}
+    cases = {
+        'authors = "Ada"': "authors: must be a list",
+        "authors = [1]": "authors: must be a list",
+        'title = ["x"]': "title: must be a string",
+        'title = "a\\nb"': "title: the title must be one line",
+        'authors = [" "]': "authors: an author's name must not be empty",
+        'author = ["Ada"]': "author: unknown key",
+        "authors = [": "not a valid TOML file",
+    }
+    for text, message in cases.items():
+        bad = tmp_path / "bad.toml"
+        bad.write_text(text, "utf-8")
+        with pytest.raises(ScenarioError, match=message):
+            read_byline(bad)
+        out = tmp_path / "r"
+        assert main(["report", "--quick", "--config", str(bad), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"{bad}: " in err and message in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+    with pytest.raises(ScenarioError, match="cannot be read"):
+        read_byline(tmp_path / "missing.toml")

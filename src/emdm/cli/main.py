@@ -434,7 +434,9 @@ def cmd_pareto(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------------- report
 def cmd_report(args: argparse.Namespace) -> int:
     from ..outputs.report import build_report
+    from ..outputs.report.config import read_byline
 
+    names = read_byline(args.config) if args.config else {}
     out = _out(args, "report")
     start = time.perf_counter()
     with Progress(f"report ({'quick' if args.quick else 'full'})", unit="part") as bar:
@@ -443,8 +445,8 @@ def cmd_report(args: argparse.Namespace) -> int:
             quick=args.quick,
             workers=args.workers,
             progress=lambda m: bar.step(note=m),
-            authors=args.author or (),
-            title=args.title,
+            authors=args.author or names.get("authors", ()),
+            title=args.title if args.title is not None else names.get("title"),
         )
     if prov.get("compiled", {}).get("hint"):
         print(prov["compiled"]["hint"], file=sys.stderr)
@@ -799,6 +801,11 @@ def build_parser() -> argparse.ArgumentParser:
         type=text("the title", LONGEST_TITLE),
         metavar="TEXT",
         help="the paper's and the pitch's title (default: the study's own)",
+    )
+    rep.add_argument(
+        "--config",
+        metavar="FILE",
+        help='a TOML file with authors = ["...", ...] and title = "..." (the options win)',
     )
     add_out(rep, "results/report")
     rep.set_defaults(func=cmd_report)

@@ -166,24 +166,33 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
-def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
+def pair_figure(
+    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, joints: bool = True
+) -> Path:
     """A pair in one composite: (a) m(t), (b) E(t), (c) the tracking error ||e||(t) above,
-    (d) q(t) and (e) qd(t) below, one strip per joint."""
+    (d) q(t) and (e) qd(t) below, one strip per joint; with ``joints=False`` the upper row
+    alone (a pair whose joints the text describes in a sentence)."""
     sc = runs[0].scenario
-    n = sc.n
+    n = sc.n if joints else 0
     spans = _common_scaled(runs)
-    height = (2.75 if n == 3 else 2.45) if medium is PAPER else 3.4
+    if not joints:
+        height = 1.0 if medium is PAPER else 1.6
+    else:
+        height = (2.75 if n == 3 else 2.2) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)
-        outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
-        upper = outer[0].subgridspec(1, 3)
-        lower = outer[1].subgridspec(1, 2)
+        if joints:
+            outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
+            upper = outer[0].subgridspec(1, 3)
+            lower = outer[1].subgridspec(1, 2)
+        else:
+            upper = fig.add_gridspec(1, 3)
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
-        q_axes = _column(fig, lower[0, 0], n)
-        qd_axes = _column(fig, lower[0, 1], n)
+        q_axes = _column(fig, lower[0, 0], n) if joints else []
+        qd_axes = _column(fig, lower[0, 1], n) if joints else []
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
@@ -239,14 +248,15 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
-        q_axes[-1].set_xlabel(r"$t$ (s)")
-        qd_axes[-1].set_xlabel(r"$t$ (s)")
-        q_axes[0].set_title(
-            r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
-        )
-        qd_axes[0].set_title(
-            r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
-        )
+        if joints:
+            q_axes[-1].set_xlabel(r"$t$ (s)")
+            qd_axes[-1].set_xlabel(r"$t$ (s)")
+            q_axes[0].set_title(
+                r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
+            )
+            qd_axes[0].set_title(
+                r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
+            )
         # panel letters above the axes, where no curve can hide them
         for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
@@ -278,7 +288,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 1.95 if medium is PAPER else 2.7
+    height = 1.8 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))

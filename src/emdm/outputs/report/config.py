@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from ...core.controllers import Name
+from ...errors import ScenarioError
 from ...studies.lab import DEFAULT_LAB_SOLVERS
 
 
@@ -84,6 +87,38 @@ def byline(authors: Sequence[str] = (), title: str | None = None) -> dict[str, A
     if title is not None:
         out["title"] = check_text("the title", title, LONGEST_TITLE)
     return out
+
+
+def read_byline(path: str | Path) -> dict[str, Any]:
+    """The byline of a TOML file with the keys ``authors`` (a list of names, in order) and
+    ``title`` (optional), as in::
+
+        authors = ["Ada Lovelace", "Alan Turing"]
+        title = "Dexterity at a price"
+
+    Raises :class:`~emdm.errors.ScenarioError` (one line naming the file and the key) when the
+    file cannot be read or parsed, holds another key, or a value is not what :func:`byline`
+    accepts."""
+    source = str(path)
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(source, "", f"cannot be read: {exc}") from None
+    except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or nested too deeply
+        raise ScenarioError(source, "", f"not a valid TOML file: {exc}") from None
+    unknown = sorted(set(data) - {"authors", "title"})
+    if unknown:
+        raise ScenarioError(source, unknown[0], "unknown key (the keys are authors and title)")
+    authors, title = data.get("authors", []), data.get("title")
+    if not isinstance(authors, list) or not all(isinstance(a, str) for a in authors):
+        raise ScenarioError(source, "authors", "must be a list of names (strings)")
+    if title is not None and not isinstance(title, str):
+        raise ScenarioError(source, "title", "must be a string")
+    try:
+        return byline(authors, title)
+    except ValueError as exc:
+        key = "title" if str(exc).startswith("the title") else "authors"
+        raise ScenarioError(source, key, str(exc)) from None
 
 
 TASKS = ("task1", "task2")

@@ -313,7 +313,7 @@ class Story:
         return sec
 
     # ------------------------------------------------------------------ Task 1
-    def pair_caption(self, task: str, group: str) -> Sentence:
+    def pair_caption(self, task: str, group: str, joints: bool = True) -> Sentence:
         ivkc, emdm = PAIRS[group]
         out = sentence(
             f"{ivkc} (solid) against {emdm} (dashed): (a) manipulability ",
@@ -327,6 +327,13 @@ class Story:
             " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
             "limits and damper influence and stop zones, (e) joint velocities with their limits.",
         )
+        if not joints:  # the upper row of a pair figure drawn before
+            out = sentence(f"{ivkc} (solid) against {emdm} (dashed): ")
+            out += (
+                sentence("panels (a)-(c) as in ", Ref("fig", "t2-c"), ".")
+                if self.has_figure("t2-c")
+                else sentence("(a) manipulability, (b) effort, (c) tracking error.")
+            )
         if (
             self.pair(task, group, "coincide_scaled_steps")
             and self.pair(task, group, "coincide_all_scaled") is not None
@@ -616,9 +623,9 @@ class Story:
                     p += sentence(
                         "C-EMDM's front at k = ",
                         self.d.num(c, "steps", i, "k", fmt="d"),
-                        " is a single point: the step is task-scaled (",
+                        " is one point, which no weight can move: the step is task-scaled (",
                         *eq(ALPHA, self.d.num(c, "steps", i, "alpha", fmt=".2f")),
-                        "), its admissible set is one point, and no weight can move it. ",
+                        ") and its admissible set a single point. ",
                     )
             sat = [(i, s) for i, s in enumerate(csteps) if s["saturated_from_ratio"] is not None]
             if sat:
@@ -742,8 +749,7 @@ class Story:
             self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
-            " iterations and terminates finitely, each iteration being an exact "
-            "equality-constrained solve",
+            " iterations, each an exact equality-constrained solve",
         )
         lab = "data/task1-lab-C-EMDM/solvers.json"
         ch: dict[str, Any] = {}
@@ -1189,21 +1195,26 @@ class Story:
                 paper=False,
             )
         )
-        p = sentence("Quality: ")
-        for k in inexact_free:
+        p = sentence("Quality (", Ref("tab", "solvers"), "): ")
+        if inexact_free:
+            # the worst of them: every solver's own figures are in Table III
+            worst = max(inexact_free, key=lambda k: rows[k]["max_abs_gap"])
             p += sentence(
-                k,
-                " leaves gaps up to ",
-                self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g"),
+                "the inexact gradient-free solvers leave gaps up to ",
+                self.d.num(f, "solvers", worst, "max_abs_gap", fmt=".2g"),
+                f" ({worst})",
             )
-            if rows[k]["max_violation"] > 1e-6:
+            violators = [k for k in inexact_free if rows[k]["max_violation"] > 1e-6]
+            if violators:
+                bad = max(violators, key=lambda k: rows[k]["max_violation"])
                 p += sentence(
-                    " and violates the bounds by up to ",
-                    self.d.num(f, "solvers", k, "max_violation", fmt=".2g"),
+                    " and violate the bounds by up to ",
+                    self.d.num(f, "solvers", bad, "max_violation", fmt=".2g"),
+                    f" ({bad})",
                 )
             p += sentence("; ")
         p += sentence(
-            "in closed loop, where each solver's answers are used as they are, ",
+            "in closed loop (each solver's answers used as they are) ",
         )
         ref_t = rows.get("active-set", {}).get("time_to_goal")
         slower = [
@@ -1214,27 +1225,19 @@ class Story:
             and rows[k]["time_to_goal"] > ref_t + 1e-9
         ]
         if slower:
-            for i, k in enumerate(slower):
-                p += sentence(
-                    k,
-                    " reaches the goal in ",
-                    self.d.num(f, "solvers", k, "time_to_goal", fmt=".2f", unit="s"),
-                    ", " if i < len(slower) - 1 else "",
-                )
             p += sentence(
-                " instead of ",
-                self.d.num(f, "solvers", "active-set", "time_to_goal", fmt=".2f", unit="s"),
-                ". ",
+                " and ".join(slower),
+                " reach" if len(slower) > 1 else " reaches",
+                " the goal later (last column). ",
             )
         else:
             p += sentence("every solver reaches the goal at the same time. ")
         p += (
             sentence(
-                "Recommendation: solve these programs with an exact active-set QP method (the custom "
-                "one takes ",
+                "Recommendation: an exact active-set QP method (the custom one: ",
                 self.d.ms(f, "solvers", "active-set", "median_time"),
-                "), or, with a general solver, a gradient-based one; gradient-free methods suit "
-                "objectives without gradients, and these convex quadratics have exact ones.",
+                "), else a gradient-based solver; gradient-free methods are for objectives "
+                "without gradients.",
             )
             if "active-set" in rows
             else []
@@ -1246,6 +1249,10 @@ class Story:
         t = "task2"
         ivkc, emdm = PAIRS["UC"]
         sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
+        if self.d.exists("paper/figures/task2-UC.png"):
+            sec.figures.append(
+                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC", joints=False))
+            )
         answer = (
             sentence(
                 f"Both unconstrained controllers reach the goal ({ivkc} in ",
@@ -1279,7 +1286,9 @@ class Story:
             self.pct(t, emdm, ivkc, "mean_manipulability"),
             ", as the slack absorbs up to ",
             *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
-            " of the desired velocity.",
+            " of the desired velocity",
+            *((" (", Ref("fig", "t2-uc"), ")") if self.has_figure("t2-uc") else ()),
+            ".",
         )
         sec.answer = answer
         self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))
@@ -1330,10 +1339,6 @@ class Story:
                 " is large.",
             )
         sec.paragraphs.append(p)
-        if self.d.exists("paper/figures/task2-UC.png"):
-            sec.figures.append(
-                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
-            )
         return sec
 
     def task2_challenges(self) -> Section:
@@ -1799,11 +1804,10 @@ class Story:
         table = Table(
             "solvers",
             sentence(
-                "Task 2 C-EMDM solvers on the same re-solved programs: median time, median "
-                "iterations/evaluations, largest gap to the exact optimum and bound violation "
-                "(0: below ",
+                "Task 2 C-EMDM solvers on the same re-solved programs: median time and "
+                "iterations/evaluations, largest gap to the optimum and bound violation (0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "); time to goal when each solver alone runs the loop.",
+                "); time to goal with each solver alone in the loop.",
             ),
             [
                 sentence("solver"),
