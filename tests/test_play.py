@@ -12,6 +12,7 @@ import sys
 import time
 import tomllib
 import urllib.error
+import urllib.parse
 import urllib.request
 import warnings
 from pathlib import Path
@@ -92,6 +93,25 @@ def test_the_address_may_carry_settings_and_bad_values_get_a_message():
     assert settings == Settings("task1")
     assert len(errors) == 4 and all("\n" not in e for e in errors)
     assert "scenario: unknown '/etc/passwd'" in errors[0]
+
+
+def test_the_address_written_by_the_page_reads_back_to_the_same_settings():
+    settings = Settings(
+        "task2",
+        5,
+        "UC",
+        {
+            "weights.effort": 0.1 + 0.2,  # every digit of a float survives
+            "motion.goal": [-0.3, 0.6000000001],
+            "controller.on_infeasible": "slack",
+        },
+    )
+    query = logic.settings_query(settings)
+    arguments: dict[str, list[bytes]] = {}
+    for key, value in urllib.parse.parse_qsl(query):
+        arguments.setdefault(key, []).append(value.encode())
+    again, errors = logic.parse_query(arguments, ["task1", "task2"])
+    assert errors == [] and again == settings
 
 
 def test_links_keep_the_reach_and_a_valid_start(bases):
@@ -494,6 +514,15 @@ def test_the_page_in_a_real_browser(tmp_path):
         _wait(driver, MODEL + ".tags[0].includes('manipulability = 0.0\\n')", "save-toml")
         assert "w_M = 0," in driver.execute_script(MODEL + ".tags[1]", "save-png")
 
+        # the address holds the settings in force, and a reload restores them
+        _wait(driver, "return location.search.includes('weights.manipulability=0.0')")
+        assert "motion.goal=" in driver.execute_script("return location.search")
+        driver.refresh()
+        _wait(driver, READY)
+        _wait(driver, MODEL + ".text.includes('C-EMDM')", "status")
+        assert driver.execute_script(MODEL + ".data.x[0]", "goal") == pytest.approx(0.3, abs=4e-3)
+        assert "manipulability = 0.0\n" in driver.execute_script(MODEL + ".tags[0]", "save-toml")
+
         # export the scenario and run it with emdm run
         driver.execute_script(
             "Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name('save-toml'))"
@@ -530,6 +559,33 @@ def test_the_page_in_a_real_browser(tmp_path):
     finally:
         driver.quit()
         stop_server(proc, signal.SIGINT)
+
+
+@pytest.mark.slow
+def test_the_page_reconnects_after_a_server_restart(tmp_path):
+    """The server stops: the page says so; it comes back on the same port: the page reloads
+    itself with the settings of its address."""
+    from emdm.play.server import free_port
+
+    port = str(free_port())
+    driver = _browser(tmp_path)
+    proc, url = start_server("--port", port, "task2")
+    try:
+        driver.get(url + "?scenario=task2&pair=UC&weights.effort=0.2")
+        _wait(driver, READY)
+        _wait(driver, MODEL + ".text.includes('UC-EMDM')", "status")
+        stop_server(proc, signal.SIGTERM)
+        _wait(driver, MODEL + ".text.includes('Connection to emdm play lost')", "banner")
+        driver.execute_script("window.emdm_before_restart = true")
+        proc, _ = start_server("--port", port, "task2")
+        _wait(driver, "return window.emdm_before_restart == null && " + READY[7:], timeout=30)
+        _wait(driver, MODEL + ".text.includes('UC-EMDM')", "status", timeout=30)
+        assert "effort = 0.2\n" in driver.execute_script(MODEL + ".tags[0]", "save-toml")
+        assert "lost" not in _text(driver, "banner")
+    finally:
+        driver.quit()
+        if proc.poll() is None:
+            stop_server(proc, signal.SIGTERM)
 
 
 def test_a_moving_slider_and_a_playing_motion_are_throttled(session):

@@ -18,12 +18,14 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+from urllib.parse import urlencode
 
 import numpy as np
 
 from ..core.controllers import Controller, Name, get_controller
 from ..core.loading import parse_override
 from ..core.scenario import Scenario, scenario_from_dict
+from ..core.schema import toml_value
 from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
 from ..sim.loop import Run, simulate
@@ -226,6 +228,16 @@ def parse_query(
                 f"{one_line(name)[:100]}: unknown parameter (scenario, pair, links or section.key)"
             )
     return settings, errors
+
+
+def settings_query(settings: Settings) -> str:
+    """The page address's query for ``settings``, which :func:`parse_query` reads back to the
+    same settings (values written as TOML, so a text such as ``"scale"`` stays a text)."""
+    params = [("scenario", settings.scenario), ("pair", settings.pair)]
+    if settings.links is not None:
+        params.append(("links", str(settings.links)))
+    params += [(key, toml_value(value)) for key, value in sorted(settings.overrides.items())]
+    return urlencode(params)
 
 
 def export_toml(scenario: Scenario) -> str:

@@ -150,6 +150,14 @@ class Session:
         self.status = Div(width=SCENE, stylesheets=sheet, name="status")
         self.banner = Div(width=280 + SCENE + 2 * PLOT_W, stylesheets=sheet, name="banner")
         self.legend = Div(width=2 * PLOT_W, stylesheets=sheet)
+        # the settings in force as the page address's query (address.js writes it to the URL)
+        self.address = Div(text="", visible=False, name="address")
+        address = CustomJS(args={"address": self.address}, code=asset("address.js"))
+        self.address.js_on_change("text", address)
+        self.doc.js_on_event("document_ready", address)
+        self.doc.js_on_event(
+            "connection_lost", CustomJS(args={"banner": self.banner}, code=asset("reconnect.js"))
+        )
         header = Div(
             text="<b>emdm playground</b> &nbsp; drag the &#9733; goal or the hollow joints of "
             "the start pose; move a slider; press Play",
@@ -157,7 +165,12 @@ class Session:
         )
         # the explanation under the scene, in view at 1280 x 720; the legend under the plots
         middle = column(self.scene, transport, self.status)
-        layout = column(header, self.banner, row(controls, middle, column(self.plots, self.legend)))
+        layout = column(
+            header,
+            self.banner,
+            row(controls, middle, column(self.plots, self.legend)),
+            self.address,
+        )
         frame = CustomJS(
             args={
                 "scrub": self.scrub,
@@ -690,6 +703,7 @@ class Session:
                 self._syncing = False
             return
         self._valid = copy.deepcopy(self.settings)
+        self.address.text = logic.settings_query(self.settings)
         ran = time.perf_counter()
         outcomes = logic.run_pair(scenario, self.settings.pair)
         self.timing["runs"] = time.perf_counter() - ran
