@@ -166,33 +166,24 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
-def pair_figure(
-    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, joints: bool = True
-) -> Path:
-    """A pair in one composite: (a) m(t), (b) E(t), (c) the tracking error ||e||(t) above,
-    (d) q(t) and (e) qd(t) below, one strip per joint; with ``joints=False`` the upper row
-    alone (a pair whose joints the text describes in a sentence)."""
+def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
+    """A pair (or all four controllers of a task) in one composite: (a) m(t), (b) E(t), (c) the
+    tracking error ||e||(t) above, (d) q(t) and (e) qd(t) below, one strip per joint."""
     sc = runs[0].scenario
-    n = sc.n if joints else 0
+    n = sc.n
     spans = _common_scaled(runs)
-    if not joints:
-        height = 1.0 if medium is PAPER else 1.6
-    else:
-        height = (2.75 if n == 3 else 2.2) if medium is PAPER else 3.4
+    height = (2.75 if n == 3 else 2.3) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)
-        if joints:
-            outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
-            upper = outer[0].subgridspec(1, 3)
-            lower = outer[1].subgridspec(1, 2)
-        else:
-            upper = fig.add_gridspec(1, 3)
+        outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
+        upper = outer[0].subgridspec(1, 3)
+        lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
-        q_axes = _column(fig, lower[0, 0], n) if joints else []
-        qd_axes = _column(fig, lower[0, 1], n) if joints else []
+        q_axes = _column(fig, lower[0, 0], n)
+        qd_axes = _column(fig, lower[0, 1], n)
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
@@ -248,15 +239,14 @@ def pair_figure(
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
-        if joints:
-            q_axes[-1].set_xlabel(r"$t$ (s)")
-            qd_axes[-1].set_xlabel(r"$t$ (s)")
-            q_axes[0].set_title(
-                r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
-            )
-            qd_axes[0].set_title(
-                r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
-            )
+        q_axes[-1].set_xlabel(r"$t$ (s)")
+        qd_axes[-1].set_xlabel(r"$t$ (s)")
+        q_axes[0].set_title(
+            r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
+        )
+        qd_axes[0].set_title(
+            r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
+        )
         # panel letters above the axes, where no curve can hide them
         for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
@@ -268,7 +258,7 @@ def pair_figure(
         fig.legend(
             handles=handles,
             loc="outside upper center",
-            ncols=len(handles),
+            ncols=min(len(handles), 4),
             frameon=False,
             columnspacing=1.0,
         )
@@ -510,7 +500,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.3 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.18 * len(names) + 0.3) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)

@@ -313,7 +313,7 @@ class Story:
         return sec
 
     # ------------------------------------------------------------------ Task 1
-    def pair_caption(self, task: str, group: str, joints: bool = True) -> Sentence:
+    def pair_caption(self, task: str, group: str) -> Sentence:
         ivkc, emdm = PAIRS[group]
         out = sentence(
             f"{ivkc} (solid) against {emdm} (dashed): (a) manipulability ",
@@ -327,13 +327,6 @@ class Story:
             " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
             "limits and damper influence and stop zones, (e) joint velocities with their limits.",
         )
-        if not joints:  # the upper row of a pair figure drawn before
-            out = sentence(f"{ivkc} (solid) against {emdm} (dashed): ")
-            out += (
-                sentence("panels (a)-(c) as in ", Ref("fig", "t2-c"), ".")
-                if self.has_figure("t2-c")
-                else sentence("(a) manipulability, (b) effort, (c) tracking error.")
-            )
         if (
             self.pair(task, group, "coincide_scaled_steps")
             and self.pair(task, group, "coincide_all_scaled") is not None
@@ -516,6 +509,7 @@ class Story:
                     self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"), " steps."
                 )
             sec.paragraphs.append(p)
+            sec.paragraphs.append(self.policy_weighed())
         pinned = self.evv(t, emdm, "pinned")
         p = sentence()
         if pinned:
@@ -1017,10 +1011,35 @@ class Story:
         e6 = self.evid("t2-c-emdm-no-manip", "runs", emdm)
         if e6.get("reached") and reached_e:
             if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
+                higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
                 p += sentence(
-                    f"Without the dexterity term {emdm} still arrives, and sooner (E6): the slack "
-                    "carries it to the goal and the dexterity term slows it down, contrary to "
-                    "what the brief expects",
+                    f"Without the dexterity term {emdm} still arrives, and sooner (E6, ",
+                    self.evid_goal("t2-c-emdm-no-manip", emdm),
+                    ")",
+                    *(
+                        (
+                            ", with a higher mean ",
+                            M_SYM,
+                            " (",
+                            self.evidn(
+                                "t2-c-emdm-no-manip",
+                                "runs",
+                                emdm,
+                                "mean_manipulability",
+                                fmt=".3f",
+                            ),
+                            " against ",
+                            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+                            "): on this arm the term works against its own purpose, and the "
+                            "slack, not the term, carries it to the goal, contrary to what the "
+                            "brief expects",
+                        )
+                        if higher
+                        else (
+                            ": the slack carries it to the goal and the dexterity term slows it "
+                            "down, contrary to what the brief expects",
+                        )
+                    ),
                 )
             else:
                 p += sentence(
@@ -1061,7 +1080,24 @@ class Story:
             ".",
         )
         sec.paragraphs.append(p)
-        sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
+        if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
+            caption = sentence(
+                "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
+                "solid, EMDM dashed): (a) manipulability ",
+                M_SYM,
+                ", (b) effort ",
+                E_SYM,
+                " (log axis, floored at ",
+                Math(r"10^{-9}", "10<sup>−9</sup>"),
+                "), (c) tracking error ",
+                ERR,
+                " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
+                "limits and damper influence and stop zones, (e) joint velocities with their "
+                "limits.",
+            )
+            sec.figures.append(self.figure("t2-c", "figures/task2-all", caption))
+        else:
+            sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
         return sec
 
     @staticmethod
@@ -1249,10 +1285,11 @@ class Story:
         t = "task2"
         ivkc, emdm = PAIRS["UC"]
         sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
-        if self.d.exists("paper/figures/task2-UC.png"):
+        if self.d.exists("paper/figures/task2-UC.png"):  # the page's; the paper's is Fig. t2-c
             sec.figures.append(
-                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC", joints=False))
+                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
             )
+        shown = "t2-c" if self.d.exists("paper/figures/task2-all.png") else "t2-uc"
         answer = (
             sentence(
                 f"Both unconstrained controllers reach the goal ({ivkc} in ",
@@ -1287,7 +1324,7 @@ class Story:
             ", as the slack absorbs up to ",
             *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
             " of the desired velocity",
-            *((" (", Ref("fig", "t2-uc"), ")") if self.has_figure("t2-uc") else ()),
+            *((" (", Ref("fig", shown), ")") if self.has_figure(shown) else ()),
             ".",
         )
         sec.answer = answer
@@ -1419,6 +1456,47 @@ class Story:
         sec.paragraphs.append(p)
         return sec
 
+    def _policy_terms(self) -> list[tuple[str, bool]]:
+        """Task 1's C-EMDM under the slack policy (E2) against scaling, per outcome: (metric,
+        whether the slack run is better on it)."""
+        run = self.evid("t1-c-slack-policy", "runs", Name.C_EMDM)
+        out = []
+        for metric, higher_better in (
+            ("time_to_goal", False),
+            ("total_effort", False),
+            ("mean_manipulability", True),
+        ):
+            new, old = run[metric], self.mv("task1", Name.C_EMDM, metric)
+            out.append((metric, new > old if higher_better else new < old))
+        return out
+
+    def policy_weighed(self) -> Sentence:
+        """Task scaling, the paper's own choice, weighed against its evidence (E2, E4)."""
+        e2, emdm = "t1-c-slack-policy", Name.C_EMDM
+        words = {
+            "time_to_goal": ("reaches the goal sooner", "reaches the goal later"),
+            "total_effort": (", with less effort", ", with more effort"),
+            "mean_manipulability": (
+                " and a higher mean manipulability",
+                " and a lower mean manipulability",
+            ),
+        }
+        p = sentence(
+            "Weighed against its evidence, scaling is not free: with a slack (E2, ",
+            Ref("tab", "evidence"),
+            ") C-EMDM ",
+        )
+        for metric, better in self._policy_terms():
+            p += sentence(words[metric][0 if better else 1])
+        p += sentence(
+            "; scaling buys the straight line (path ",
+            self.mt("task1", emdm, "path_length", ".2f", "m"),
+            ", with a slack ",
+            self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
+            ").",
+        )
+        return p
+
     def conclusion(self) -> Section:
         sec = Section("conclusion", "Conclusion")
         t1 = "task1"
@@ -1434,8 +1512,27 @@ class Story:
             self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
             " effort. On the non-redundant arm the slack, not the dexterity term, decides: it lets "
             "C-EMDM leave a straight line that the joint limits block, where task scaling, our "
-            "departure from the brief, stalls C-IVKC. Exact active-set QP solvers, certified at "
-            "every step, are the right tool; gradient-free methods are not.",
+            "departure from the brief, stalls C-IVKC. ",
+        )
+        better = [m for m, b in self._policy_terms() if b]
+        adjectives = {
+            "time_to_goal": "faster",
+            "total_effort": "cheaper",
+            "mean_manipulability": "more dexterous",
+        }
+        e4 = self.evid("t2-c-ivkc-slack-policy", "runs", Name.C_IVKC)
+        if better:
+            named = [adjectives[m] for m in better]
+            p += sentence(
+                "Scaling buys only the straight line: with a slack C-EMDM is ",
+                ", ".join(named[:-1]) + (" and " if len(named) > 1 else "") + named[-1],
+                " (E2)",
+                " and C-IVKC arrives (E4)" if e4.get("reached") else "",
+                "; where the path does not matter, the slack is the better default. ",
+            )
+        p += sentence(
+            "Exact active-set QP solvers, certified at every step, are the right tool; "
+            "gradient-free methods are not."
         )
         sec.paragraphs.append(p)
         return sec
@@ -1891,58 +1988,53 @@ class Story:
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs: one change to a nominal run, and its outcome (E3 is the "
-                "weight-grid re-run of ",
+                "Evidence runs: one change to a nominal run, and its outcomes as evidence "
+                "(nominal); stall: the goal is not reached (E3: the weight-grid re-run of ",
                 Ref("sec", "t1-pareto"),
                 ").",
             ),
             [
                 sentence("run"),
-                sentence("task, controller"),
+                sentence("task, ctrl."),
                 sentence("change"),
-                sentence("outcome"),
+                sentence("goal (s)"),
+                sentence("mean ", M_SYM),
+                sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
             ],
-            align="llll",
+            align="lllrrr",
+            font="scriptsize",
         )
-        for label, key, ctrl, change, kind in items:
+        for label, key, ctrl, change, _kind in items:
             entry = self.evid(key)
             task = entry["task"]
             run = entry["runs"].get(ctrl, {})
-            if "error" in run:
-                out = sentence("no solution")
-            elif kind == "reference":
-                out = sentence(
-                    entry["reference"]["controller"],
-                    " ",
-                    Math(r"\pm", "±"),
-                    " ",
-                    self.evidn(
-                        key,
-                        "reference",
-                        "max_abs_qd_difference",
-                        fmt=".0e" if entry["reference"]["max_abs_qd_difference"] else ".0f",
-                    ),
-                    " rad/s",
+            cells: list[Sentence] = []
+            for metric, fmt in (
+                ("time_to_goal", ".2f"),
+                ("mean_manipulability", ".3f"),
+                ("total_effort", ".2f"),
+            ):
+                if "error" in run:
+                    cells.append(sentence("no solution"))
+                    continue
+                stall = metric == "time_to_goal"
+                new = (
+                    sentence("stall")
+                    if stall and not run["reached"]
+                    else sentence(self.evidn(key, "runs", ctrl, metric, fmt=fmt))
                 )
-            elif kind == "pair":
-                out = sentence(
-                    "identical steps: ", self.evidn(key, "pair", "coincide_steps", fmt="d")
+                old = (
+                    sentence("stall")
+                    if stall and not self.mv(task, ctrl, "reached")
+                    else sentence(self.mt(task, ctrl, metric, fmt))
                 )
-            elif run.get("reached"):
-                out = sentence("goal in ", self.evid_goal(key, ctrl))
-            else:
-                out = sentence(
-                    "stalls, ",
-                    ERR,
-                    " = ",
-                    self.evidn(key, "runs", ctrl, "final_error", fmt=".3f", unit="m"),
-                )
+                cells.append(new + sentence(" (") + old + sentence(")"))
             table.rows.append(
                 [
                     sentence(label),
                     sentence("1" if task == "task1" else "2", ", ", ctrl),
                     change,
-                    out,
+                    *cells,
                 ]
             )
         self.tables["evidence"] = table
