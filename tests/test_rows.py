@@ -190,7 +190,7 @@ def test_rows_through_the_solver_chain():
 
 
 def test_qp_checks_the_shape_of_its_rows():
-    with pytest.raises(ValueError, match="G must be 2 x 3"):
+    with pytest.raises(ValueError, match="G: must be 2 x 3"):
         QP(np.eye(3), np.zeros(3), np.ones((1, 3)), np.ones(1), -np.ones(3), np.ones(3), 3,
            G=np.ones((2, 2)), h=np.ones(2))  # fmt: skip
     qp = QP(np.eye(3), np.zeros(3), np.ones((1, 3)), np.ones(1), -np.ones(3), np.ones(3), 3)

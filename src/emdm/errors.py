@@ -11,9 +11,12 @@ class EmdmError(Exception):
 
 
 class ScenarioError(EmdmError, ValueError):
-    """A scenario (file, preset, override or Python argument) is invalid.
+    """A scenario (file, preset, override or Python argument) is invalid, or an argument of the
+    Python API (a wrong type, shape, NaN, sign or name).
 
-    The message names the source, the key and what is wrong: ``"bad.toml: arm.lengths: must be > 0"``.
+    The message names the source, the key and what is wrong: ``"bad.toml: arm.lengths: must be > 0"``;
+    for an argument the source is the function and the key the argument:
+    ``"simulate: fallback: must be a list of solver names, got 'daqp'"``.
     """
 
     def __init__(self, source: str, key: str, problem: str) -> None:

@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
+from .checks import _Checker, memory_available
 from .kernels import kinematics_of
 
 Vector = NDArray[np.float64]
@@ -57,9 +58,17 @@ class Kinematics:
 
 
 class PlanarArm:
-    """A planar arm with ``n >= 2`` revolute joints and link lengths ``lengths`` (m, all > 0)."""
+    """A planar arm with ``n >= 2`` revolute joints and link lengths ``lengths`` (m, all > 0).
+
+    Raises :class:`~emdm.errors.ScenarioError` naming ``lengths`` (or, in the methods, ``q``:
+    ``n`` finite joint angles) when it is not a valid argument.
+    """
 
     def __init__(self, lengths: ArrayLike) -> None:
+        if lengths is not None:  # the kind of its entries (None: refused below)
+            _Checker("PlanarArm").array(
+                "lengths", lengths, None, finite=None, what="a list of link lengths (m)"
+            )
         lengths_arr = np.array(lengths, dtype=float)
         if lengths_arr.ndim != 1 or lengths_arr.size < 2:
             raise ScenarioError("PlanarArm", "lengths", "needs a list of at least 2 link lengths")
@@ -67,12 +76,19 @@ class PlanarArm:
             raise ScenarioError(
                 "PlanarArm", "lengths", f"must be finite and > 0, got {lengths_arr}"
             )
+        n = lengths_arr.size
+        need, have = 8 * (n * (n - 1) // 2 * (n + 1) + 2 * n), memory_available()
+        if have and need > have // 2:  # the kinematics' buffers (kernels.kin_work)
+            raise ScenarioError(
+                "PlanarArm",
+                "lengths",
+                f"{n} links need about {need / 1e9:.3g} GB for the kinematics' buffers, more "
+                f"than half of this machine's {have / 1e9:.3g} GB: use fewer links",
+            )
         self._kernel_lengths = lengths_arr.copy()  # writable: one compiled signature
         lengths_arr.setflags(write=False)
         self.lengths: Vector = lengths_arr
         self.n: int = int(lengths_arr.size)
-        joints = np.arange(self.n)
-        self._max_jk = np.maximum(joints[:, None], joints[None, :])
 
     def __repr__(self) -> str:
         return f"PlanarArm(lengths={self.lengths.tolist()})"
@@ -100,7 +116,8 @@ class PlanarArm:
         return max(0.0, float(2.0 * self.lengths.max() - self.lengths.sum()))
 
     def _check_q(self, q: ArrayLike) -> Vector:
-        q_arr = np.asarray(q, dtype=float)
+        check = _Checker("PlanarArm")
+        q_arr = check.array("q", q, None, what=lambda: f"{self.n} joint angles (rad)")
         if q_arr.shape != (self.n,):
             raise ScenarioError(
                 "PlanarArm", "q", f"expected {self.n} joint angles, got {q_arr.shape}"
@@ -135,7 +152,9 @@ class PlanarArm:
     def hessian(self, q: ArrayLike) -> NDArray[np.float64]:
         """Hessian slices ``H[j] = dJ/dq_j`` (n x 2 x n): column k of ``H[j]`` is ``-r_max(j,k)``."""
         r = self.tip_vectors(q)
-        return np.transpose(-r[:, self._max_jk], (1, 0, 2))
+        joints = np.arange(self.n)
+        max_jk = np.maximum(joints[:, None], joints[None, :])
+        return np.transpose(-r[:, max_jk], (1, 0, 2))
 
     def manipulability(self, q: ArrayLike) -> float:
         """Manipulability ``m(q) = sqrt(det(J J^T))``, mathematics.md eq. (6)."""

@@ -31,13 +31,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
 from ..errors import EmdmError, NoSolution
 from .arm import Kinematics, Vector
+from .checks import _Checker, _show
 from .distance import AXIS, GAP, POINT, chain_points_of, link_gaps
-from .feasibility import task_scale
+from .feasibility import _task_scale
 from .kernels import task_kinematics_of
 from .limits import Bounds
 from .problem import QP
@@ -47,6 +49,7 @@ from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, bui
 from .terms.damper import joint_bounds as _joint_bounds
 from .terms.obstacle import SLOWEST
 from .tolerances import ERROR_FLOOR
+from .validation import POLICIES
 
 
 class When(StrEnum):
@@ -81,6 +84,13 @@ class Controller:
     name: str
     terms: tuple[Term, ...]
 
+    def __post_init__(self) -> None:
+        check = _Checker("Controller")
+        check.text("name", self.name, "a name (a non-empty string)")
+        terms: Any = self.terms
+        if not isinstance(terms, tuple) or not all(isinstance(t, Term) for t in terms):
+            raise check.fail("terms", f"must be a tuple of Term, got {_show(terms)}")
+
     def has(self, kind: TermKind) -> bool:
         """Whether the controller holds a term of ``kind`` (on some arm)."""
         return any(t.kind is kind for t in self.terms)
@@ -98,7 +108,10 @@ class Controller:
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:
         """The terms, weights and numbers of this controller's program on ``scenario`` (with the
-        scenario's weights: built once per scenario and kept in its :attr:`Scenario.memo`)."""
+        scenario's weights: built once per scenario and kept in its :attr:`Scenario.memo`).
+        Raises :class:`~emdm.errors.ScenarioError` unless ``scenario`` is a Scenario and
+        ``weights`` None or Weights."""
+        _inputs("Controller.program_data", scenario, weights)
         if weights is None:  # keyed by name, checked by identity first (hashing the terms costs)
             key = ("program", self.name)
             kept = scenario.memo.get(key)
@@ -204,7 +217,9 @@ BASELINES: dict[str, Controller] = {
 
 
 def get_controller(name: str) -> Controller:
-    """The controller called ``name`` (case-insensitive), or an :class:`EmdmError` listing them."""
+    """The controller called ``name`` (case-insensitive), or an :class:`EmdmError` listing them
+    (a :class:`~emdm.errors.ScenarioError` when ``name`` is not a string)."""
+    _Checker("get_controller").text("name", name, "a controller's name")
     for key, controller in (CONTROLLERS | BASELINES).items():
         if key.lower() == name.lower():
             return controller
@@ -212,10 +227,45 @@ def get_controller(name: str) -> Controller:
     raise EmdmError(f"unknown controller {name!r} (known: {known})")
 
 
+def controller_of(source: str, controller: Any) -> Controller:
+    """``controller`` (a name or a :class:`Controller`) as a Controller, for the function
+    ``source``: a ScenarioError naming ``controller`` when it is neither, an :class:`EmdmError`
+    for an unknown name."""
+    if isinstance(controller, Controller):
+        return controller
+    _Checker(source).text("controller", controller, "a controller's name or a Controller")
+    return get_controller(controller)
+
+
+def _scenario(check: _Checker, scenario: Any) -> None:
+    check.instance("scenario", scenario, Scenario, "a Scenario (from emdm.load_scenario)")
+
+
+def _inputs(source: str, scenario: Any, weights: Any) -> None:
+    """``scenario`` a Scenario and ``weights`` None or Weights, for the function ``source``."""
+    if isinstance(scenario, Scenario) and isinstance(weights, Weights | None):
+        return
+    check = _Checker(source)
+    _scenario(check, scenario)
+    check.instance("weights", weights, (Weights, type(None)), "None or a Weights")
+
+
+def _joints(check: _Checker, scenario: Scenario, q: Any) -> Vector:
+    """``q`` (rad): ``n`` finite joint values of ``scenario``'s arm."""
+    n = scenario.n
+    return check.array("q", q, (n,), what=lambda: f"{n} joint values")
+
+
 def joint_bounds(scenario: Scenario, q: Vector) -> Bounds:
-    """The velocity box intersected with the position dampers at ``q`` (the C- bounds)."""
+    """The velocity box intersected with the position dampers at ``q`` (the C- bounds).
+
+    Raises :class:`~emdm.errors.ScenarioError` unless ``scenario`` is a Scenario and ``q`` its
+    ``n`` finite joint values."""
+    check = _Checker("joint_bounds")
+    _scenario(check, scenario)
+    q_arr = _joints(check, scenario, q)
     lo, hi = np.empty(scenario.n), np.empty(scenario.n)
-    _joint_bounds(scenario.arm_data, np.asarray(q, dtype=float), lo, hi)
+    _joint_bounds(scenario.arm_data, q_arr, lo, hi)
     return Bounds(lo, hi)
 
 
@@ -238,7 +288,49 @@ def step_program(
     floor: float = SLOWEST,
 ) -> QP:
     """The program of ``controller`` at configuration ``q`` and time ``t`` (s; where obstacles
-    move) for the desired velocity ``v``."""
+    move) for the desired velocity ``v``.
+
+    Raises :class:`~emdm.errors.ScenarioError` naming the argument that is not valid:
+    ``controller`` a Controller, ``scenario`` a Scenario, ``q`` its ``n`` finite joint values,
+    ``kin`` the Kinematics of its task (``p``: task rows, ``J``: task rows x n, ``Jm``: n, all
+    finite), ``v`` finite task rows, ``error_norm``, ``floor`` finite and >= 0, ``t`` finite,
+    ``weights`` None or Weights.
+    """
+    check = _Checker("step_program")
+    check.instance("controller", controller, Controller, "a Controller (emdm.get_controller)")
+    _scenario(check, scenario)
+    n, nt = scenario.n, scenario.nt
+    q_arr = _joints(check, scenario, q)
+    check.instance("kin", kin, Kinematics, "the Kinematics at q")
+    for key, value, shape in (
+        ("kin.p", kin.p, (nt,)),
+        ("kin.J", kin.J, (nt, n)),
+        ("kin.Jm", kin.Jm, (n,)),
+    ):
+        check.array(key, value, shape)
+    v_arr = check.array("v", v, (nt,), what=lambda: f"{nt} numbers (one per task row)")
+    error = check.real("error_norm", error_norm, nonnegative=True)
+    _inputs("step_program", scenario, weights)
+    time = check.real("t", t)
+    least = check.real("floor", floor, nonnegative=True)
+    return _step_program(
+        controller, scenario, q_arr, kin, v_arr, error, weights=weights, t=time, floor=least
+    )
+
+
+def _step_program(
+    controller: Controller,
+    scenario: Scenario,
+    q: Vector,
+    kin: Kinematics,
+    v: Vector,
+    error_norm: float,
+    *,
+    weights: Weights | None = None,
+    t: float = 0.0,
+    floor: float = SLOWEST,
+) -> QP:
+    """:func:`step_program` for checked arguments (the per-step path)."""
     data = controller.program_data(scenario, weights)
     n, nt = scenario.n, scenario.nt
     pts, axes = np.zeros((n + 2, POINT)), np.zeros((n, AXIS))
@@ -274,7 +366,7 @@ def step_program(
         float(floor),
     )
     rows = build_program(data, state, out)
-    return QP(out.P, out.c, out.A, out.b, out.lb, out.ub, n, G=out.G[:rows], h=out.h[:rows])
+    return QP._trusted(out.P, out.c, out.A, out.b, out.lb, out.ub, n, out.G[:rows], out.h[:rows])
 
 
 @dataclass(frozen=True, eq=False)
@@ -291,8 +383,26 @@ class Admissible:
 
 
 def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = None) -> Admissible:
-    """Apply the infeasibility policy ``policy`` (``scale``, ``slack`` or ``error``) to ``qp``."""
-    alpha = task_scale(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h)
+    """Apply the infeasibility policy ``policy`` (``scale``, ``slack`` or ``error``) to ``qp``.
+
+    Raises :class:`~emdm.errors.NoSolution` when no admissible program exists under the policy,
+    and :class:`~emdm.errors.ScenarioError` naming the argument that is not valid: ``qp`` a QP,
+    ``policy`` one of the policies, ``slack_weight`` a finite number > 0, ``step`` None or an
+    integer >= 0.
+    """
+    check = _Checker("admissible")
+    check.instance("qp", qp, QP, "a QP")
+    if not isinstance(policy, str) or policy not in POLICIES:
+        raise check.fail("policy", f"must be one of {', '.join(POLICIES)}, got {_show(policy)}")
+    weight = check.real("slack_weight", slack_weight, positive=True)
+    if step is not None:
+        check.count("step", step, 0, 2**62)
+    return _admissible(qp, policy, slack_weight=weight, step=step)
+
+
+def _admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = None) -> Admissible:
+    """:func:`admissible` for checked arguments (the per-step path)."""
+    alpha = _task_scale(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h)
     if alpha == 1.0:
         return Admissible(qp, 1.0, None)
     where = f"step {step}: " if step is not None else ""
@@ -323,10 +433,10 @@ def admissible(qp: QP, policy: str, *, slack_weight: float, step: int | None = N
                 f"({limits} exclude every motion that keeps the task direction)",
                 problem=qp,
             )
-        return Admissible(qp.with_rhs(alpha * qp.b), alpha, "scale")
+        return Admissible(qp._rhs(alpha * qp.b), alpha, "scale")
     if policy == "slack":
-        relaxed = qp.with_free_slack(slack_weight)
-        if task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub, relaxed.G, relaxed.h) != 1.0:
+        relaxed = qp._free_slack(slack_weight)
+        if _task_scale(relaxed.A, relaxed.b, relaxed.lb, relaxed.ub, relaxed.G, relaxed.h) != 1.0:
             raise NoSolution(
                 f"{where}the program is infeasible even with free slack "
                 "(the joint bounds are empty)",
@@ -392,8 +502,8 @@ def program_at(
 ) -> Admissible:
     """The admissible program of ``controller`` at ``q``: built, then the policy applied."""
     st = state or state_at(scenario, q)
-    nominal = step_program(controller, scenario, q, st.kin, st.v, st.error_norm, weights=weights)
-    return admissible(
+    nominal = _step_program(controller, scenario, q, st.kin, st.v, st.error_norm, weights=weights)
+    return _admissible(
         nominal,
         scenario.controller.on_infeasible,
         slack_weight=slack_weight(scenario, st.error_norm, weights),

@@ -16,10 +16,13 @@ returned.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from . import simplex
 from .arm import Matrix, Vector
+from .checks import _Checker
 from .tolerances import FEASIBILITY_TOL, RANK_TOL
 from .zonotope import NEEDS_REFERENCE, OK
 
@@ -36,6 +39,38 @@ def _rows(A: Matrix, G: Matrix | None, h: Vector | None) -> tuple[Matrix, Vector
     return _contiguous(np.asarray(G, dtype=float).reshape(-1, A.shape[1]), h)  # type: ignore[return-value]
 
 
+def _arguments(
+    source: str, A: Any, b: Any, lb: Any, ub: Any, G: Any, h: Any
+) -> tuple[Matrix, Vector, Vector, Vector, Matrix | None, Vector | None]:
+    """The arguments of :func:`task_scale` and :func:`feasible_point`, checked: ``A`` finite
+    k x n, ``b`` finite k, ``lb`` and ``ub`` n entries (never NaN), ``G`` finite m x n and ``h``
+    finite m, both given or neither."""
+    check = _Checker(source)
+    A = check.array("A", A, (None, None), what="a matrix (one row per task row)")
+    k, n = A.shape
+    b = check.array("b", b, (k,), what=lambda: f"{k} entries (one per row of A)")
+    lb = check.array(
+        "lb", lb, (n,), finite=False, what=lambda: f"{n} entries (one per column of A)"
+    )
+    ub = check.array(
+        "ub", ub, (n,), finite=False, what=lambda: f"{n} entries (one per column of A)"
+    )
+    if (G is None) != (h is None):
+        raise check.fail(
+            "h" if h is None else "G", "must be given with " + ("G" if h is None else "h")
+        )
+    if G is not None:
+        h = check.array("h", h, (None,), what="a vector (one entry per row of G)")
+        G = check.array(
+            "G", G, None, what=lambda: f"{h.size} x {n} numbers (one row per entry of h)"
+        )
+        if G.size != h.size * n:
+            raise check.fail(
+                "G", f"must be {h.size} x {n} (one row per entry of h), got shape {G.shape}"
+            )
+    return A, b, lb, ub, G, h
+
+
 def task_scale(
     A: Matrix,
     b: Vector,
@@ -49,8 +84,22 @@ def task_scale(
 
     Returns 1.0 for a feasible program and ``None`` when no ``alpha`` in [0, 1] works (for instance a
     box that excludes ``x = 0`` and cannot reach the task direction either). The compiled kernel
-    answers first, HiGHS what it leaves.
+    answers first, HiGHS what it leaves. Raises :class:`~emdm.errors.ScenarioError` naming the
+    argument that is not valid: ``A`` finite k x n, ``b`` finite k, ``lb`` and ``ub`` n entries,
+    finite or infinite but never NaN, ``G`` finite m x n and ``h`` finite m (both or neither).
     """
+    return _task_scale(*_arguments("task_scale", A, b, lb, ub, G, h))
+
+
+def _task_scale(
+    A: Matrix,
+    b: Vector,
+    lb: Vector,
+    ub: Vector,
+    G: Matrix | None = None,
+    h: Vector | None = None,
+) -> float | None:
+    """:func:`task_scale` of checked arguments (the per-step path)."""
     Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)
     alpha = simplex.task_scale_of(Ac, bc, Gc, hc, lbc, ubc)
@@ -69,7 +118,20 @@ def feasible_point(
     h: Vector | None = None,
 ) -> Vector | None:
     """Some ``x`` with ``A x = b``, ``G x <= h`` and ``lb <= x <= ub`` (exact up to rounding), or
-    ``None``."""
+    ``None``. Raises :class:`~emdm.errors.ScenarioError` naming the argument that is not valid
+    (as :func:`task_scale`)."""
+    return _feasible_point(*_arguments("feasible_point", A, b, lb, ub, G, h))
+
+
+def _feasible_point(
+    A: Matrix,
+    b: Vector,
+    lb: Vector,
+    ub: Vector,
+    G: Matrix | None = None,
+    h: Vector | None = None,
+) -> Vector | None:
+    """:func:`feasible_point` of checked arguments."""
     x = np.empty(A.shape[1])
     Gc, hc = _rows(A, G, h)
     Ac, bc, lbc, ubc = _contiguous(A, b, lb, ub)

@@ -8,16 +8,17 @@ import tomllib
 import warnings
 from collections.abc import Mapping
 from importlib import resources
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import ScenarioError
+from .checks import _Checker
 from .kernels import rotation_vector
 from .scenario import Scenario, _read_robot, scenario_from_dict
 from .serial import SerialArm
-from .validation import _Checker
 
 PLANAR_PRESETS = ("task1", "task2")
 """The brief's planar tasks (Tables 1 and 2)."""
@@ -90,9 +91,16 @@ def load_scenario(name_or_path: str | Path, overrides: Mapping[str, Any] | None 
     for the robot, :func:`urdf_template`), apply overrides, validate.
 
     Raises :class:`~emdm.errors.ScenarioError` for a missing file, a file that is not TOML, or invalid
-    content. Valid but suspicious settings are kept in ``scenario.warnings`` and issued as
-    :class:`ScenarioWarning`.
+    content, and for arguments of the wrong kind (``name_or_path`` not a string or a path,
+    ``overrides`` not a mapping of ``"section.key"`` to values). Valid but suspicious settings are
+    kept in ``scenario.warnings`` and issued as :class:`ScenarioWarning`.
     """
+    check = _Checker("load_scenario")
+    check.instance(
+        "name_or_path", name_or_path, (str, PathLike), "a preset's name or a file's path"
+    )
+    if overrides is not None:
+        check.mapping("overrides", overrides, "'section.key' to values")
     text_name = str(name_or_path)
     if Path(text_name).suffix.lower() == ".urdf":
         scenario = urdf_template(text_name, overrides)

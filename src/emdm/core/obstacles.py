@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .arm import Vector
-from .validation import _Checker, _frozen, _show
+from .checks import _Checker, _frozen, _show
 
 SHAPES = {2: ("circle", "segment"), 3: ("sphere", "capsule")}
 """The shapes of a planar (2) and a spatial (3) scenario; the first of each is a point with a

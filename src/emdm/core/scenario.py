@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from .arm import PlanarArm, Vector
+from .checks import _Checker, _name, _show
 from .distance import pack as pack_obstacles
 from .kernels import ArmData, Geometry
 from .obstacles import Obstacle, check_damper, check_start, pack_rows, parse_obstacles
@@ -50,13 +51,7 @@ from .sections import (
 from .serial import SerialArm, _tool
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 from .urdf import UrdfArm, read_urdf
-from .validation import (
-    Policy,
-    _check_consistency,
-    _Checker,
-    _name,
-    _show,
-)
+from .validation import Policy, _check_consistency
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,14 +89,19 @@ class Scenario:
         )
 
     def plane_distances(self, q: Vector) -> Vector:
-        """``d_i = n_i . p - offset_i`` (m): the end effector's distance to each plane at ``q``."""
-        q = np.asarray(q, dtype=float)
+        """``d_i = n_i . p - offset_i`` (m): the end effector's distance to each plane at ``q``
+        (``n`` finite joint values, else a :class:`~emdm.errors.ScenarioError` naming ``q``)."""
         p = self.robot.position(q)
         return np.asarray(self.planes.normals @ p - self.planes.offsets, dtype=float)
 
     def obstacle_distances(self, q: Vector, t: float = 0.0) -> Vector:
-        """``D[i, o]`` (m): link ``i``'s distance to obstacle ``o`` at ``q`` and time ``t`` (s)."""
-        return obstacle_distances(self, q, t)
+        """``D[i, o]`` (m): link ``i``'s distance to obstacle ``o`` at ``q`` and time ``t`` (s).
+
+        Raises :class:`~emdm.errors.ScenarioError` unless ``q`` is ``n`` finite joint values
+        and ``t`` a finite number."""
+        check = _Checker("Scenario.obstacle_distances")
+        q = check.array("q", q, (self.n,), what=lambda: f"{self.n} joint values")
+        return obstacle_distances(self, q, check.real("t", t))
 
     @property
     def n(self) -> int:
@@ -259,7 +259,14 @@ class Scenario:
         return "\n".join(lines) + "\n"
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> Scenario:
-        """A new scenario with ``{"section.key": value}`` replaced, validated like a file."""
+        """A new scenario with ``{"section.key": value}`` replaced, validated like a file.
+
+        Raises :class:`~emdm.errors.ScenarioError` for ``overrides`` that are not such a
+        mapping, an unknown key or an invalid value.
+        """
+        _Checker("Scenario.with_overrides").mapping(
+            "overrides", overrides, "'section.key' to values"
+        )
         data = self.to_dict()
         for dotted, value in overrides.items():
             section, _, key = dotted.partition(".")
@@ -328,7 +335,12 @@ class Scenario:
 
 
 def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> Scenario:
-    """Validate raw scenario data (the TOML layout) and build a :class:`Scenario`."""
+    """Validate raw scenario data (the TOML layout) and build a :class:`Scenario`.
+
+    Raises :class:`~emdm.errors.ScenarioError` naming the source, the key and the problem (a
+    ``source`` that is not a string is named as the argument).
+    """
+    _Checker("scenario_from_dict").text("source", source, "a string (the data's file or name)")
     check = _Checker(source)
     if not isinstance(data, Mapping):
         raise check.fail("", "a scenario must be a table of sections")
@@ -352,7 +364,11 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
 
     raw_arm = dict(data.get("arm", {}))
     raw_lengths, raw_dh, raw_urdf = raw_arm.get("lengths"), raw_arm.get("dh"), raw_arm.get("urdf")
-    given = [k for k, v in (("lengths", raw_lengths), ("dh", raw_dh), ("urdf", raw_urdf)) if v]
+    given = [
+        k
+        for k, v in (("lengths", raw_lengths), ("dh", raw_dh), ("urdf", raw_urdf))
+        if (v is not None if isinstance(v, np.ndarray) else v)  # an array: refused below
+    ]
     if len(given) > 1:
         raise check.fail(
             f"arm.{given[1]}",
@@ -382,7 +398,7 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
                 raise check.fail(dotted, "is for spatial arms only (given by arm.dh)")
     raw_task = data.get("motion", {}).get("task", "pose" if spatial else "planar")
     tasks = ("position", "pose") if spatial else ("planar",)
-    if raw_task not in tasks:
+    if not isinstance(raw_task, str) or raw_task not in tasks:
         raise check.fail(
             "motion.task", f"must be {' or '.join(repr(t) for t in tasks)}, got {_show(raw_task)}"
         )
@@ -398,7 +414,7 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
             value = raw_section.get(key, spec.default)
             if value is None:
                 raise check.fail(dotted, "is required")
-            if value == "" and spec.kind != "str" and spec.default == "":
+            if isinstance(value, str) and value == "" and spec.kind != "str" and spec.default == "":
                 parsed[section][key] = None  # an optional key left out (arm.lengths or arm.dh)
             elif spec.kind == "joints":
                 parsed[section][key] = check.vector(dotted, value, n, spec.scalar_ok)

@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..errors import ScenarioError
 from .chain import Chain
+from .checks import _Checker
 from .kernels import Geometry
 from .serial_kernels import (
     ROWS_ALL,
@@ -61,7 +62,8 @@ def _tool(tool: ArrayLike | None, source: str = "SerialArm", key: str = "tool") 
     """The tool transform: ``None`` (identity), a translation ``(x, y, z)`` (m) or a 4 x 4 pose."""
     if tool is None:
         return np.eye(4)
-    arr = np.array(tool, dtype=float)
+    what = "a translation [x, y, z] (m) or a finite 4 x 4 transform"
+    arr = np.array(_Checker(source).array(key, tool, None, finite=None, what=what))
     if arr.shape == (3,):
         out = np.eye(4)
         out[:3, 3] = arr
@@ -85,7 +87,12 @@ def _tool(tool: ArrayLike | None, source: str = "SerialArm", key: str = "tool") 
 class SerialArm:
     """A serial chain of ``n >= 1`` joints: DH rows ``[a, alpha, d, offset]`` (revolute joints)
     or, through :meth:`from_urdf` and :meth:`from_chain`, any chain of revolute and prismatic
-    joints."""
+    joints.
+
+    Raises :class:`~emdm.errors.ScenarioError` naming the argument (``dh``, ``convention``,
+    ``tool``, ``path``, ``chain``; in the methods ``q``, ``n`` finite joint values, and
+    ``axes``) when it is not valid.
+    """
 
     dh: Matrix | None
     """The DH rows (None for an arm from a URDF file or a chain)."""
@@ -96,7 +103,8 @@ class SerialArm:
         convention: Literal["standard", "modified"] = "standard",
         tool: ArrayLike | None = None,
     ) -> None:
-        table = np.array(dh, dtype=float)
+        what = "one row [a, alpha, d, offset] (m, rad, m, rad) per joint"
+        table = np.array(_Checker("SerialArm").array("dh", dh, None, finite=None, what=what))
         if table.ndim != 2 or table.shape[1] != 4 or table.shape[0] < 1:
             raise ScenarioError(
                 "SerialArm", "dh", "needs one row [a, alpha, d, offset] (m, rad, m, rad) per joint"
@@ -115,6 +123,7 @@ class SerialArm:
     @classmethod
     def from_chain(cls, chain: Chain, tool: ArrayLike | None = None) -> SerialArm:
         """The arm of a :class:`Chain`, with a ``tool`` (translation or 4 x 4) after its tail."""
+        _Checker("SerialArm.from_chain").instance("chain", chain, Chain, "a Chain")
         arm = cls.__new__(cls)
         arm._set_chain(chain, _tool(tool))
         arm.dh = None
@@ -132,6 +141,11 @@ class SerialArm:
     ) -> SerialArm:
         """The arm of a URDF file from ``base_link`` to ``tip_link`` (:func:`emdm.core.urdf.read_urdf`;
         each may be omitted where the file leaves one choice)."""
+        check = _Checker("SerialArm.from_urdf")
+        check.instance("path", path, (str, Path), "the path of a URDF file")
+        for key, link in (("base_link", base_link), ("tip_link", tip_link)):
+            if link is not None:
+                check.text(key, link, "a link's name")
         return cls.from_chain(read_urdf(path, base_link, tip_link).chain, tool)
 
     def _set_chain(self, chain: Chain, tool: Matrix) -> None:
@@ -184,12 +198,13 @@ class SerialArm:
         return np.asarray(self.jacobian(q)[:3])
 
     def _check_q(self, q: ArrayLike) -> Matrix:
-        q_arr = np.ascontiguousarray(q, dtype=float)
+        check = _Checker("SerialArm")
+        q_arr = check.array("q", q, None, what=lambda: f"{self.n} joint values")
         if q_arr.shape != (self.n,):
             raise ScenarioError(
                 "SerialArm", "q", f"expected {self.n} joint values, got shape {q_arr.shape}"
             )
-        return q_arr
+        return np.ascontiguousarray(q_arr)
 
     def _kinematics(self, q: ArrayLike) -> tuple[Matrix, Matrix, Matrix]:
         """Link frames ((n + 1) x 4 x 4), end-effector pose and Jacobian at ``q``."""
@@ -236,7 +251,7 @@ class SerialArm:
 
     def manipulability_and_jacobian(self, q: ArrayLike, axes: Axes = "all") -> tuple[float, Matrix]:
         """``(m, Jm)`` together, from one Jacobian and Hessian."""
-        if axes not in _ROWS:
+        if not isinstance(axes, str) or axes not in _ROWS:
             raise ScenarioError(
                 "SerialArm", "axes", f'must be "all", "trans" or "rot", got {axes!r}'
             )

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ScenarioError
 from .arm import Vector
+from .checks import _Checker
 from .serial import SerialArm
 
 
@@ -26,64 +26,6 @@ class Policy(StrEnum):
 
 
 POLICIES = tuple(Policy)
-
-
-def _frozen(values: Any) -> Vector:
-    arr = np.array(values, dtype=float)
-    arr.setflags(write=False)
-    return arr
-
-
-class _Checker:
-    """Reads one raw section value at a time, raising ScenarioError with the source and the key."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-
-    def fail(self, key: str, problem: str) -> ScenarioError:
-        return ScenarioError(self.source, key, problem)
-
-    def number(self, key: str, value: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(key, f"must be a number, got {_show(value)}")
-        try:
-            number = float(value)
-        except OverflowError:  # an integer beyond the float range
-            digits = len(str(abs(value)))
-            raise self.fail(key, f"must be finite, got an integer of {digits} digits") from None
-        if not math.isfinite(number):
-            raise self.fail(key, f"must be finite, got {value}")
-        return number
-
-    def table(self, key: str, value: Any, rows: int, cols: int) -> Vector:
-        if not isinstance(value, list) or len(value) != rows:
-            raise self.fail(key, f"must be a list of {rows} rows of {cols} numbers")
-        out = []
-        for i, row in enumerate(value):
-            if not isinstance(row, list) or len(row) != cols:
-                raise self.fail(f"{key}[{i}]", f"must be a row of {cols} numbers, got {_show(row)}")
-            out.append([self.number(f"{key}[{i}][{j}]", v) for j, v in enumerate(row)])
-        return _frozen(out)
-
-    def vector(self, key: str, value: Any, size: int, scalar_ok: bool) -> Vector:
-        if isinstance(value, list):
-            if len(value) != size:
-                raise self.fail(key, f"must have {size} values, got {len(value)}")
-            return _frozen([self.number(f"{key}[{i}]", v) for i, v in enumerate(value)])
-        if scalar_ok:
-            return _frozen(np.full(size, self.number(key, value)))
-        raise self.fail(key, f"must be a list of {size} numbers, got {_show(value)}")
-
-
-def _name(key: Any) -> str:
-    """A key as written in messages: plain when it looks like one, else quoted (repr)."""
-    text = str(key)
-    return text if text.isidentifier() else repr(key)
-
-
-def _show(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _fmt(values: Vector) -> str:
@@ -187,6 +129,30 @@ def _check_planes(check: _Checker, planes: dict[str, Any]) -> None:
         raise check.fail("planes.gain", f"must be positive, got {planes['gain']:g}")
 
 
+def check_start_angles(
+    check: _Checker, key: str, q0: Vector, q_min: Vector, q_max: Vector, stop: Vector
+) -> None:
+    """A start ``q0`` (rad) within the joint limits and outside the dampers' stop zones
+    (``stop``, rad, per joint); ``key`` names it in the message."""
+    outside = (q0 < q_min) | (q0 > q_max)
+    if np.any(outside):
+        j = int(np.argmax(outside))
+        raise check.fail(
+            key,
+            f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
+            f"[{q_min[j]:g}, {q_max[j]:g}]",
+        )
+    margin = np.minimum(q_max - q0, q0 - q_min)
+    inside_stop = margin < stop
+    if np.any(inside_stop):
+        j = int(np.argmax(inside_stop))
+        raise check.fail(
+            key,
+            f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
+            f"damper's stop zone ({stop[j]:g} rad), which the dampers forbid",
+        )
+
+
 def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) -> list[str]:
     """Cross-field rules; returns the warnings (valid but suspicious settings)."""
     _check_planes(check, p["planes"])
@@ -248,24 +214,7 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
             f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}",
         )
 
-    q0 = motion["q0"]
-    outside = (q0 < arm["q_min"]) | (q0 > arm["q_max"])
-    if np.any(outside):
-        j = int(np.argmax(outside))
-        raise check.fail(
-            "motion.q0",
-            f"joint {j + 1} starts at {q0[j]:g} rad, outside its limits "
-            f"[{arm['q_min'][j]:g}, {arm['q_max'][j]:g}]",
-        )
-    margin = np.minimum(arm["q_max"] - q0, q0 - arm["q_min"])
-    inside_stop = margin < damper["stop"]
-    if np.any(inside_stop):
-        j = int(np.argmax(inside_stop))
-        raise check.fail(
-            "motion.q0",
-            f"joint {j + 1} starts {margin[j]:g} rad from its limit, inside the "
-            f"damper's stop zone ({damper['stop'][j]:g} rad), which the dampers forbid",
-        )
+    check_start_angles(check, "motion.q0", motion["q0"], arm["q_min"], arm["q_max"], damper["stop"])
 
     found: list[str] = []
     overshoot = motion["dt"] >= damper["gain"] * (damper["influence"] - damper["stop"])

@@ -16,12 +16,13 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core.checks import _Checker
 from ..core.controllers import Controller, Name, get_controller
 from ..core.jit import ensure_compiled, kernel
 from ..core.kernels import ArmData, Geometry
 from ..core.scenario import Scenario
 from ..core.terms import ProgramData
-from ..core.validation import Policy
+from ..core.validation import RANGES, Policy, check_start_angles
 from ..errors import NoSolution
 from .buffers import Motion, new_record, require_memory, step_work
 from .loop import (
@@ -29,6 +30,7 @@ from .loop import (
     TIMEOUT,
     WARM_UP_PRESETS,
     Exit,
+    _arguments,
     _warm_up,
     motion_data,
     run_kernel,
@@ -177,6 +179,41 @@ class BatchResult:
         return int(self.steps.size)
 
 
+def _starts(scenario: Scenario, goals: ArrayLike | None, q0s: ArrayLike | None) -> tuple[F64, F64]:
+    """The goals and start angles of :func:`simulate_batch` as 2-D arrays (R x task rows,
+    R x n), checked as the scenario checks ``motion.goal`` and ``motion.q0``."""
+    check = _Checker("simulate_batch")
+    nt, n = scenario.nt, scenario.n
+    if goals is None:
+        g = np.atleast_2d(np.asarray(scenario.motion.goal, dtype=float))
+    else:
+        g = check.array("goals", goals, None, what=f"rows of {nt} numbers (one per task row)")
+        g = check.array("goals", np.atleast_2d(g), (None, nt), what=f"rows of {nt} numbers")
+        low, high, unit = RANGES["motion.goal"]
+        if np.any((g < low) | (g > high)):
+            r, i = (int(x) for x in np.argwhere((g < low) | (g > high))[0])
+            raise check.fail(
+                f"goals[{r}]", f"must be between {low:g} and {high:g}{unit}, got {g[r, i]:g}"
+            )
+    if q0s is None:
+        q = np.atleast_2d(np.asarray(scenario.motion.q0, dtype=float))
+    else:
+        q = check.array("q0s", q0s, None, what=f"rows of {n} joint angles (rad)")
+        q = check.array("q0s", np.atleast_2d(q), (None, n), what=f"rows of {n} joint angles")
+        arm, stop = scenario.arm, scenario.damper.stop
+        margin = np.minimum(arm.q_max - q, q - arm.q_min)
+        bad = np.flatnonzero(np.any(margin < stop, axis=1))  # outside the limits: margin < 0
+        if bad.size:
+            r = int(bad[0])
+            check_start_angles(check, f"q0s[{r}]", q[r], arm.q_min, arm.q_max, stop)
+    if g.shape[0] != q.shape[0] and 1 not in (g.shape[0], q.shape[0]):
+        raise check.fail(
+            "q0s",
+            f"has {q.shape[0]} rows and goals {g.shape[0]}: give as many rows as goals, or one",
+        )
+    return g, q
+
+
 def simulate_batch(
     scenario: Scenario,
     controller: str | Controller,
@@ -187,16 +224,21 @@ def simulate_batch(
     """Many closed-loop runs of ``controller``, in parallel on every core.
 
     ``goals`` (R x task rows: m, and rad for a pose's orientation) and ``q0s`` (R x n, rad)
-    default to the scenario's; either may be given alone (one row is broadcast). The outcomes
-    equal those of :func:`emdm.simulate` run by run.
+    default to the scenario's; either may be given alone (one row is broadcast, and a single
+    row may be given as a vector). The outcomes equal those of :func:`emdm.simulate` run by run.
+
+    Raises :class:`~emdm.errors.ScenarioError` naming the argument that is not valid:
+    ``scenario`` a Scenario, ``controller`` a name or a Controller (an unknown name:
+    :class:`~emdm.errors.EmdmError`), ``goals`` finite rows of one value per task row within
+    the range of ``motion.goal``, ``q0s`` finite rows of ``n`` joint angles within the joint
+    limits and outside the dampers' stop zones, the same number of rows or one.
     """
-    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    ctrl, _ = _arguments("simulate_batch", scenario, controller)
+    g, q = _starts(scenario, goals, q0s)
     ensure_compiled(_warm_up)
     ensure_compiled(_warm_up_batch, what="the batch loop")
     n = scenario.n
-    g = np.atleast_2d(np.asarray(goals if goals is not None else scenario.motion.goal, dtype=float))
-    q = np.atleast_2d(np.asarray(q0s if q0s is not None else scenario.motion.q0, dtype=float))
-    runs = max(g.shape[0], q.shape[0])
+    runs = 0 if 0 in (g.shape[0], q.shape[0]) else max(g.shape[0], q.shape[0])
     g = np.ascontiguousarray(np.broadcast_to(g, (runs, scenario.nt)))
     q = np.ascontiguousarray(np.broadcast_to(q, (runs, n)))
     out = np.empty((runs, len(OUTCOMES)))

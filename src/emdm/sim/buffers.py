@@ -4,12 +4,12 @@ definition of a joint at a bound (:func:`mark_active`)."""
 
 from __future__ import annotations
 
-import os
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.checks import memory_available
 from ..core.distance import AXIS, GAP, POINT
 from ..core.jit import kernel
 from ..core.kernels import KinWork, SpatialWork, kin_work, spatial_work
@@ -174,14 +174,6 @@ def work_bytes(n: int, nx: int, nt: int, ng: int, spatial: bool) -> int:
 def record_bytes(steps: int, n: int, nt: int) -> int:
     """About the bytes :func:`new_record` allocates for ``steps`` commands."""
     return 8 * (steps + 1) * (5 * n + 4 * nt + 14)
-
-
-def memory_available() -> int:
-    """The machine's physical memory (bytes), or 0 when the system does not say."""
-    try:
-        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return 0
 
 
 def require_memory(

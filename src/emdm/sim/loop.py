@@ -29,15 +29,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.arm import Matrix, Vector
+from ..core.checks import _Checker
 from ..core.controllers import (
     Admissible,
     Controller,
     Name,
-    admissible,
+    _admissible,
+    _step_program,
+    controller_of,
     get_controller,
     slack_weight,
     state_at,
-    step_program,
 )
 from ..core.distance import chain_points, link_gaps
 from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
@@ -57,7 +59,8 @@ from ..core.tolerances import STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
 from ..errors import NoSolution
-from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver, solve_chain
+from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver
+from ..solvers.base import _solve_chain
 from ..solvers.kernels import (
     INFEASIBLE,
     OK,
@@ -405,9 +408,14 @@ def simulate(
     ``certify=False`` the first finite answer is used as it is (to study inexact solvers in
     closed loop; its KKT residual is recorded). Raises :class:`~emdm.errors.NoSolution` when a step
     has no admissible command (``on_infeasible = "error"``, or no solver succeeds); the exception
-    carries the partial run (``.run``), the controller and the step.
+    carries the partial run (``.run``), the controller and the step. Before the first step, raises
+    :class:`~emdm.errors.ScenarioError` naming the argument that is not valid (``scenario`` a
+    Scenario, ``controller`` a name or a Controller, ``solver`` a name, ``fallback`` a list of
+    names, ``certify`` True or False), :class:`~emdm.errors.EmdmError` for an unknown controller
+    and :class:`~emdm.errors.SolverNotFound` for an unknown solver.
     """
-    ctrl = controller if isinstance(controller, Controller) else get_controller(controller)
+    ctrl, fallback = _arguments("simulate", scenario, controller, solver, fallback)
+    _Checker("simulate").flag("certify", certify)
     chain = [solver, *[f for f in fallback if f != solver]]
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
@@ -445,6 +453,31 @@ def simulate(
     return _run(scenario, ctrl, rec, k, steps, reached=code == Exit.REACHED)
 
 
+def _arguments(
+    source: str,
+    scenario: Scenario,
+    controller: str | Controller,
+    solver: str = DEFAULT_SOLVER,
+    fallback: Sequence[str] = DEFAULT_FALLBACK,
+) -> tuple[Controller, list[str]]:
+    """The controller and the fallback chain of a run of ``source`` (:func:`simulate`,
+    :func:`~emdm.sim.batch.simulate_batch`), its arguments checked."""
+    if (  # the usual call, recognised in a few hundred nanoseconds (the per-run cost counts)
+        type(scenario) is Scenario
+        and type(controller) is str
+        and type(solver) is str
+        and solver
+        and type(fallback) is tuple
+        and all(type(f) is str for f in fallback)
+    ):
+        return get_controller(controller), list(fallback)
+    check = _Checker(source)
+    check.instance("scenario", scenario, Scenario, "a Scenario (from emdm.load_scenario)")
+    ctrl = controller_of(source, controller)
+    check.text("solver", solver, "a solver's name")
+    return ctrl, check.names("fallback", fallback, "solver names")
+
+
 def _standstill(nominal: QP, policy: str) -> Admissible:
     """The task scaled to zero, when standing still is admissible and the policy scales: a stall
     in front of an obstacle can leave a largest scale of order 1e-11 whose feasible set is
@@ -454,7 +487,7 @@ def _standstill(nominal: QP, policy: str) -> Admissible:
     zero = np.zeros(nominal.lb.size)
     if policy != "scale" or nominal.bound_excess(zero) > 0.0:
         raise NoSolution("standing still is not admissible either", problem=nominal)
-    return Admissible(nominal.with_rhs(np.zeros_like(nominal.b)), 0.0, "scale")
+    return Admissible(nominal._rhs(np.zeros_like(nominal.b)), 0.0, "scale")
 
 
 def _chain_step(
@@ -469,7 +502,7 @@ def _chain_step(
 ) -> None:
     """Step ``k`` through the policy and the solver chain; its nominal program is in ``w``."""
     n = scenario.n
-    nominal = QP(
+    nominal = QP._trusted(
         w.P.copy(),
         w.c.copy(),
         w.A.copy(),
@@ -477,8 +510,8 @@ def _chain_step(
         w.lb.copy(),
         w.ub.copy(),
         n,
-        G=w.G[: w.rows[0]].copy(),
-        h=w.h[: w.rows[0]].copy(),
+        w.G[: w.rows[0]].copy(),
+        w.h[: w.rows[0]].copy(),
     )
     error_norm = float(np.linalg.norm(rec.e[k]))
     t = k * scenario.motion.dt
@@ -486,23 +519,23 @@ def _chain_step(
     policy = scenario.controller.on_infeasible
     context = f"step {k} (t = {t:g} s): "
     try:
-        program = admissible(nominal, policy, slack_weight=weight, step=k)
-        result = solve_chain(program.qp, chain, context=context, certify=certify)
+        program = _admissible(nominal, policy, slack_weight=weight, step=k)
+        result = _solve_chain(program.qp, chain, context=context, certify=certify)
     except NoSolution:
         if not (scenario.obstacles and ctrl.has(TermKind.OBSTACLE)):
             raise
         # the obstacle rows' speed floor left no admissible command: the step again without
         # it, where standing still is admissible (docs/mathematics.md, "Obstacles")
         state = state_at(scenario, rec.q[k])
-        nominal = step_program(
+        nominal = _step_program(
             ctrl, scenario, rec.q[k], state.kin, rec.v[k], error_norm, t=t, floor=0.0
         )
         try:
-            program = admissible(nominal, policy, slack_weight=weight, step=k)
-            result = solve_chain(program.qp, chain, context=context, certify=certify)
+            program = _admissible(nominal, policy, slack_weight=weight, step=k)
+            result = _solve_chain(program.qp, chain, context=context, certify=certify)
         except NoSolution:
             program = _standstill(nominal, policy)
-            result = solve_chain(program.qp, chain, context=context, certify=certify)
+            result = _solve_chain(program.qp, chain, context=context, certify=certify)
         rec.lo[k], rec.hi[k] = nominal.lb[:n], nominal.ub[:n]
     x = result.x
     rec.qd[k] = x[:n]

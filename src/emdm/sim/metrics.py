@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.checks import _Checker
 from ..core.jit import kernel
 from .loop import Run
 
@@ -124,8 +125,9 @@ def metrics(run: Run) -> dict[str, Any]:
     steps whose task was scaled (``alpha < 1``); ``fallback_steps``, the steps a fallback solver
     answered; the solvers used, the largest KKT residual and bound excess, and solve statistics;
     in a scene with obstacles ``min_clearance``, the smallest distance of a link to an obstacle
-    (m).
+    (m). Raises :class:`~emdm.errors.ScenarioError` unless ``run`` is a Run.
     """
+    _Checker("metrics").instance("run", run, Run, "a Run (from emdm.simulate)")
     sc = run.scenario
     K = run.steps
     out = np.empty(len(OUTCOMES))

@@ -24,6 +24,7 @@ from typing import Protocol
 import numpy as np
 
 from ..core.arm import Vector
+from ..core.checks import _Checker
 from ..core.problem import QP
 from ..errors import NoSolution, SolverNotFound
 from .kernels import BOUND_TOL, KKT_TOL, certify_of, multipliers_of
@@ -72,7 +73,17 @@ def kkt_report(qp: QP, x: Vector) -> KKTReport:
 
     The compiled certificate (:func:`emdm.solvers.kernels.certify`): non-negative least squares
     over the bounds active at ``x`` finds the multipliers, so nothing the solver claims is used.
+    A non-finite ``x`` has an infinite report. Raises :class:`~emdm.errors.ScenarioError` unless
+    ``qp`` is a QP and ``x`` a vector of its ``qp.n`` variables.
     """
+    check = _Checker("kkt_report")
+    check.instance("qp", qp, QP, "a QP")
+    x = check.array("x", x, (qp.n,), finite=None, what=lambda: f"{qp.n} numbers (one per variable)")
+    return _kkt_report(qp, x)
+
+
+def _kkt_report(qp: QP, x: Vector) -> KKTReport:
+    """:func:`kkt_report` of checked arguments."""
     if not np.all(np.isfinite(x)):
         return KKTReport(math.inf, math.inf, math.inf, math.inf)
     out = np.empty(4)
@@ -163,7 +174,10 @@ def available_solvers() -> list[str]:
 
 
 def get_solver(name: str) -> SolverSpec:
-    """The solver called ``name``; an unknown or missing one raises :class:`SolverNotFound`."""
+    """The solver called ``name``; an unknown or missing one raises :class:`SolverNotFound`, a
+    ``name`` that is not a string :class:`~emdm.errors.ScenarioError`."""
+    if not isinstance(name, str) or not name:
+        _Checker("get_solver").text("name", name, "a solver's name")
     spec = _REGISTRY.get(name.lower())
     if spec is None or not spec.is_available():
         extras: dict[str, list[str]] = {}
@@ -186,9 +200,9 @@ def infeasible(qp: QP) -> bool:
     The iterative and general-purpose solvers call this first (their phase 1), so an infeasible
     program is reported infeasible, never answered with a wrong point.
     """
-    from ..core.feasibility import feasible_point
+    from ..core.feasibility import _feasible_point
 
-    return feasible_point(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h) is None
+    return _feasible_point(qp.A, qp.b, qp.lb, qp.ub, qp.G, qp.h) is None
 
 
 # ------------------------------------------------------------------------------ the chain
@@ -213,8 +227,26 @@ def solve_chain(
 
     With ``certify=False`` the first finite answer is accepted whatever its KKT report (used to
     study inexact solvers in closed loop; the report is still recorded). Raises
-    :class:`~emdm.errors.NoSolution` when no answer is accepted, naming every attempt.
+    :class:`~emdm.errors.NoSolution` when no answer is accepted, naming every attempt;
+    :class:`~emdm.errors.SolverNotFound` for an unknown solver; and
+    :class:`~emdm.errors.ScenarioError` naming the argument that is not valid: ``qp`` a QP,
+    ``chain`` a non-empty list of solver names, ``tol`` a finite number > 0, ``context`` a
+    string, ``certify`` True or False.
     """
+    check = _Checker("solve_chain")
+    check.instance("qp", qp, QP, "a QP")
+    if not check.names("chain", chain, "solver names"):
+        raise check.fail("chain", "must name at least one solver")
+    tol = check.real("tol", tol, positive=True)
+    check.instance("context", context, str, "a string")
+    check.flag("certify", certify)
+    return _solve_chain(qp, chain, tol=tol, context=context, certify=certify)
+
+
+def _solve_chain(
+    qp: QP, chain: Sequence[str], *, tol: float = KKT_TOL, context: str = "", certify: bool = True
+) -> ChainResult:
+    """:func:`solve_chain` of checked arguments (the per-step path)."""
     attempts: list[tuple[str, str]] = []
     total = 0.0
     for position, name in enumerate(chain):
@@ -228,7 +260,10 @@ def solve_chain(
         if result.x is None or not np.all(np.isfinite(result.x)):
             attempts.append((name, result.status if result.x is None else "non-finite answer"))
             continue
-        report = kkt_report(qp, result.x)
+        if np.shape(result.x) != qp.c.shape:  # the certificate's kernel would read past it
+            attempts.append((name, f"an answer of shape {np.shape(result.x)}, not ({qp.n},)"))
+            continue
+        report = _kkt_report(qp, result.x)
         if certify and not report.is_optimal(tol):
             attempts.append(
                 (
