@@ -229,7 +229,7 @@ def test_the_authors_sign_the_paper_the_pitch_and_the_page(report, tmp_path):
     page = (root / "index.html").read_text(encoding="utf-8")
     signed = r"Émilie du Châtelet, R\&D 100\% \$x\_1\$ \#2"
     assert signed in paper and signed in pitch
-    assert "The emdm study" not in paper
+    assert "Anonymous authors" not in paper
     assert "Émilie du Châtelet, R&amp;D 100% $x_1$ #2</p>" in page
     from emdm.outputs.report.config import BYLINE, byline
     from emdm.outputs.report.render import write_latex
@@ -239,7 +239,7 @@ def test_the_authors_sign_the_paper_the_pitch_and_the_page(report, tmp_path):
     (copy / BYLINE).write_text(json.dumps(byline([], "A Title of Our Own")), encoding="utf-8")
     write_latex(copy)
     retitled = (copy / "paper" / "paper.tex").read_text(encoding="utf-8")
-    assert r"\title{A Title of Our Own}" in retitled and "The emdm study" in retitled
+    assert r"\title{A Title of Our Own}" in retitled and "Anonymous authors" in retitled
     for bad, message in ((["ok", " "], "must not be empty"), (["x" * 121], "at most 120")):
         with pytest.raises(ValueError, match=message):
             byline(bad)

@@ -74,7 +74,7 @@ class Document:
     answers: list[tuple[str, Sentence]] = field(default_factory=list)
     authors: tuple[str, ...] = ()
     """The names on the paper, the pitch and the page (``emdm report --author``); none: the
-    study signs as "The emdm study"."""
+    paper and the pitch say "Anonymous authors"."""
 
     def number(self) -> None:
         """Number figures and tables by first appearance; fill in the references' numbers."""

@@ -251,7 +251,7 @@ class Story:
                 out += sentence(
                     "Gradient-based ",
                     grad,
-                    " solves each program exactly in ",
+                    " solves each program exactly in a median ",
                     self.d.ms(f, "solvers", grad, "median_time"),
                 )
                 if free:
@@ -1173,6 +1173,8 @@ class Story:
                     "; " if i < len(exact_free) - 1 else "",
                 )
             over = [k for k in exact_free if rows[k]["p95_time"] > dt]
+            typical = [k for k in exact_free if rows[k]["median_time"] > dt]
+            one = len(exact_free) == 1
             answer += sentence(
                 ", against a control period of ",
                 self.d.num(
@@ -1180,7 +1182,10 @@ class Story:
                 ),
                 ": "
                 + (
-                    "each overruns it on at least one program in 20"
+                    ("its median already exceeds it" if one else "their medians already exceed it")
+                    if len(typical) == len(exact_free)
+                    else ("it overruns it" if one else "each overruns it")
+                    + " on at least one program in 20"
                     if len(over) == len(exact_free)
                     else "some overrun it on at least one program in 20"
                     if over
