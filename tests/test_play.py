@@ -307,6 +307,10 @@ def test_the_page_explains_a_refused_slider_and_keeps_the_last_valid_view(sessio
         control = CONTROL[name]
         shown = control.from_slider(s.sliders[name].value)
         assert shown == pytest.approx(control.value(good), rel=0.02, abs=control.step), name
+    s._dirty = True  # the refused slider is let go: the page recomputes what is in force
+    s._on_release("value_throttled", None, None)
+    _settle(s)
+    assert "Not applied: damper.stop" in html.unescape(s.banner.text)  # still explained
     s.sliders["stop"].value = 0.1
     s.sliders["influence"].value = 0.3
     _settle(s)
@@ -352,7 +356,7 @@ def test_the_scrub_bar_moves_the_status_and_the_front(session):
     s.scrub.value = 2.0
     _settle(s)
     assert "2.00 s (step 40 of 163)" in s.status.text
-    assert s.pareto_title.text == "Pareto front, t = 2.00 s"
+    assert s.pareto_title.text == "Pareto, t = 2.00 s"
     assert len(s.front_src.data["E"]) == len(emdm.studies.pareto.ratios()) + 2  # w_M = 0, 50
 
 

@@ -38,7 +38,7 @@ from bokeh.plotting import figure
 from ..core.scenario import Scenario
 from ..core.validation import POLICIES
 from ..errors import EmdmError
-from ..outputs.style import CONTROLLER_STYLE, OKABE_ITO
+from ..outputs.style import CONTROLLER_STYLE
 from ..outputs.views import Views
 from . import logic
 from .logic import CONTROLS, PAIRS, Control, Outcome, Settings
@@ -48,6 +48,19 @@ log = logging.getLogger("emdm.play")
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 JOINT_COLORS = ("white", "#F0E442", "#CC79A7", "black", "#444444")
 """Fill of the joint markers by state (see :data:`emdm.play.logic.JOINT_STATES`)."""
+JOINT_LINES = (
+    "#009E73",
+    "#332288",
+    "#000000",
+    "#882255",
+    "#44AA99",
+    "#999933",
+    "#777777",
+    "#AA4499",
+)
+"""Colours of the joint-angle curves, one per joint (up to the 8 links a page allows): none of
+them is a controller's colour (:data:`emdm.outputs.style.CONTROLLER_STYLE`) or a zone's, so a
+curve is never read as a run."""
 SCENE, PLOT_W, PLOT_H = 460, 250, 180
 """Sizes (px) that fit a projector's 1280 x 720 with the explanation in view."""
 
@@ -102,6 +115,7 @@ class Session:
         arguments = dict(request.arguments) if request is not None else {}
         self.settings, notes = logic.parse_query(arguments, list(bases))
         self._valid = copy.deepcopy(self.settings)  # the settings of the scenario shown
+        self._refusal: str | None = None  # shown until a change of the settings is applied
         self.scenario: Scenario | None = None
         self.outcomes: tuple[Outcome, ...] = ()
         self.t = 0.0
@@ -681,7 +695,8 @@ class Session:
             scenario = logic.build_scenario(self.bases, self.settings)
         except EmdmError as exc:
             shown = "the page shows the last valid settings" if self.scenario else "nothing to show"
-            self._show([f"Not applied: {logic.message(exc)} ({shown})"], notes)
+            self._refusal = f"Not applied: {logic.message(exc)} ({shown})"
+            self._show([self._refusal], notes)
             if self.scenario is None:  # the address's values: drop the refused one, keep the rest
                 key = getattr(exc, "key", "")
                 if key in self.settings.overrides:
@@ -702,6 +717,8 @@ class Session:
             finally:
                 self._syncing = False
             return
+        if self.settings != self._valid:  # a change applied: an earlier refusal is history
+            self._refusal = None
         self._valid = copy.deepcopy(self.settings)
         self.address.text = logic.settings_query(self.settings)
         ran = time.perf_counter()
@@ -713,7 +730,9 @@ class Session:
         self.doc.hold("combine")  # one message; the Python callbacks of held changes run later
         try:
             self._draw(scenario, outcomes, end)
-            self._show([], [*notes, *scenario.warnings])
+            # a refused value stays explained while the page recomputes what is in force (the
+            # release of the slider that was refused, the next tick of a playing motion)
+            self._show([self._refusal] if self._refusal else [], [*notes, *scenario.warnings])
         finally:
             self.doc.unhold()
         self._syncing = True  # not held: these changes call back now, and are muted
@@ -726,7 +745,7 @@ class Session:
 
     def _draw(self, scenario: Scenario, outcomes: Sequence[Outcome], end: float) -> None:
         scale = logic.ellipse_scale(scenario)
-        palette = [OKABE_ITO[j % len(OKABE_ITO)] for j in range(scenario.n)]
+        palette = [JOINT_LINES[j % len(JOINT_LINES)] for j in range(scenario.n)]
         for i, outcome in enumerate(outcomes):
             color = CONTROLLER_STYLE[outcome.name]["color"]
             run = outcome.run
@@ -781,7 +800,7 @@ class Session:
         toml = logic.export_toml(dataclasses.replace(scenario, name=name))
         self.save_toml.tags = [toml, f"{name}.toml"]
         self.save_png.tags = [f"{name}.png", self._caption(scenario, outcomes)]
-        _set(self.legend, text=self._legend(outcomes))
+        _set(self.legend, text=self._legend(outcomes, scenario.n))
 
     def _sync_widgets(self, scenario: Scenario, end: float, replay: bool) -> None:
         """Show the scenario's values: goal, start pose, widgets, scrub bar; ``replay`` plays
@@ -835,7 +854,7 @@ class Session:
             f"{scenario.motion.goal[1]:.2f}) m; " + "; ".join(parts)
         )
 
-    def _legend(self, outcomes: Sequence[Outcome]) -> str:
+    def _legend(self, outcomes: Sequence[Outcome], n: int) -> str:
         line = '<span class="line {}" style="border-color:{}"></span>'
         swatch = '<span class="sw" style="background:{}"></span>'
         items = []
@@ -844,6 +863,10 @@ class Session:
             items.append(f"{line.format(kind, color)}{outcome.name}{what}")
         for code, text in enumerate(logic.JOINT_STATES[:4]):
             items.append(f"{swatch.format(JOINT_COLORS[code])}{text}")
+        joints = "".join(  # the joint-angle plot's curves
+            f"{line.format('solid', JOINT_LINES[j % len(JOINT_LINES)])}q{j + 1} " for j in range(n)
+        )
+        items.append(joints.strip())
         return (
             '<div class="legend">'
             + "".join(f'<span class="item">{i}</span>' for i in items)
@@ -900,7 +923,8 @@ class Session:
             else:
                 self.front_label.text = ""
                 self.front_now.data = {"M": [], "E": []}
-            title = f"Pareto front, t = {result.t:.2f} s" + (" (1 point)" if result.single else "")
+            # short enough for the plot's 250 px: "Pareto, t = 12.35 s (1 point)"
+            title = f"Pareto, t = {result.t:.2f} s" + (" (1 point)" if result.single else "")
             self.pareto_title.text = title if not result.message else f"no front: {result.message}"
             self._refresh_status()
         finally:
