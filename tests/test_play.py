@@ -321,6 +321,7 @@ def test_bad_address_values_are_listed_on_the_page(session):
     s = session(links="nine", **{"weights.effort": "-1", "damper.stop": "x"})
     assert "links: must be 2 to 8" in s.banner.text
     assert "Not applied" in s.banner.text and s.scenario is not None
+    assert '<div class="note">' not in s.banner.text  # refusals look like errors, not notes
     assert s.scenario.weights.effort == 0.1  # the defaults are shown
 
 

@@ -113,7 +113,7 @@ class Session:
         self.doc, self.bases = doc, bases
         request = getattr(doc.session_context, "request", None)
         arguments = dict(request.arguments) if request is not None else {}
-        self.settings, notes = logic.parse_query(arguments, list(bases))
+        self.settings, refused = logic.parse_query(arguments, list(bases))
         self._valid = copy.deepcopy(self.settings)  # the settings of the scenario shown
         self._refusal: str | None = None  # shown until a change of the settings is applied
         self.scenario: Scenario | None = None
@@ -128,7 +128,7 @@ class Session:
         self._due: set[str] = set()  # requests scheduled by _soon
         self._dirty = False  # a slider moved since the last recompute
         layout = self._build()
-        self._recompute(replay=False, notes=notes)
+        self._recompute(replay=False, refused=refused)
         self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
@@ -688,7 +688,9 @@ class Session:
         items += [f'<div class="note">{html.escape(n)}</div>' for n in notes]
         self.banner.text = "".join(items)
 
-    def _recompute(self, *, replay: bool, notes: Sequence[str] = ()) -> None:
+    def _recompute(self, *, replay: bool, refused: Sequence[str] = ()) -> None:
+        """Run the settings in force and draw them; ``refused``: the page address's values that
+        could not be used, shown as errors above the run."""
         start = time.perf_counter()
         self._ran_at, self._dirty = time.monotonic(), False
         try:
@@ -696,14 +698,16 @@ class Session:
         except EmdmError as exc:
             shown = "the page shows the last valid settings" if self.scenario else "nothing to show"
             self._refusal = f"Not applied: {logic.message(exc)} ({shown})"
-            self._show([self._refusal], notes)
+            self._show([*refused, self._refusal], [])
             if self.scenario is None:  # the address's values: drop the refused one, keep the rest
                 key = getattr(exc, "key", "")
                 if key in self.settings.overrides:
                     del self.settings.overrides[key]
                 else:
                     self.settings = Settings(scenario=self.settings.scenario)
-                self._recompute(replay=replay, notes=[*notes, f"Not applied: {logic.message(exc)}"])
+                self._recompute(
+                    replay=replay, refused=[*refused, f"Not applied: {logic.message(exc)}"]
+                )
                 return
             # back to the settings in force, and every control showing them (a refused slider
             # value must not stay on screen beside plots of the earlier one)
@@ -732,7 +736,8 @@ class Session:
             self._draw(scenario, outcomes, end)
             # a refused value stays explained while the page recomputes what is in force (the
             # release of the slider that was refused, the next tick of a playing motion)
-            self._show([self._refusal] if self._refusal else [], [*notes, *scenario.warnings])
+            errors = [*refused, *([self._refusal] if self._refusal else [])]
+            self._show(errors, list(scenario.warnings))
         finally:
             self.doc.unhold()
         self._syncing = True  # not held: these changes call back now, and are muted
