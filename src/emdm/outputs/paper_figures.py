@@ -222,10 +222,25 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
             qd_axes[j].set_ylabel(rf"$\dot q_{j + 1}$", labelpad=1)
             for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
                 qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
-            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
+            # with constrained and unconstrained runs together, the axis is the constrained
+            # runs' (within the limits): the unconstrained peaks are clipped and their value said
+            scaled = [r for r in runs if r.controller.name.startswith("C-")]
+            seen = scaled if 0 < len(scaled) < len(runs) else list(runs)
+            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in seen)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             span = max(top, limit) * 1.15
             qd_axes[j].set_ylim(-span, span)
+            peak = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
+            if peak > span:
+                qd_axes[j].text(
+                    0.98,
+                    0.06,
+                    f"UC peak {peak:.1f} off-scale",
+                    transform=qd_axes[j].transAxes,
+                    ha="right",
+                    va="bottom",
+                    fontsize=medium.small,
+                )
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
@@ -278,7 +293,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 1.8 if medium is PAPER else 2.7
+    height = 1.7 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -372,7 +387,14 @@ def workspace_figure(
                 markersize=2.5,
                 label="goal beyond\nlimit of $q_1$",
             ),
-            Line2D([], [], color="black", marker="X", linestyle="none", label="stall"),
+            Line2D(  # in the colour of the run that stalls, as drawn
+                [],
+                [],
+                color=next((_style(r, medium)["color"] for r in runs if not r.reached), "black"),
+                marker="X",
+                linestyle="none",
+                label="stall",
+            ),
             Line2D(
                 [],
                 [],
@@ -500,7 +522,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.18 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.12 * len(names) + 0.3) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)

@@ -7,7 +7,7 @@ from typing import Any
 
 from ...core.controllers import Name
 from .document import Document
-from .findings import ALPHA, ERR, M_SYM, MRATE, RATIO, W_M, Story
+from .findings import ALPHA, DT, ERR, M_SYM, MRATE, RATIO, W_M, Story
 from .trace import Data, Math, Sentence, Text, sentence
 
 
@@ -264,7 +264,7 @@ class Pitch:
             out[0] += sentence(
                 ", by leaving the joint limits (joint ",
                 s.ev(t, ivkc, "limits", "excess_joint", fmt="d"),
-                " by ",
+                " by up to ",
                 s.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
                 ")",
             )
@@ -327,13 +327,26 @@ class Pitch:
         if failed:
             out.append(
                 sentence(
-                    "Too much weight on dexterity fails: at ",
+                    "Too much weight on dexterity: at ",
                     RATIO,
                     " = ",
                     self.d.num(grid, "runs", failed[0], "w_manip", fmt=".4g"),
                     Text("/"),
                     self.d.num(grid, "runs", failed[0], "w_effort", fmt=".2g"),
                     " the run misses the goal",
+                    *(
+                        (
+                            ", a failure of the time step: with ",
+                            DT,
+                            " = ",
+                            self.d.num(
+                                grid, "runs", failed[0], "finer_dt", "dt", fmt=".2f", unit="s"
+                            ),
+                            " it arrives",
+                        )
+                        if self.d.value(grid, "runs", failed[0]).get("finer_dt", {}).get("reached")
+                        else ()
+                    ),
                 )
             )
         return out
