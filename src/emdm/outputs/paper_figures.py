@@ -522,7 +522,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.12 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.06 * len(names) + 0.3) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)

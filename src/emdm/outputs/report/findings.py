@@ -606,8 +606,21 @@ class Story:
             if e0 > 0
             else Text("little"),
             " effort at k = 0" if en >= e0 else " effort",
-            ".",
         )
+        later = [
+            (info["nominal_E"] / info["zero_E"], i)
+            for i, info in enumerate(self.d.value(uc, "steps"))
+            if i > 0 and info.get("zero_E") and info.get("nominal_E") is not None
+        ]
+        if later and e0 > 0 and max(later)[0] > en / e0:  # dearer later: say so
+            i = max(later)[1]
+            answer += sentence(
+                " but up to ",
+                self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
+                " at k = ",
+                self.d.num(uc, "steps", i, "k", fmt="d"),
+            )
+        answer += sentence(".")
         sec.answer = answer
         self.answers.append(("Task 1: Pareto front between E and M at t = 0, T/3, 2T/3, T", answer))
         # degenerate and saturated fronts of C-EMDM
@@ -1930,10 +1943,10 @@ class Story:
         table = Table(
             "solvers",
             sentence(
-                "Task 2 C-EMDM solvers on the same re-solved programs: median time and "
-                "iterations/evaluations, largest gap to the optimum and bound violation (0: below ",
+                "Task 2 C-EMDM, each solver on the same re-solved programs (medians; largest gap "
+                "to the optimum and bound violation, 0 below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "); time to goal with each solver alone in the loop.",
+                "; goal: the solver alone in the loop).",
             ),
             [
                 sentence("solver"),
