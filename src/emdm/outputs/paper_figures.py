@@ -184,8 +184,18 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
-        for run in runs:
+        mixed = 0 < sum(r.controller.name.startswith("C-") for r in runs) < len(runs)
+
+        def drawn(run: Run) -> dict[str, Any]:
             st = _style(run, medium)
+            if mixed and not run.controller.name.startswith("C-"):
+                # beside the constrained pair, the unconstrained one thinner and lighter: the
+                # two oranges and the two blues must not be read as one run
+                st = {**st, "linewidth": 0.6 * st["linewidth"], "alpha": 0.75}
+            return st
+
+        for run in runs:
+            st = drawn(run)
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
@@ -230,17 +240,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             span = max(top, limit) * 1.15
             qd_axes[j].set_ylim(-span, span)
-            peak = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
-            if peak > span:
-                qd_axes[j].text(
-                    0.98,
-                    0.06,
-                    f"UC peak {peak:.1f} off-scale",
-                    transform=qd_axes[j].transAxes,
-                    ha="right",
-                    va="bottom",
-                    fontsize=medium.small,
-                )
+            # (the caption gives the clipped peaks: a label in the panel would cover a curve)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
@@ -265,7 +265,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         # panel letters above the axes, where no curve can hide them
         for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
-        handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
+        handles: list[Artist] = [Line2D([], [], **drawn(r)) for r in runs]
         if spans:
             handles.append(
                 Patch(color="#999999", alpha=0.35, label=r"both task-scaled ($\alpha<1$)")
@@ -651,16 +651,28 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         ]
         right.set_xlim(floor / 10, 30 * max([1.0, *finite]))  # no marker clipped at the edge
         left.set_ylim(-0.6, len(order) - 0.1)
-        handles = [
-            Line2D([], [], color="#D55E00", marker="x", linestyle="none", label="bound violation")
+        handles = [  # the families' markers first: a reader must not guess them
+            Line2D(
+                [],
+                [],
+                marker=markers[f],
+                color=FAMILY_COLOR[f],
+                linestyle="none",
+                label=f,
+            )
+            for f in ("exact", "gradient", "gradient-free")
+            if any(rows[k]["family"] == f for k in order)
         ]
+        handles.append(
+            Line2D([], [], color="#D55E00", marker="x", linestyle="none", label="bound violation")
+        )
         fig.legend(  # below the panels, where it hides no marker
             handles=[
                 *handles,
                 Patch(color="#0072B2", alpha=0.25, label=r"gap $\leq 10^{-12}$"),
             ],
             loc="outside lower center",
-            ncols=2,
+            ncols=3,
             frameon=False,
             fontsize=medium.tiny,
             handletextpad=0.3,

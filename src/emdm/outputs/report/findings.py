@@ -688,7 +688,7 @@ class Story:
                 self.d.num(grid_file, "runs", i, "w_effort", fmt=".2g"),
                 " UC-EMDM fails to reach the goal (final error ",
                 self.d.num(grid_file, "runs", i, "final_error", fmt=".3f", unit="m"),
-                "): its null-space speed reaches ",
+                "): its largest joint speed reaches ",
                 self.d.num(grid_file, "runs", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                 ", and a step of ",
                 self.d.num(
@@ -1096,6 +1096,7 @@ class Story:
         )
         sec.paragraphs.append(p)
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
+            peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
                 "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
                 "solid, EMDM dashed): (a) manipulability ",
@@ -1108,7 +1109,9 @@ class Story:
                 ERR,
                 " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
                 "limits and damper influence and stop zones, (e) joint velocities with their "
-                "limits.",
+                "limits, on the constrained runs' scale (unconstrained peaks up to ",
+                self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
+                ").",
             )
             sec.figures.append(self.figure("t2-c", "figures/task2-all", caption))
         else:
@@ -1220,7 +1223,7 @@ class Story:
                 answer += (
                     sentence(
                         "; the others stop short of the optimum by ",
-                        self.d.num(f, "solvers", lo, "max_abs_gap", fmt=".0e"),
+                        self.d.num(f, "solvers", lo, "max_abs_gap", fmt=".2g"),
                         " (",
                         lo,
                         ") to ",
@@ -1984,8 +1987,8 @@ class Story:
                             "/",
                             self.d.num(f, "solvers", k, "median_evaluations", fmt=".4g"),
                         ),
-                        sentence(
-                            self.d.num(f, "solvers", k, "max_abs_gap", fmt=".0e")
+                        sentence(  # two digits, as the text quotes them
+                            self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g")
                             if abs(r["max_abs_gap"]) >= 1e-12
                             else Text("0")
                         ),

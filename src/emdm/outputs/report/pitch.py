@@ -239,9 +239,9 @@ class Pitch:
         named = [words[m] for m in better]
         return [
             sentence(
-                "Task scaling keeps the straight line but costs ",
+                "Task scaling keeps the straight line but, in Task 1, costs ",
                 ", ".join(named[:-1]) + (" and " if len(named) > 1 else "") + named[-1],
-                ": where the path does not matter, use a slack",
+                " against a slack; in Task 2 it stalls C-IVKC",
             )
         ]
 
