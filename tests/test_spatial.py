@@ -310,13 +310,6 @@ def test_spatial_figures_are_written(tmp_path):
     assert (tmp_path / "p" / "pareto_front.png").is_file()
 
 
-def test_planar_only_commands_refuse_a_spatial_arm_in_one_line(tmp_path, capsys):
-    from emdm.cli.main import main
-
-    assert main(["play", "panda", "--no-browser"]) == 2
-    assert "planar arms only" in capsys.readouterr().err
-
-
 def test_a_written_spatial_scenario_takes_another_task_when_edited(tmp_path):
     """`emdm scenario panda` writes uniform per-row values once, so a user who switches the file
     to a position task gives only the new goal."""

@@ -611,7 +611,7 @@ def cmd_scenario(args: argparse.Namespace) -> int:
 
 
 def cmd_play(args: argparse.Namespace) -> int:
-    from ..play import serve
+    from ..play import serve  # planar: the Bokeh page; spatial: the 3-D viser page
 
     return serve(_scenario(args), port=args.port, open_browser=not args.no_browser)
 
@@ -934,7 +934,9 @@ def build_parser() -> argparse.ArgumentParser:
         sub,
         "play",
         "the live playground in the browser (drag the goal, move the weights)",
-        "Serve the playground on 127.0.0.1 and open it in the browser.",
+        "Serve the playground on 127.0.0.1 and open it in the browser: a planar arm on the 2-D "
+        "page (Bokeh, the play extra), a spatial one (panda, ur5, panda-obstacles, a URDF or "
+        "spatial TOML file) on the 3-D page (viser, the play3d extra).",
     )
     add_scenario(play, default="task1")
     play.add_argument(

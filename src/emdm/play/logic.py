@@ -174,7 +174,14 @@ def build_scenario(bases: Mapping[str, Scenario], settings: Settings) -> Scenari
     if settings.links is not None:
         base = with_links(base, settings.links)
     scenario = base.with_overrides(settings.overrides)
-    cap = max(MAX_STEPS, bases[settings.scenario].max_steps)  # the served file's own stands
+    check_steps(scenario, bases[settings.scenario])
+    return scenario
+
+
+def check_steps(scenario: Scenario, served: Scenario) -> None:
+    """A page computes at most :data:`MAX_STEPS` per controller, or the served file's own
+    number: a :class:`ScenarioError` naming ``motion.max_time`` beyond that."""
+    cap = max(MAX_STEPS, served.max_steps)  # the served file's own stands
     if scenario.max_steps > cap:
         raise ScenarioError(
             "page",
@@ -183,7 +190,6 @@ def build_scenario(bases: Mapping[str, Scenario], settings: Settings) -> Scenari
             f"at most {cap} per controller (max_time <= {cap * scenario.motion.dt:g} s), which "
             "keeps every change interactive",
         )
-    return scenario
 
 
 def parse_query(
