@@ -14,7 +14,7 @@ from .style import COLUMN, DOUBLE, FAMILY_COLOR, color, figure
 FLOOR = 1e-17
 
 
-def _error_curve(history: tuple[dict[str, float], ...], f_star: float) -> np.ndarray:
+def error_curve(history: tuple[dict[str, float], ...], f_star: float) -> np.ndarray:
     """Running best of ``|f - f*| + violation`` along a history (floored for log axes)."""
     values = [
         abs(h["objective"] - f_star) + h.get("violation", h.get("primal_residual", 0.0))
@@ -42,7 +42,7 @@ def convergence_figure(lab: LabResult, out: Path) -> Path:
                 hist = study.histories.get(label, ())
                 if not hist:
                     continue
-                err = _error_curve(hist, f_star)
+                err = error_curve(hist, f_star)
                 style = {
                     **_line_style(i),
                     "label": name,

@@ -522,7 +522,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.06 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.0 * len(names) + 0.3) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)
@@ -677,6 +677,44 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
             fontsize=medium.tiny,
             handletextpad=0.3,
             columnspacing=1.0,
+        )
+    return stem
+
+
+def convergence_figure(
+    curves: dict[str, tuple[str, Sequence[float], Sequence[float]]],
+    step: int,
+    stem: Path,
+    medium: Medium = PAPER,
+) -> Path:
+    """One program's convergence, every solver: the running best of |f - f*| + bound violation
+    against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
+    by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
+    height = 1.15 if medium is PAPER else 2.7
+    width = medium.column if medium is PAPER else 3.3
+    dashes = ("-", "--", ":", "-.")
+    with _figure(stem, medium, width, height) as fig:
+        ax = fig.add_subplot()
+        seen: dict[str, int] = {}
+        for name, (family, evaluations, error) in curves.items():
+            i = seen[family] = seen.get(family, -1) + 1
+            ax.loglog(
+                evaluations,
+                error,
+                color=FAMILY_COLOR.get(family, "grey"),
+                linestyle=dashes[i % len(dashes)],
+                linewidth=medium.line,
+                label=name,
+            )
+        ax.set_xlabel("objective evaluations", labelpad=1)
+        ax.set_ylabel(r"best $|f-f^*|$ + viol.", labelpad=1)
+        ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
+        ax.legend(
+            loc="center left",
+            bbox_to_anchor=(1.01, 0.5),
+            fontsize=medium.tiny,
+            frameon=False,
+            handlelength=1.8,
         )
     return stem
 

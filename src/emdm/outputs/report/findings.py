@@ -838,10 +838,7 @@ class Story:
             ")",
         )
         if reached_e and not reached_i:
-            answer += sentence(
-                ", so the comparison is between a controller that can leave the straight line to "
-                "the goal and one that cannot, not between two speeds."
-            )
+            answer += sentence(": one can leave the straight line to the goal, the other cannot.")
         else:
             answer += sentence(".")
         sec.answer = answer
@@ -1270,7 +1267,21 @@ class Story:
                 paper=False,
             )
         )
-        p = sentence("Quality (", Ref("tab", "solvers"), "): ")
+        conv = self.figure(
+            "convergence",
+            "figures/convergence",
+            sentence(
+                "Convergence on one program (green: gradient-based, orange: gradient-free).",
+            ),
+        )
+        if self.has_figure("convergence"):
+            sec.figures.append(conv)
+        p = sentence(
+            "Quality (",
+            Ref("tab", "solvers"),
+            *((", ", Ref("fig", "convergence")) if self.has_figure("convergence") else ()),
+            "): ",
+        )
         violators = [k for k in inexact_free if rows[k]["max_violation"] > 1e-6]
         if violators:  # the gaps are in the answer; every solver's own figures in Table III
             bad = max(violators, key=lambda k: rows[k]["max_violation"])
@@ -1280,7 +1291,7 @@ class Story:
                 "; ",
             )
         p += sentence(
-            "in closed loop (each solver's answers used as they are) ",
+            "in closed loop ",
         )
         ref_t = rows.get("active-set", {}).get("time_to_goal")
         slower = [
@@ -1300,10 +1311,9 @@ class Story:
             p += sentence("every solver reaches the goal at the same time. ")
         p += (
             sentence(
-                "Recommendation: an exact active-set QP method (the custom one: ",
+                "Recommendation: exact active-set QP (ours: ",
                 self.d.ms(f, "solvers", "active-set", "median_time"),
-                "), else a gradient-based solver; gradient-free methods are for objectives "
-                "without gradients.",
+                "), else gradient-based.",
             )
             if "active-set" in rows
             else []
@@ -1444,36 +1454,35 @@ class Story:
                 paper=False,
             )
         )
-        p = sentence(
-            "The slack block of the Hessian grows with ",
-            W_S_SYM,
-        )
+        p = sentence()
         if self.d.exists(f):
             p += sentence(
-                ", and the condition number of the reduced Hessian reaches ",
+                "The reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                " on the re-solved steps. At ",
+                "; at ",
                 M_SYM,
-                " = 0 the manipulability is not differentiable; ",
+                " = 0, where ",
+                M_SYM,
+                " is not differentiable, ",
                 Math("J_m", "<i>J</i><sub>m</sub>"),
-                " is then taken as the steepest one-sided ascent direction, so the program stays "
-                "defined. The exact solvers do not notice: the active-set method needs a median "
-                "of ",
+                " is the steepest one-sided ascent. The active-set method does not notice (a "
+                "median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
-                " iterations in closed loop, warm-started from the previous step (",
+                " iterations warm-started, ",
                 self.d.num(f, "solvers", "active-set", "median_iterations", fmt=".4g"),
-                " from a cold start on the re-solved programs of ",
+                " cold in ",
                 Ref("tab", "solvers"),
-                ")",
-                ", with no fallback. " if self.mv(t, emdm, "fallback_steps") == 0 else ". ",
+                "; no fallback)" if self.mv(t, emdm, "fallback_steps") == 0 else ")",
             )
             ch = self.d.value(f, "challenges", "solvers")
-            if "admm" in ch and ch["admm"].get("iterations_vs_cond_spearman") is not None:
+            if "admm" not in ch or ch["admm"].get("iterations_vs_cond_spearman") is None:
+                p += sentence(".")
+            else:
                 p += sentence(
-                    "First-order ADMM does: its iteration count follows the conditioning (rank "
-                    "correlation ",
+                    "; ",
+                    "ADMM's iterations follow the conditioning (rank correlation ",
                     self.d.num(
                         f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
                     ),
@@ -1555,8 +1564,8 @@ class Story:
             " and ",
             self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
             " effort. On the non-redundant arm the slack, not the dexterity term, decides: it lets "
-            "C-EMDM leave a straight line that the joint limits block, where task scaling, our "
-            "departure from the brief, stalls C-IVKC. ",
+            "C-EMDM leave a straight line that the joint limits block, where task scaling (our "
+            "departure from the brief, kept as the closest to its task equation) stalls C-IVKC. ",
         )
         better = [m for m, b in self._policy_terms() if b]
         adjectives = {
@@ -1568,12 +1577,11 @@ class Story:
         if better:
             named = [adjectives[m] for m in better]
             p += sentence(
-                "Scaling buys only the straight line: with a slack C-EMDM is ",
+                "Scaling buys only that line: with a slack C-EMDM is ",
                 ", ".join(named[:-1]) + (" and " if len(named) > 1 else "") + named[-1],
                 " (E2)",
                 " and C-IVKC arrives (E4)" if e4.get("reached") else "",
-                ". We compare under scaling, the closest to the brief's task equation; where "
-                "the path does not matter, a slack is the better default. ",
+                "; where the path does not matter, a slack is the better default. ",
             )
         p += sentence(
             "Exact active-set QP solvers, certified at every step, are the right tool; "
@@ -1946,10 +1954,10 @@ class Story:
         table = Table(
             "solvers",
             sentence(
-                "Task 2 C-EMDM, each solver on the same re-solved programs (medians; largest gap "
-                "to the optimum and bound violation, 0 below ",
+                "Task 2 C-EMDM solvers on the same programs (medians; largest gap and bound "
+                "violation, 0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "; goal: the solver alone in the loop).",
+                "; goal: alone in the loop).",
             ),
             [
                 sentence("solver"),

@@ -138,7 +138,9 @@ def _job_lab(task: str, controller: str, solvers: Sequence[str], cfg: ReportConf
     )
 
 
-def _write_lab(folder: Path, lab: LabResult, fig_dir: Path | None) -> None:
+def _write_lab(
+    folder: Path, lab: LabResult, fig_dir: Path | None, paper_stem: Path | None = None
+) -> None:
     record = lab_json(lab)
     # where each solver failed: on task-scaled steps (a single admissible point) or not
     record["notes"] = {
@@ -162,6 +164,22 @@ def _write_lab(folder: Path, lab: LabResult, fig_dir: Path | None) -> None:
 
         with formats((".png",)):
             convergence_figure(lab, fig_dir)
+    if paper_stem is not None:  # the paper's: the first representative step, every solver
+        from ..lab_plots import error_curve
+
+        label, k = next(iter(lab.representative.items()))
+        f_star = lab.optimum[k][1]
+        curves = {
+            name: (
+                study.spec.family,
+                [h["evaluations"] for h in study.histories[label]],
+                list(error_curve(study.histories[label], f_star)),
+            )
+            for name, study in lab.studies.items()
+            if study.histories.get(label) and "evaluations" in study.histories[label][0]
+        }
+        if curves:
+            pf.convergence_figure(curves, k, paper_stem)
 
 
 def _job_lab_written(
@@ -171,9 +189,10 @@ def _job_lab_written(
     cfg: ReportConfig,
     data_dir: Path,
     fig_dir: Path | None,
+    paper_stem: Path | None = None,
 ) -> str:
-    """A whole lab, its data (and convergence figure) written by the worker."""
-    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir)
+    """A whole lab, its data (and convergence figures) written by the worker."""
+    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir, paper_stem)
     return controller
 
 
@@ -502,6 +521,7 @@ def build_report(
                 stage / "data" / "task2-lab-C-EMDM",
                 lab2,
                 stage / "figures" / "task2-lab-C-EMDM" if lab_figs else None,
+                stage / PAPER_FIGURES / "convergence",
             )
             data_figs = pool.submit(_job_data_figures, stage, scenarios["task2"].motion.dt, cfg)
             for key, future in futures.items():
