@@ -789,6 +789,24 @@ def manipulability_figure(
     return stem
 
 
+def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
+    """Effort E(t) (log) and manipulability m(t) of a pair, two large panels (a slide's figure,
+    where the pair composite's five panels would be too small to read)."""
+    height = 2.3 if medium is SLIDE else 1.6
+    with _figure(stem, medium, medium.wide, height) as fig:
+        ax_e, ax_m = fig.subplots(1, 2)
+        for run in runs:
+            st = _style(run, medium)
+            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
+            ax_m.plot(run.t, run.m, **st)
+        ax_e.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
+        ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
+        for ax in (ax_e, ax_m):
+            ax.set_xlabel(r"$t$ (s)")
+        ax_m.legend(loc="best", frameon=True, framealpha=0.9)
+    return stem
+
+
 def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Medium = SLIDE) -> Path:
     """Animation stills: each run's arm at ``times`` instants (darker = later), path, goal and
     the manipulability ellipse at the last state, the runs side by side."""

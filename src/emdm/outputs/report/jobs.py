@@ -267,6 +267,8 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))
             )
+            if (task, group) == ("task2", "UC"):  # the pitch's Task 2.2 slide: two big panels
+                out.append(str(pf.effort_figure(pair, stage / SLIDE_FIGURES / "task2-UC-effort")))
     return out
 
 

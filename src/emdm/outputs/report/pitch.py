@@ -222,6 +222,7 @@ class Pitch:
             "task2-C",
             "task1-UC",
             "task2-UC",
+            "task2-UC-effort",
         ):
             out.figures[name] = self.d.exists(f"paper/slides/{name}.png")
         return out
