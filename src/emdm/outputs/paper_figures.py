@@ -22,7 +22,7 @@ Figures (each a function of measured records only):
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -682,7 +682,7 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
 
 
 def convergence_figure(
-    curves: dict[str, tuple[str, Sequence[float], Sequence[float]]],
+    curves: Mapping[str, tuple[str, Sequence[float], Sequence[float]]],
     step: int,
     stem: Path,
     medium: Medium = PAPER,
