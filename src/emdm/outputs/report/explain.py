@@ -269,6 +269,9 @@ def conditioning(run: Run) -> dict[str, Any]:
         "singular_states": int((~np.isfinite(cond)).sum()),
         "w_slack_start": float(w_s[0]),
         "w_slack_end": float(w_s[-1]),
+        # the largest weight a solved program had: the states before the last (at the last the
+        # goal is reached and nothing is solved)
+        "w_slack_max_solved": float(w_s[: run.steps].max()) if run.steps else float(w_s[0]),
     }
 
 

@@ -1203,8 +1203,8 @@ class Story:
                     if len(over) == len(exact_free)
                     else "some overrun it on at least one program in 20"
                     if over
-                    else "it stays within it but costs a hundred times the gradient-based "
-                    "method or more"
+                    else "its 95th percentile is within it, but it costs a hundred times the "
+                    "gradient-based method or more"
                     if all(
                         rows[k]["median_time"] >= 100 * rows[grad]["median_time"]
                         for k in exact_free
@@ -1427,8 +1427,8 @@ class Story:
             " grows from ",
             self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
             " to ",
-            self.ev(t, emdm, "conditioning", "w_slack_end", fmt=".3g"),
-            " as the error shrinks, and the singular passage drives ",
+            self.ev(t, emdm, "conditioning", "w_slack_max_solved", fmt=".3g"),
+            " over the solved steps as the error shrinks, and the singular passage drives ",
             COND_J,
             " to ",
             self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
