@@ -86,6 +86,19 @@ def test_sigterm_stops_report_and_its_pool(tmp_path):
 
 
 @pytest.mark.slow
+def test_sigkill_of_report_leaves_no_worker(tmp_path):
+    """SIGKILL reaches no handler of the report: its pool's workers end with it anyway (they ran
+    on for good before), and nothing is written to --out."""
+    out = tmp_path / "report"
+    process, _, seen = stop_when(
+        ["report", "--quick", "--out", str(out)], lambda kids: len(kids) >= 2, signal.SIGKILL
+    )
+    assert process.returncode == -signal.SIGKILL
+    assert len(seen) >= 2 and gone(seen) == []
+    assert not out.exists()
+
+
+@pytest.mark.slow
 def test_sighup_stops_the_solver_lab_and_keeps_earlier_results(tmp_path):
     out = tmp_path / "lab"
     assert main(["run", "task2", "--controller", "UC-IVKC", "--out", str(out)]) == 0

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import signal
+import sys
 import threading
 from typing import Any
 
@@ -80,3 +83,20 @@ def check_stop() -> None:
     are put in place, between chunks of work and when a command returns."""
     if _Stop.signum and threading.current_thread() is threading.main_thread():
         raise Interrupted(_Stop.signum)
+
+
+def die_with_parent(parent: int) -> None:
+    """The initializer of a pool's worker process: the worker is killed when ``parent`` dies, even
+    by SIGKILL (which no handler of the parent sees), so no worker outlives its command. Linux:
+    ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; elsewhere the pool's own shutdown stops the workers. A
+    parent already gone when this runs ends the worker at once."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+        except (OSError, AttributeError):  # no prctl here: the pool's shutdown remains
+            pass
+    if os.getppid() != parent:
+        os._exit(1)

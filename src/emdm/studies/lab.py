@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import os
 import time
 from collections import Counter
 from collections.abc import Sequence
@@ -32,7 +33,7 @@ from ..core.arm import Vector
 from ..core.controllers import Controller, get_controller, program_at
 from ..core.problem import QP
 from ..core.scenario import Scenario
-from ..errors import NoSolution, ScenarioError, check_stop
+from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 
@@ -265,7 +266,12 @@ def run_lab(
     studies: dict[str, SolverStudy] = {}
     if workers > 1 and len(jobs) > 1:
         context = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        with ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=context,
+            initializer=die_with_parent,  # no worker outlives a killed lab
+            initargs=(os.getpid(),),
+        ) as pool:
             futures = {pool.submit(_study, *job): job[2] for job in jobs}
             done = {}
             for future in as_completed(futures):

@@ -28,7 +28,7 @@ from ... import __version__
 from ...core.controllers import CONTROLLERS, Name
 from ...core.loading import load_scenario
 from ...core.scenario import Scenario
-from ...errors import EmdmError, NoSolution
+from ...errors import EmdmError, NoSolution, die_with_parent
 from ...sim.loop import Run, simulate
 from ...sim.metrics import metrics
 from ...solvers import available_solvers
@@ -484,7 +484,12 @@ def build_report(
         context = multiprocessing.get_context("fork")
         futures: dict[str, Future[Any]] = {}
         results: dict[str, Any] = {}
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        with ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=context,
+            initializer=die_with_parent,  # no worker outlives a killed report
+            initargs=(os.getpid(),),
+        ) as pool:
             # longest jobs first: the gradient-free closed loops
             for name in reversed(solvers2):
                 futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", Name.C_EMDM, [name], cfg)
