@@ -187,6 +187,17 @@ def sample_steps(run: Run, sample: int | None) -> list[int]:
     return sorted(chosen)
 
 
+def worker_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` forked processes (they inherit the compiled kernels) that end with
+    the process that made them, even when it is killed (:func:`~emdm.errors.die_with_parent`)."""
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=die_with_parent,
+        initargs=(os.getpid(),),
+    )
+
+
 def representative_steps(run: Run) -> dict[Representative, int]:
     """The first step, the first scaled step (if any) and the last step of a run."""
     reps = {Representative.FIRST: 0}
@@ -265,13 +276,7 @@ def run_lab(
     ]
     studies: dict[str, SolverStudy] = {}
     if workers > 1 and len(jobs) > 1:
-        context = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=context,
-            initializer=die_with_parent,  # no worker outlives a killed lab
-            initargs=(os.getpid(),),
-        ) as pool:
+        with worker_pool(workers) as pool:
             futures = {pool.submit(_study, *job): job[2] for job in jobs}
             done = {}
             for future in as_completed(futures):

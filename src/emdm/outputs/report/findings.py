@@ -315,10 +315,12 @@ class Story:
         return sec
 
     # ------------------------------------------------------------------ Task 1
-    def pair_caption(self, task: str, group: str) -> Sentence:
-        ivkc, emdm = PAIRS[group]
-        out = sentence(
-            f"{ivkc} (solid) against {emdm} (dashed): (a) manipulability ",
+    @staticmethod
+    def panels() -> Sentence:
+        """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
+        as its captions name them (without the final stop)."""
+        return sentence(
+            "(a) manipulability ",
             M_SYM,
             ", (b) effort ",
             E_SYM,
@@ -327,8 +329,12 @@ class Story:
             "), (c) tracking error ",
             ERR,
             " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
-            "limits and damper influence and stop zones, (e) joint velocities with their limits.",
+            "limits and damper influence and stop zones, (e) joint velocities with their limits",
         )
+
+    def pair_caption(self, task: str, group: str) -> Sentence:
+        ivkc, emdm = PAIRS[group]
+        out = sentence(f"{ivkc} (solid) against {emdm} (dashed): ") + self.panels() + sentence(".")
         if (
             self.pair(task, group, "coincide_scaled_steps")
             and self.pair(task, group, "coincide_all_scaled") is not None
@@ -1094,19 +1100,15 @@ class Story:
         sec.paragraphs.append(p)
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
-            caption = sentence(
-                "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
-                "solid, EMDM dashed): (a) manipulability ",
-                M_SYM,
-                ", (b) effort ",
-                E_SYM,
-                " (log axis, floored at ",
-                Math(r"10^{-9}", "10<sup>−9</sup>"),
-                "), (c) tracking error ",
-                ERR,
-                " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
-                "limits and damper influence and stop zones, (e) joint velocities with their "
-                "limits, on the constrained runs' scale (unconstrained peaks up to ",
+            caption = (
+                sentence(
+                    "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
+                    "solid, EMDM dashed): "
+                )
+                + self.panels()
+            )
+            caption += sentence(
+                ", on the constrained runs' scale (unconstrained peaks up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
                 ").",
             )

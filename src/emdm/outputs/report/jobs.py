@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
-import multiprocessing
 import os
 import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -28,11 +27,19 @@ from ... import __version__
 from ...core.controllers import CONTROLLERS, Name
 from ...core.loading import load_scenario
 from ...core.scenario import Scenario
-from ...errors import EmdmError, NoSolution, die_with_parent
+from ...errors import EmdmError, NoSolution
 from ...sim.loop import Run, simulate
 from ...sim.metrics import metrics
 from ...solvers import available_solvers
-from ...studies.lab import LabResult, lab_header, lab_json, lab_rows, merge_labs, run_lab
+from ...studies.lab import (
+    LabResult,
+    lab_header,
+    lab_json,
+    lab_rows,
+    merge_labs,
+    run_lab,
+    worker_pool,
+)
 from ...studies.pareto import default_grid, pareto_study, ratios, weight_grid
 from .. import paper_figures as pf
 from ..animate import animate
@@ -481,15 +488,9 @@ def build_report(
         solvers2 = [s for s in cfg.lab_solvers if s in available_solvers()]
         solvers1 = [s for s in cfg.fallback_solvers if s in available_solvers()]
         lab_figs = not cfg.quick
-        context = multiprocessing.get_context("fork")
         futures: dict[str, Future[Any]] = {}
         results: dict[str, Any] = {}
-        with ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=context,
-            initializer=die_with_parent,  # no worker outlives a killed report
-            initargs=(os.getpid(),),
-        ) as pool:
+        with worker_pool(workers) as pool:  # no worker outlives a killed report
             # longest jobs first: the gradient-free closed loops
             for name in reversed(solvers2):
                 futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", Name.C_EMDM, [name], cfg)
