@@ -176,6 +176,16 @@ def test_the_page_draws_the_session_and_survives_failures(page):
     assert not page.flush() and "orientation" in page.status.content
 
 
+def test_flush_after_the_worker_took_the_change_reports_its_outcome(page):
+    page.set_override("weights.effort", -1.0)
+    deadline = time.monotonic() + 10.0
+    while page.pending and time.monotonic() < deadline:  # the worker takes it (CI's race)
+        time.sleep(0.01)
+    assert not page.flush() and "refused" in page.status.content
+    page.set_override("weights.effort", 0.01)
+    assert page.flush()
+
+
 def test_the_page_controls_without_a_browser(page):
     user = SimpleNamespace(client=object())  # an event from a tab
     page.scenario.value = "ur5"  # the page's own change: no event from a tab, nothing done

@@ -227,6 +227,7 @@ class Page:
         self.duration = self.t
         self.note = ""
         self.failures = 0
+        self.accepted = True  # the outcome of the last flush
         self.cylinder = cylinder_mesh()
         self.sphere = sphere_mesh()
         self.nodes: dict[str, Any] = {}
@@ -267,11 +268,13 @@ class Page:
         self.wake.set()
 
     def flush(self) -> bool:
-        """Apply the queued changes, compute and draw now; True when the session accepted them."""
+        """Apply the queued changes, compute and draw now; True when the session accepted them.
+
+        With nothing queued (the worker took the changes first) it is the last outcome."""
         with self.lock:
             changes, self.pending = list(self.pending.values()), {}
             if not changes:
-                return True
+                return self.accepted
             refusals = [self.session.error for apply in changes if not apply()]
             accepted = self.session.compute()
             if refusals:  # a change refused before the computation (a malformed value)
@@ -280,6 +283,7 @@ class Page:
             if self.place:
                 self._place()
             self.draw(geometry=accepted)
+            self.accepted = accepted
             return accepted
 
     def set_goal(self, position: Any, wxyz: Any = None, *, gizmo: bool = False) -> None:
@@ -476,6 +480,7 @@ class Page:
         self.t = computed.duration if computed else 0.0
         self._scene()
         self.draw(geometry=accepted)
+        self.accepted = accepted
 
     # ------------------------------------------------------------------------ scene
     def _scene(self) -> None:
