@@ -33,9 +33,9 @@ unit: $(STAMP)
 
 test: lint typecheck unit
 
-fuzz: $(STAMP)   # the long profiles: 10,000 cases per fuzz test, signals at 200 random moments
+fuzz: $(STAMP)   # the long profiles: 10,000 cases per fuzz test, signals at 200 random moments of run, 20 of each command with workers
 	EMDM_FUZZ_EXAMPLES=$${EMDM_FUZZ_EXAMPLES:-10000} $(BIN)/pytest -n 2 tests/test_fuzz.py
-	EMDM_SIGNAL_MOMENTS=$${EMDM_SIGNAL_MOMENTS:-200} $(BIN)/pytest tests/test_signals.py -k random_moment
+	EMDM_SIGNAL_MOMENTS=$${EMDM_SIGNAL_MOMENTS:-200} EMDM_PARALLEL_MOMENTS=$${EMDM_PARALLEL_MOMENTS:-20} $(BIN)/pytest tests/test_signals.py -k random_moment
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .mypy_cache .ruff_cache

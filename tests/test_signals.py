@@ -320,3 +320,84 @@ def test_a_signal_at_a_random_moment_loses_nothing(tmp_path):
         for p in tmp_path.iterdir():
             if p.name != "out":
                 subprocess.run(["rm", "-rf", str(p)], check=True)
+
+
+PARALLEL = {  # a command with workers, the longest it runs here (s) and a file of its results
+    "report": (["report", "--quick"], 13.0, "index.html"),
+    "lab": (
+        ["solvers", "task2", "--solver", "slsqp,nelder-mead", "--sample", "5", "--no-figures"],
+        4.0,
+        "solvers.json",
+    ),
+    "dask": (
+        ["study", "task1", "--runs", "2000", "--engine", "dask", "--workers", "2"],
+        6.0,
+        "study.json",
+    ),
+}
+PARALLEL_MOMENTS = int(os.environ.get("EMDM_PARALLEL_MOMENTS", "1"))
+"""Random moments per run of :func:`test_a_signal_at_a_random_moment_of_a_command_with_workers`:
+one in ``make test`` (on one of its commands, drawn at random), 20 per command in ``make fuzz``."""
+
+
+@pytest.mark.slow
+def test_a_signal_at_a_random_moment_of_a_command_with_workers(tmp_path):
+    """SIGINT, SIGTERM, SIGHUP or SIGKILL at a random moment of a command that starts workers
+    (the report's pool, the solver lab's pool, a Dask cluster), over earlier results: it finished
+    (exit 0, complete results), or it stopped with its status and one line and the earlier results
+    byte for byte (or the new ones, complete, when the signal came at the swap); no process it
+    started survives it, not even after SIGKILL; nothing is left beside --out after a catchable
+    signal."""
+    rng = np.random.default_rng(int.from_bytes(os.urandom(4), "little"))
+    if PARALLEL_MOMENTS == 1:  # make test: one moment, of one command
+        plan = [rng.choice(sorted(PARALLEL))]
+    else:
+        plan = [name for name in sorted(PARALLEL) for _ in range(PARALLEL_MOMENTS)]
+    if "dask" in plan:
+        pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    assert main(["run", "task1", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    env = {**os.environ, "EMDM_PROGRESS": "0"}
+    signals = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGKILL]
+    for name in plan:
+        argv, longest, result = PARALLEL[name]
+        before = snapshot(out)
+        sig = signals[int(rng.integers(len(signals)))]
+        delay = float(rng.uniform(0.0, longest))
+        process = subprocess.Popen(
+            [sys.executable, "-m", "emdm", *argv, "--out", str(out)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        handled(process, timeout=60.0)
+        seen: set[int] = set()
+        deadline = time.monotonic() + delay
+        while time.monotonic() < deadline and process.poll() is None:
+            seen.update(descendants(process.pid))  # every worker it starts, however briefly
+            time.sleep(0.02)
+        if process.poll() is None:
+            seen.update(descendants(process.pid))
+            process.send_signal(sig)
+        _, err = process.communicate(timeout=120)
+        code = process.returncode
+        moment = f"{name}: {sig.name} after {delay:.2f} s: exit {code}, {err[-600:]!r}"
+        assert "Traceback" not in err, moment
+        assert gone(seen, wait=10.0) == [], moment
+        after = snapshot(out)
+        complete = result in after and ".emdm-results" in after and after != before
+        if code == 0:
+            assert complete, moment
+        elif sig == signal.SIGKILL:
+            assert code == -signal.SIGKILL and (after == before or complete), moment
+        else:
+            assert code == 128 + sig, moment
+            assert last_line(err).startswith("emdm: "), moment
+            if after != before:
+                assert complete and "was written before that" in last_line(err), moment
+        if sig != signal.SIGKILL:
+            assert [p.name for p in tmp_path.iterdir()] == ["out"], moment
+        for p in tmp_path.iterdir():  # what SIGKILL left is tidied by the next command; start clean
+            if p.name != "out":
+                subprocess.run(["rm", "-rf", str(p)], check=True)
