@@ -194,3 +194,28 @@ def test_buffer_estimates_and_a_run_too_large_for_the_machine_is_refused_up_fron
     with pytest.raises(emdm.ScenarioError, match=r"task1: (arm|motion\.max_time): .* GB"):
         emdm.simulate_batch(sc, "C-EMDM")  # a full-length record per thread: the larger part
     assert emdm.simulate(emdm.load_scenario("task1"), "C-EMDM").reached  # small runs go on
+
+
+def test_simulate_passes_one_signature_to_the_loop(monkeypatch):
+    """simulate calls the loop's machine code without numba's per-call type lookup
+    (loop._entry): sound only while every kind of arm, task, program and obstacle gives the
+    loop arguments of one type, which this checks."""
+    from emdm.sim import loop
+
+    seen: set[tuple[object, ...]] = set()
+    real = loop._entry
+
+    def spy(args):
+        seen.add(tuple(loop.run_kernel.typeof_pyval(a) for a in args))
+        return real(args)
+
+    monkeypatch.setattr(loop, "_entry", spy)
+    planes = {"planes.normals": [[0.0, 1.0]], "planes.offsets": [-0.5]}
+    cases = [(p, {}) for p in ("task1", "task2", "obstacle", "panda", "ur5", "panda-obstacles")]
+    cases += [("task1", {"arm.lengths": [0.3] * 7, "motion.q0": [0.3] * 7}), ("task1", planes)]
+    cases += [("ur5", {"motion.axes": "trans"}), ("task1", {"controller.on_infeasible": "slack"})]
+    for preset, overrides in cases:
+        sc = emdm.load_scenario(preset, {"motion.max_time": 0.2, **overrides})
+        for name in ("UC-IVKC", "C-EMDM", "MMC", "NEO"):
+            emdm.simulate(sc, name)
+    assert len(seen) == 1, seen

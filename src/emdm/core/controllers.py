@@ -220,6 +220,9 @@ def get_controller(name: str) -> Controller:
     """The controller called ``name`` (case-insensitive), or an :class:`EmdmError` listing them
     (a :class:`~emdm.errors.ScenarioError` when ``name`` is not a string)."""
     _Checker("get_controller").text("name", name, "a controller's name")
+    exact = CONTROLLERS.get(name) or BASELINES.get(name)  # the usual call: a name as printed
+    if exact is not None:
+        return exact
     for key, controller in (CONTROLLERS | BASELINES).items():
         if key.lower() == name.lower():
             return controller

@@ -21,9 +21,10 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -433,10 +434,9 @@ def simulate(
     work = _work(n, nx, nt, prog.rows, len(scenario.obstacles))
     steps = _Steps()
     k = 0
+    kernel = _entry((arm, geo, motion, prog, True, True, rec, k, work))
     while True:
-        code, k = run_kernel(
-            arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work
-        )
+        code, k = kernel(arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work)
         if code == Exit.FULL:
             cap = min(motion.n_steps, 4 * cap)
             rec = _grow(rec, cap, n)
@@ -451,6 +451,29 @@ def simulate(
             raise
         k += 1
     return _run(scenario, ctrl, rec, k, steps, reached=code == Exit.REACHED)
+
+
+_entries: list[Callable[..., tuple[int, int]]] = []
+
+
+def _entry(args: tuple[Any, ...]) -> Callable[..., tuple[int, int]]:
+    """:func:`run_kernel`'s machine code for :func:`simulate`'s arguments, looked up once.
+
+    numba's dispatcher finds a kernel's machine code by fingerprinting every argument at every
+    call: about 100 arrays here, 10 us, a fifth of a short run's cost. :func:`simulate`'s
+    arguments always have one type: every array in them is made by emdm's own builders
+    (:func:`~emdm.sim.buffers.new_record`, :func:`~emdm.sim.buffers.step_work`,
+    :func:`motion_data`, ``Scenario.arm_data`` and ``geometry``, ``Controller.program_data``),
+    each with a fixed dtype, number of dimensions and C layout, so the lookup is done on the
+    first call and its entry point reused (``tests/test_simulate.py`` checks that every kind of
+    arm, task, program and obstacle gives this one signature)."""
+    if not _entries:
+        dispatcher: Any = run_kernel
+        signature = tuple(dispatcher.typeof_pyval(a) for a in args)
+        if signature not in dispatcher.overloads:  # not warmed up for it: compiled (or loaded)
+            dispatcher.compile(signature)
+        _entries.append(dispatcher.overloads[signature].entry_point)
+    return _entries[0]
 
 
 def _arguments(
@@ -569,8 +592,11 @@ def _run(
         if k < K:
             solve_time[k] = seconds
     fallback = np.zeros(K, dtype=bool)
-    fallback[[k for k in steps.fallback if k < K]] = True
-    policy = ["scale" if a < 1.0 else "" for a in rec.alpha[:K].tolist()]
+    if steps.fallback:
+        fallback[[k for k in steps.fallback if k < K]] = True
+    policy = [""] * K
+    for k in (rec.alpha[:K] < 1.0).nonzero()[0].tolist():
+        policy[k] = "scale"
     for k, value in steps.policy.items():
         if k < K:
             policy[k] = value
