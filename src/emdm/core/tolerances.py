@@ -50,6 +50,23 @@ within this band (m) of its final error, for at least ``STALL_TIME``."""
 STALL_TIME = 1.0
 """Shortest stall (s) that counts as one."""
 
+CHATTER_SPEED = 0.05
+"""A joint chatters where its command reverses sign from one step to the next, at least this
+speed (rad/s) on both sides, for ``CHATTER_STEPS`` reversals in a row."""
+
+CHATTER_STEPS = 6
+"""Fewest reversals in a row that count as chattering."""
+
+SLACK_USED = 1e-9
+"""The task slack is in use on a command whose slack ``||delta||`` exceeds this (m/s)."""
+
+NEAR_SINGULAR = 0.01
+"""A state is near-singular when the smallest singular value of its task Jacobian, position rows
+divided by the reach, is below this: the arm has lost almost all of one task direction."""
+
+COINCIDE = 1e-9
+"""Two runs coincide at a state where their joint angles differ by at most this (rad)."""
+
 LAZY = 0.5
 """A row ``G_i x <= h_i`` with ``h_i >= LAZY * max_box G_i x`` (it keeps at least half its
 right-hand side against the largest value the bounds allow) is solved lazily: left out of the

@@ -13,6 +13,7 @@ it shows is computed here.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -26,8 +27,10 @@ from ..core.controllers import Controller, Name, get_controller
 from ..core.loading import parse_override
 from ..core.scenario import Scenario, scenario_from_dict
 from ..core.schema import toml_value
+from ..core.tolerances import COINCIDE, NEAR_SINGULAR
 from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
+from ..sim import passages
 from ..sim.loop import Run, simulate
 from ..studies.pareto import front_at, ratios
 
@@ -428,6 +431,7 @@ def explain(scenario: Scenario, outcome: Outcome) -> str:
             f"the task was scaled down (alpha < 1) on {scaled.size} of {run.steps} steps, "
             f"from t = {run.t[scaled[0]]:.2f} s"
         )
+    notes += _passages(run)
     if run.reached:
         head = f"reached the goal at t = {run.t[-1]:.2f} s"
         return head + ("; " + "; ".join(notes) if notes else "") + "."
@@ -458,6 +462,72 @@ def explain(scenario: Scenario, outcome: Outcome) -> str:
     return f"{head}: {why}" + ("; " + "; ".join(notes) if notes else "") + "."
 
 
+@functools.lru_cache(maxsize=32)  # a Run hashes by identity: one entry per computed run
+def _dexterity(run: Run) -> np.ndarray:
+    return passages.dexterity(run)
+
+
+def _passages(run: Run) -> list[str]:
+    """Chattering, the slack in use and near-singular passages, each in a clause with its times
+    (their one definition is :mod:`emdm.sim.passages`)."""
+    notes = []
+    chatter = passages.chattering(run)
+    if chatter:
+        joints = sorted({c.joint for c in chatter})
+        first, last = min(c.start for c in chatter), max(c.stop for c in chatter)
+        verb = "chatters" if len(joints) == 1 else "chatter"
+        notes.append(
+            f"{_joints(joints)} {verb} from t = {run.t[first]:.2f} s to {run.t[last]:.2f} s: "
+            f"the command reverses sign on every step, up to "
+            f"{max(c.peak for c in chatter):.2f} rad/s"
+        )
+    used = passages.slack_in_use(run)
+    if used.any():
+        size = np.linalg.norm(run.delta, axis=1)
+        k = int(np.argmax(size))
+        notes.append(
+            f"the task slack was in use on {int(used.sum())} of {run.steps} steps (largest "
+            f"||delta|| = {size[k]:.3g} m/s at t = {run.t[k]:.2f} s): there the end effector "
+            f"moves off the P controller's velocity by the slack"
+        )
+    dex = _dexterity(run)
+    near = passages.spans(dex < NEAR_SINGULAR)
+    if near:
+        a, b = near[0]
+        k = a + int(np.argmin(dex[a : b + 1]))
+        more = (
+            f" (and {len(near) - 1} more passage{'s' if len(near) > 2 else ''})"
+            if len(near) > 1
+            else ""
+        )
+        notes.append(
+            f"near-singular from t = {run.t[a]:.2f} s to {run.t[b]:.2f} s{more}: the smallest "
+            f"singular value of J fell to {100 * dex[k]:.2g} % of the reach (m = {run.m[k]:.3g} "
+            f"at t = {run.t[k]:.2f} s)"
+        )
+    return notes
+
+
+def explain_pair(first: Outcome, second: Outcome) -> str:
+    """A sentence when two runs coincide, from the start for a while or throughout (the ghost
+    arm is then hidden under the first), else ``""``."""
+    a, b = first.run, second.run
+    if a is None or b is None or a.steps == 0:
+        return ""
+    shared = passages.coinciding(a, b)
+    if shared == a.q.shape[0] == b.q.shape[0]:
+        return (
+            f"{first.name} and {second.name} coincide throughout (joint angles within "
+            f"{COINCIDE:g} rad): one arm hides the other."
+        )
+    if shared >= 2 and a.t[shared - 1] >= 0.5:
+        return (
+            f"{first.name} and {second.name} coincide until t = {a.t[shared - 1]:.2f} s (joint "
+            f"angles within {COINCIDE:g} rad): the ghost arm is hidden until then."
+        )
+    return ""
+
+
 def _held(run: Run, j: int, side: int) -> str:
     """How joint ``j`` is held at the last command (``side``: +1 upper bound, -1 lower)."""
     value = run.hi[-1, j] if side > 0 else run.lo[-1, j]
@@ -486,8 +556,10 @@ def status_rows(outcome: Outcome, t: float) -> list[tuple[str, str]]:
         ("time to goal", time_to_goal(outcome)),
         ("t", f"{run.t[k]:.2f} s (step {k} of {K})"),
         ("||e||", f"{run.error_norm[k]:.3g} m"),
-        ("m", f"{run.m[k]:.4f}"),
+        ("m", f"{run.m[k]:.4f}" if run.m[k] >= 1e-3 else f"{run.m[k]:.3g}"),
     ]
+    if _dexterity(run)[k] < NEAR_SINGULAR:
+        rows[-1] = ("m", rows[-1][1] + " (near-singular)")
     if k == K:
         end = "goal reached" if run.reached else ("stopped" if outcome.error else "time out")
         rows += [("command", f"none: final state ({end})")]
@@ -496,6 +568,11 @@ def status_rows(outcome: Outcome, t: float) -> list[tuple[str, str]]:
     rows.append(("alpha", "1 (full task)" if alpha >= 1.0 else f"{alpha:.3f} (task scaled)"))
     if run.policy[k] == "slack":
         rows[-1] = ("alpha", "1 (free slack: the task is relaxed)")
+    if passages.slack_in_use(run)[k]:
+        delta = float(np.linalg.norm(run.delta[k]))
+        rows.append(("task slack", f"||delta|| = {delta:.3g} m/s (the task is relaxed)"))
+        if alpha >= 1.0 and run.policy[k] != "slack":
+            rows[-2] = ("alpha", "1 (not scaled; the slack relaxes the task)")
     sides = at_bounds(run)[k]
     active = np.flatnonzero(sides).tolist()
     text = "; ".join(_bound_kind(run, k, j, int(sides[j])) for j in active)
@@ -623,6 +700,7 @@ __all__ = [
     "ellipse_scale",
     "ellipses",
     "explain",
+    "explain_pair",
     "export_toml",
     "front",
     "joint_positions",

@@ -896,6 +896,9 @@ class Session:
             f"<p><b>{html.escape(o.name)}</b>: {html.escape(logic.explain(scenario, o))}</p>"
             for o in self.outcomes
         )
+        if len(self.outcomes) == 2:
+            pair = logic.explain_pair(*self.outcomes)
+            why += f"<p>{html.escape(pair)}</p>" if pair else ""
         ms = {key: f"{value * 1e3:.1f}" for key, value in self.timing.items()}
         timing = (
             f'<p class="timing">server: this change <span class="change">{ms["change"]}</span> ms '
