@@ -99,3 +99,36 @@ def test_half_bounded_variables_go_to_highs():
     x = feasible_point(np.eye(2), np.array([2.0, -3.0]), lb, ub)
     np.testing.assert_allclose(x, [2.0, -3.0])
     assert feasible_point(np.eye(2), np.array([-2.0, 3.0]), lb, ub) is None
+
+
+def test_velocity_set_is_the_hull_of_the_box_corners():
+    import itertools
+
+    from scipy.spatial import ConvexHull
+
+    from emdm.core.feasibility import velocity_set
+
+    rng = np.random.default_rng(3)
+    for trial in range(100):
+        n = int(rng.integers(1, 7))
+        J = rng.normal(size=(2, n))
+        lb, ub = -rng.uniform(0.1, 2, n), rng.uniform(0.1, 2, n)
+        if trial % 4 == 0:
+            lb[0] = ub[0]  # a joint held at one speed: a translation, no side
+        V = velocity_set(J, lb, ub)
+        corners = np.array(
+            [J @ np.where(np.array(c, bool), ub, lb) for c in itertools.product((0, 1), repeat=n)]
+        )
+        x, y = V[:, 0], V[:, 1]
+        signed = 0.5 * float(x @ np.roll(y, -1) - y @ np.roll(x, -1))
+        if n - (trial % 4 == 0) >= 2:
+            assert signed == pytest.approx(ConvexHull(corners).volume, rel=1e-9)  # area, CCW
+        # every corner of the box maps inside, and every vertex is a corner's image
+        edges = np.roll(V, -1, axis=0) - V
+        for c in corners:
+            cross = edges[:, 0] * (c[1] - V[:, 1]) - edges[:, 1] * (c[0] - V[:, 0])
+            assert cross.min() >= -1e-9
+        assert all(np.min(np.linalg.norm(corners - v, axis=1)) < 1e-9 for v in V)
+    assert velocity_set(np.eye(2), np.array([-np.inf, 0.0]), np.ones(2)) is None
+    with pytest.raises(ValueError):
+        velocity_set(np.eye(3), np.zeros(3), np.ones(3))

@@ -159,6 +159,35 @@ def test_joint_states_show_zones_pins_and_broken_limits(bases, task2_c):
     assert math.isnan(steps["E"][-1]) and math.isnan(steps["alpha"][-1])
 
 
+def test_the_drawn_program_is_the_step_s_program(bases):
+    """The velocity set drawn at the tip holds the P velocity when the step keeps the full task
+    and not when it scales it, and its arrows are the P velocity and J qd of the command."""
+    run = logic.run_controller(bases["task1"], "C-EMDM").run
+    scale = 0.2
+    drawn = logic.velocity_data(run, scale)
+    K, n = run.steps, bases["task1"].n
+    corners = np.column_stack((drawn["px"], drawn["py"])).reshape(K + 1, 2 * n, 2)
+    tip = run.p[:, :2]
+    assert np.allclose(drawn["vx"][:K], tip[:K, 0] + scale * run.v[:K, 0])
+    arm = bases["task1"].planar_arm
+    for k in (0, 60, K - 1):
+        Jqd = arm.jacobian(run.q[k]) @ run.qd[k]
+        assert np.allclose([drawn["ax"][k], drawn["ay"][k]], tip[k] + scale * Jqd)
+    inside = []
+    for k in range(K):
+        V = (corners[k] - tip[k]) / scale
+        edges = np.roll(V, -1, axis=0) - V
+        v = run.v[k]
+        cross = edges[:, 0] * (v[1] - V[:, 1]) - edges[:, 1] * (v[0] - V[:, 0])
+        keep = np.linalg.norm(edges, axis=1) > 1e-12  # padded corners repeat the last one
+        inside.append(cross[keep].min() >= -1e-9)
+    inside = np.array(inside)
+    assert np.array_equal(inside, ~run.scaled)  # task1 scales its first 38 steps
+    assert run.scaled.sum() == 38 and math.isnan(drawn["ax"][K])
+    uc = logic.run_controller(bases["task1"], "UC-EMDM").run
+    assert np.all(np.isnan(logic.velocity_data(uc, scale)["px"]))  # no bounds: no polygon
+
+
 # ------------------------------------------------------------------------------ status text
 def test_status_says_why_a_run_ended(bases, task2_c):
     emdm_run, ivkc = task2_c
@@ -498,6 +527,10 @@ def test_the_page_in_a_real_browser(tmp_path):
         _wait(driver, MODEL + ".text.includes('C-EMDM')", "status")
         status, trace = _text(driver, "status"), _series(driver, "ex")
         assert "0.00 s (step 0 of 163)" in status
+        # the program at the step shown: its velocity set (6 corners) and both arrows
+        assert len(driver.execute_script(MODEL + ".data.x", "velocity-set")) == 6
+        assert len(driver.execute_script(MODEL + ".data.x1", "want")) == 1
+        assert len(driver.execute_script(MODEL + ".data.x1", "got")) == 1
 
         # drag the goal: a new trajectory ends there and the status changes
         goal = driver.execute_script(WHERE, "scene", -0.7, 0.5)

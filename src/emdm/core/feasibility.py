@@ -26,7 +26,7 @@ from .checks import _Checker
 from .tolerances import FEASIBILITY_TOL, RANK_TOL
 from .zonotope import NEEDS_REFERENCE, OK
 
-__all__ = ["FEASIBILITY_TOL", "RANK_TOL", "feasible_point", "task_scale"]
+__all__ = ["FEASIBILITY_TOL", "RANK_TOL", "feasible_point", "task_scale", "velocity_set"]
 
 
 def _contiguous(*arrays: Vector) -> tuple[Vector, ...]:
@@ -181,3 +181,31 @@ def _linprog(
     if rows and not simplex.rows_hold(*_contiguous(G, h, x)):  # type: ignore[arg-type]
         return None
     return alpha, x
+
+
+def velocity_set(J: Matrix, lb: Vector, ub: Vector) -> Matrix | None:
+    """The vertices, counter-clockwise, of the set of task velocities ``{J x : lb <= x <= ub}``
+    of a two-row task (a zonotope: the polygon of tip velocities the joint bounds allow), ``(V,
+    2)`` with ``V`` twice the number of joints whose column and interval are not zero; ``None``
+    when a bound is infinite (the set is unbounded).
+
+    Each joint adds the segment ``J_j [lb_j, ub_j]``; with the segments' half-vectors ``g_j``
+    turned into ``[0, pi)`` and sorted by angle, the boundary walks ``+2 g_j`` in that order from
+    the lowest-rightmost corner, then ``-2 g_j`` (the Minkowski sum of segments)."""
+    J, lb, ub = (np.asarray(a, dtype=float) for a in (J, lb, ub))
+    if J.ndim != 2 or J.shape[0] != 2 or lb.shape != ub.shape or lb.shape != (J.shape[1],):
+        raise ValueError("velocity_set: J is 2 x n and lb, ub have n entries")
+    if not (np.all(np.isfinite(lb)) and np.all(np.isfinite(ub))):
+        return None
+    centre = J @ ((lb + ub) / 2)
+    g = J * ((ub - lb) / 2)[None, :]
+    keep = np.hypot(g[0], g[1]) > 0.0
+    g = g[:, keep]
+    angle = np.arctan2(g[1], g[0])
+    flip = (angle < 0.0) | (angle >= np.pi)
+    g[:, flip] *= -1.0
+    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
+    start = centre - g.sum(axis=1)
+    steps = np.concatenate((2 * g, -2 * g), axis=1).T
+    corners = start + np.concatenate((np.zeros((1, 2)), np.cumsum(steps, axis=0)[:-1]))
+    return np.asarray(corners)

@@ -24,6 +24,7 @@ from urllib.parse import urlencode
 import numpy as np
 
 from ..core.controllers import Controller, Name, get_controller
+from ..core.feasibility import velocity_set
 from ..core.loading import parse_override
 from ..core.scenario import Scenario, scenario_from_dict
 from ..core.schema import toml_value
@@ -399,6 +400,41 @@ def scene_data(run: Run, scale: float) -> tuple[dict[str, np.ndarray], dict[str,
     return points, steps
 
 
+def velocity_data(run: Run, scale: float) -> dict[str, np.ndarray]:
+    """The step's program drawn at the tip, at the ellipse's ``scale`` (m per m/s), state by
+    state: ``px, py``, the ``2n`` corners of the tip velocities the step's joint bounds allow
+    (:func:`emdm.core.feasibility.velocity_set`; NaN where a bound is infinite, as in UC
+    programs, and the last command's at the final state), and ``vx, vy`` (the P controller's
+    velocity) and ``ax, ay`` (the tip velocity ``J qd`` of the command), as points."""
+    sc = run.scenario
+    K, n = run.steps, sc.n
+    pts = joint_positions(sc.link_lengths, run.q)
+    tip = pts[:, -1]
+    arms = tip[:, None, :] - pts[:, :-1]  # (K + 1, n, 2): joint j to the tip
+    J = np.stack((-arms[..., 1], arms[..., 0]), axis=1)  # (K + 1, 2, n)
+    corners = np.full((K + 1, 2 * n, 2), np.nan)
+    for k in range(K):
+        vertices = velocity_set(J[k], run.lo[k], run.hi[k])
+        if vertices is not None and len(vertices):
+            corners[k, : len(vertices)] = vertices
+            corners[k, len(vertices) :] = vertices[-1]
+    if K:
+        corners[K] = corners[K - 1]
+    drawn = tip[:, None, :] + scale * corners
+    achieved = np.full((K + 1, 2), np.nan)
+    achieved[:K] = np.einsum("kij,kj->ki", J[:K], run.qd)
+    desired = np.full((K + 1, 2), np.nan)
+    desired[:K] = run.v[:K]
+    return {
+        "px": drawn[..., 0].ravel(),
+        "py": drawn[..., 1].ravel(),
+        "vx": tip[:, 0] + scale * desired[:, 0],
+        "vy": tip[:, 1] + scale * desired[:, 1],
+        "ax": tip[:, 0] + scale * achieved[:, 0],
+        "ay": tip[:, 1] + scale * achieved[:, 1],
+    }
+
+
 # ------------------------------------------------------------------------------------ status
 def _joints(indices: Sequence[int]) -> str:
     names = [str(j + 1) for j in indices]
@@ -712,5 +748,6 @@ __all__ = [
     "scene_data",
     "status_rows",
     "step_at",
+    "velocity_data",
     "with_links",
 ]

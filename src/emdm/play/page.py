@@ -31,7 +31,7 @@ from bokeh.models import (
     PointDrawTool,
     Range1d,
 )
-from bokeh.models.annotations import BoxAnnotation, Label, Span, Title
+from bokeh.models.annotations import Arrow, BoxAnnotation, Label, OpenHead, Span, Title, VeeHead
 from bokeh.models.widgets import Button, Div, RadioButtonGroup, Select, Slider, Spinner, Toggle
 from bokeh.plotting import figure
 
@@ -46,6 +46,8 @@ from .logic import CONTROLS, PAIRS, Control, Outcome, Settings
 log = logging.getLogger("emdm.play")
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+VELOCITY_COLOR = "#56B4E9"
+"""Outline and fill of the tip velocity set drawn at the tip (a colour no controller uses)."""
 JOINT_COLORS = ("white", "#F0E442", "#CC79A7", "black", "#444444")
 """Fill of the joint markers by state (see :data:`emdm.play.logic.JOINT_STATES`)."""
 JOINT_LINES = (
@@ -144,6 +146,12 @@ class Session:
             ColumnDataSource({"x": [], "y": [], "w": [], "h": [], "a": []}) for _ in range(2)
         ]
         self.qlines = [ColumnDataSource({"xs": [], "ys": [], "color": []}) for _ in range(2)]
+        # the first run's program at the scrubbed step: its tip velocity set, all states
+        # (``velocity``) and the one drawn (``polygon``), the P velocity and the tip's velocity
+        self.velocity = ColumnDataSource({"px": [], "py": []})
+        self.polygon = ColumnDataSource({"x": [], "y": []}, name="velocity-set")
+        self.want = ColumnDataSource({"x0": [], "y0": [], "x1": [], "y1": []}, name="want")
+        self.got = ColumnDataSource({"x0": [], "y0": [], "x1": [], "y1": []}, name="got")
         self.goal = ColumnDataSource({"x": [], "y": []}, name="goal")
         self.handles = ColumnDataSource({"x": [], "y": []}, name="handles")
         self.start = ColumnDataSource({"x": [], "y": []})
@@ -196,13 +204,20 @@ class Session:
                 ],
                 "cursors": self.cursors,
                 "clock": self.clock,
+                "velocity": {
+                    "all": self.velocity,
+                    "now": self.polygon,
+                    "want": self.want,
+                    "got": self.got,
+                    "steps": self.steps[0],
+                },
             },
             code=asset("frame.js"),
         )
         self.doc.js_on_event("document_ready", frame)
         self.scrub.js_on_change("value", frame)
         self.scrub.js_on_change("step", frame)
-        for source in (*self.points, *self.steps):
+        for source in (*self.points, *self.steps, self.velocity):
             source.js_on_change("data", frame)
         return layout
 
@@ -250,6 +265,17 @@ class Session:
         )
         fig.scatter([0], [0], marker="square", size=12, color="#333333")
         fig.line("x", "y", source=self.start, color="#888888", line_width=2, line_dash="dotted")
+        fig.patch(  # the tip velocities the step's bounds allow, at the ellipse's scale
+            "x",
+            "y",
+            source=self.polygon,
+            fill_color=VELOCITY_COLOR,
+            fill_alpha=0.07,
+            line_color=VELOCITY_COLOR,
+            line_alpha=0.8,
+            line_dash="dotted",
+            line_width=1.5,
+        )
         cmap = LinearColorMapper(palette=list(JOINT_COLORS), low=-0.5, high=4.5)
         for i in (1, 0):  # the baseline (ghost) first, under EMDM
             ghost = i == 1
@@ -292,6 +318,27 @@ class Session:
                 line_alpha=0.5 if ghost else 1.0,
                 fill_alpha=0.6 if ghost else 1.0,
                 fill_color={"field": "s", "transform": cmap},
+            )
+        heads = (OpenHead(size=9, line_color="#000000"), VeeHead(size=9, fill_color="#000000"))
+        for source, dash, head in zip(
+            (self.want, self.got), ("dashed", "solid"), heads, strict=True
+        ):
+            body: dict[str, Any] = {
+                "line_width": 2,
+                "line_dash": dash,
+                "line_color": "#000",
+            }  # bokeh's
+            # stubs name these body_line_*, which bokeh 3.9 refuses: given as keywords at run time
+            fig.add_layout(
+                Arrow(
+                    end=head,
+                    x_start="x0",
+                    y_start="y0",
+                    x_end="x1",
+                    y_end="y1",
+                    source=source,
+                    **body,
+                )
             )
         handles = fig.scatter(
             "x",
@@ -755,11 +802,17 @@ class Session:
             color = CONTROLLER_STYLE[outcome.name]["color"]
             run = outcome.run
             if run is None:
+                if i == 0:
+                    self.velocity.data = {"px": [], "py": []}
                 self.points[i].data = {"x": [], "y": [], "s": []}
                 self.steps[i].data = {"t": [], "ex": [], "ey": []}
                 self.qlines[i].data = {"xs": [], "ys": [], "color": []}
                 continue
             points, steps = logic.scene_data(run, scale)
+            if i == 0:  # the first run's program made visible (frame.js draws its step)
+                velocity = logic.velocity_data(run, scale)
+                steps |= {key: velocity[key] for key in ("vx", "vy", "ax", "ay")}
+                self.velocity.data = {"px": velocity["px"], "py": velocity["py"]}
             self.points[i].data = points
             self.steps[i].data = steps
             self.qlines[i].data = {
@@ -868,6 +921,12 @@ class Session:
             items.append(f"{line.format(kind, color)}{outcome.name}{what}")
         for code, text in enumerate(logic.JOINT_STATES[:4]):
             items.append(f"{swatch.format(JOINT_COLORS[code])}{text}")
+        first = outcomes[0].name if outcomes else "EMDM"
+        items.append(  # the program of the first run at the scrubbed step
+            f"{line.format('dotted', VELOCITY_COLOR)}tip velocities {first}'s bounds allow"
+        )
+        items.append(f"{line.format('ghost', '#000000')}P velocity")
+        items.append(f"{line.format('solid', '#000000')}tip velocity J qd")
         joints = "".join(  # the joint-angle plot's curves
             f"{line.format('solid', JOINT_LINES[j % len(JOINT_LINES)])}q{j + 1} " for j in range(n)
         )

@@ -1,6 +1,8 @@
 // Show the state under the scrub bar: copy row k of each run into the drawn sources.
 // args: scrub (Slider, value = t in s, step = dt), runs ([{points, steps, arm, ell}]),
-// cursors (Spans of the time plots), clock (Label of the scene).
+// cursors (Spans of the time plots), clock (Label of the scene), velocity ({all, now, want,
+// got, steps}: the first run's tip velocity set at every state, the one drawn, the P velocity
+// and the tip velocity, read from its steps).
 const t = scrub.value
 const dt = scrub.step
 for (const run of runs) {
@@ -18,6 +20,26 @@ for (const run of runs) {
   run.arm.data = {x: rows(pts.x), y: rows(pts.y), s: rows(pts.s)}
   run.ell.data = {x: [steps.ex[k]], y: [steps.ey[k]], w: [steps.ew[k]], h: [steps.eh[k]],
                   a: [steps.ea[k]]}
+}
+{
+  const steps = velocity.steps.data
+  const K = steps.t.length - 1
+  const none = {x0: [], y0: [], x1: [], y1: []}
+  if (K < 0 || steps.vx === undefined) {
+    velocity.now.data = {x: [], y: []}
+    velocity.want.data = none
+    velocity.got.data = none
+  } else {
+    const k = Math.min(K, Math.max(0, Math.round(t / dt)))
+    const all = velocity.all.data
+    const per = all.px.length / (K + 1)
+    const rows = (a) => Array.from(a.slice(k * per, (k + 1) * per))
+    velocity.now.data = {x: rows(all.px), y: rows(all.py)}
+    const arrow = (x, y) => (Number.isFinite(x[k]) ?
+      {x0: [steps.ex[k]], y0: [steps.ey[k]], x1: [x[k]], y1: [y[k]]} : none)
+    velocity.want.data = arrow(steps.vx, steps.vy)
+    velocity.got.data = arrow(steps.ax, steps.ay)
+  }
 }
 for (const cursor of cursors) {
   cursor.location = t
