@@ -122,7 +122,7 @@ CONTROLS: tuple[Control, ...] = (
     Control("K_p", "K_p  task gain (1/s)", "motion.kp", 0.1, 5.0, 0.1),
     Control("influence", "damper influence i (rad)", "damper.influence", 0.05, 1.5, 0.01),
     Control("stop", "damper stop s (rad)", "damper.stop", 0.0, 0.5, 0.005),
-    Control("gain", "damper gain K_safe", "damper.gain", 0.1, 5.0, 0.05),
+    Control("gain", "damper gain K_safe (edge speed 1/K_safe)", "damper.gain", 0.1, 5.0, 0.05),
     Control(
         "qd_max", "velocity limit |qd| (rad/s)", "arm.qd_max", 0.1, 5.0, 0.05, lower="arm.qd_min"
     ),
