@@ -535,3 +535,38 @@ def test_piping_into_head_is_quiet(tmp_path):
             check=False,
         )
         assert done.stderr == "" and done.returncode == 0, (reader, done.stderr)
+
+
+def test_study_sweep_folders_are_unique_and_read_back(tmp_path, capsys):
+    """Found by the hostile re-test: weights that print alike, and two scenarios of one name,
+    shared one sweep folder and the last study overwrote the others."""
+    out = tmp_path / "s"
+    argv = [
+        "study",
+        "task1",
+        "--runs",
+        "20",
+        "--weights",
+        "0.1:5,0.1000000001:5",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 0
+    folders = sorted(p.name for p in out.iterdir() if p.name.startswith("task1-wE"))
+    assert folders == ["task1-wE0.1-wM5", "task1-wE0.1000000001-wM5"]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    for folder in ("a", "b"):
+        text = emdm.load_scenario("task1").to_toml().replace('name = "task1"', 'name = "same"')
+        (tmp_path / folder / "s.toml").write_text(text, encoding="utf-8")
+    capsys.readouterr()
+    argv = ["study", str(tmp_path / "a" / "s.toml"), str(tmp_path / "b" / "s.toml"), "--runs", "20"]
+    assert main([*argv, "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err
+    assert "would share the folder same-wE0.1-wM5" in err and not (tmp_path / "t").exists()
+
+
+def test_unicode_names_stay_in_folder_names():
+    from emdm.cli.main import safe
+
+    assert safe("αβγ 日本") == "αβγ_日本" and safe("../x") == "x" and safe("///") == "scenario"

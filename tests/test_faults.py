@@ -485,3 +485,84 @@ def test_a_lab_with_nothing_to_solve_and_a_garbage_scheduler_are_one_line(tmp_pa
     assert main([*args, "--out", str(tmp_path / "d")]) == 2
     assert "expected a Dask scheduler address" in capsys.readouterr().err
     assert not (tmp_path / "s").exists() and not (tmp_path / "d").exists()
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", "task1", "--set", "weights.effort=0.2"],
+        ["pareto", "task1", "--grid", "3", "--set", "weights.effort=0.2"],
+        ["study", "task1", "--runs", "20"],
+    ],
+    ids=["run", "pareto", "study"],
+)
+def test_a_full_stdout_keeps_the_earlier_results(tmp_path, command):
+    """Found by the hostile re-test: `emdm run ... > /dev/full` replaced --out, then exited 2.
+    What a command prints goes out before the swap, so a failing stdout keeps the old results."""
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full here")
+    out = tmp_path / "out"
+    assert main(["run", "task1", "--controller", "C-EMDM", "--out", str(out)]) == 0
+    before = _snapshot(out)
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [sys.executable, "-m", "emdm", *command, "--out", str(out)],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            check=False,
+            env={**os.environ, "EMDM_PROGRESS": "0"},
+        )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        "emdm: error: cannot write to the standard output: no space left on device"
+    )
+    assert _snapshot(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no staging left
+
+
+def test_a_closed_stdout_is_one_line_before_any_work(tmp_path):
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "emdm", "run", "task1", "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        check=False,
+        preexec_fn=lambda: os.close(1),
+    )
+    assert done.returncode == 2
+    assert done.stderr.startswith("emdm: error: the standard output is closed; nothing was run")
+    assert len(done.stderr.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_a_path_too_long_is_refused_before_any_folder_is_made(tmp_path, capsys):
+    deep = tmp_path / "lp" / "/".join(["d" * 200] * 25)
+    assert main(["run", "task1", "--out", str(deep)]) == 2
+    assert "its path is too long" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []  # the issue's case left 21 empty folders
+    long_name = tmp_path / ("x" * 256)
+    assert main(["run", "task1", "--out", str(long_name)]) == 2
+    assert "longer than 255 bytes" in capsys.readouterr().err
+
+
+def test_a_failing_mkdir_removes_the_parents_it_made(tmp_path, monkeypatch):
+    from emdm.outputs import records
+
+    real = Path.mkdir
+    calls = []
+
+    def mkdir(self, *args, **kwargs):
+        calls.append(self)
+        if len(calls) == 3:
+            raise OSError(36, "File name too long")
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "mkdir", mkdir)
+    with pytest.raises(OSError):
+        records._make_parents(tmp_path / "a" / "b" / "c" / "d")
+    assert list(tmp_path.iterdir()) == []

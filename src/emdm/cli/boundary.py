@@ -292,6 +292,12 @@ def run_command(command: Callable[[], int], *, final: bool = False) -> int:
     ends with it, :func:`handling_signals`)."""
     records.COMMITTED.clear()
     clear_stop()
+    if sys.stdout is None:  # started with its standard output closed (>&-)
+        _print(
+            "emdm: error: the standard output is closed; nothing was run (send it to /dev/null "
+            "to discard what emdm prints)"
+        )
+        return 2
     try:
         with handling_signals(final):
             try:

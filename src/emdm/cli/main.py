@@ -65,7 +65,7 @@ class UsageError(EmdmError):
 # ----------------------------------------------------------------------------------- helpers
 def safe(text: str) -> str:
     """``text`` as one harmless path component (a scenario name in a default ``--out``)."""
-    cleaned = re.sub(r"[^A-Za-z0-9._+=-]+", "_", text).strip("._")
+    cleaned = re.sub(r"[^\w.+=-]+", "_", text).strip("._")
     return cleaned[:100] or "scenario"
 
 
@@ -168,23 +168,24 @@ def cmd_run(args: argparse.Namespace) -> int:
             results = write_run_folder(
                 staging, scenario, runs, solver=solver, fallback=fallback, stopped=details
             )
-        print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
-        print(summary_table(results, "m,rad" if scenario.nt == 6 else "m"))
-        if scenario.obstacles or scenario.planes.count:  # how each run fared, from its record
-            from ..outputs.report.explain import (
-                obstacle_sentence,
-                obstacles,
-                plane_sentence,
-                planes,
-            )
+            # printed before the swap: a standard output that fails keeps the earlier results
+            print(f"{scenario.name}: {len(runs)} controller(s) in {elapsed:.2f} s -> {out}/")
+            print(summary_table(results, "m,rad" if scenario.nt == 6 else "m"))
+            if scenario.obstacles or scenario.planes.count:  # how each run fared
+                from ..outputs.report.explain import (
+                    obstacle_sentence,
+                    obstacles,
+                    plane_sentence,
+                    planes,
+                )
 
-            for name, run in runs.items():
-                for line in (
-                    obstacle_sentence(name, obstacles(run)),
-                    plane_sentence(name, planes(run)),
-                ):
-                    if line:
-                        print(line)
+                for name, run in runs.items():
+                    for line in (
+                        obstacle_sentence(name, obstacles(run)),
+                        plane_sentence(name, planes(run)),
+                    ):
+                        if line:
+                            print(line)
     if stopped:
         first, *others = stopped.items()
         message = f"run stopped: {_stopped(*first)}"
@@ -247,12 +248,12 @@ def cmd_solvers(args: argparse.Namespace) -> int:
             (folder / "solvers.txt").write_text(tables[controller] + "\n", encoding="utf-8")
             if not args.no_figures:
                 lab_figures(lab, folder / "figures")
-    for controller, lab in labs.items():
-        print(
-            f"{scenario.name} {controller}: {len(solvers)} solvers, {len(lab.steps)} steps "
-            f"re-solved in {wall:.1f} s -> {out}/"
-        )
-        print(tables[controller])
+        for controller, lab in labs.items():
+            print(
+                f"{scenario.name} {controller}: {len(solvers)} solvers, {len(lab.steps)} steps "
+                f"re-solved in {wall:.1f} s -> {out}/"
+            )
+            print(tables[controller])
     return 0
 
 
@@ -310,7 +311,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         bar.note("drawing the figures")
         with atomic_output(out, command="emdm plot") as staging:
             stems = run_figures(runs, staging)
-    print(f"{scenario.name}: {len(stems)} figures (PNG, PDF, SVG) -> {out}/")
+            print(f"{scenario.name}: {len(stems)} figures (PNG, PDF, SVG) -> {out}/")
     return 0
 
 
@@ -378,7 +379,7 @@ def cmd_animate(args: argparse.Namespace) -> int:
                             f"({reason or type(exc).__name__}); pass --no-mp4 for the GIF only"
                         ) from None
                 bar.step()
-    print(f"{scenario.name}: {', '.join(p.name for p in written)} -> {out}/")
+            print(f"{scenario.name}: {', '.join(p.name for p in written)} -> {out}/")
     return 0
 
 
@@ -422,12 +423,12 @@ def cmd_pareto(args: argparse.Namespace) -> int:
             )
             pareto_figure(data, folder)
             trade_off_figure(rows, scenario, name, folder)
-    for name, (data, rows) in results.items():
-        print(
-            f"{scenario.name} {name}: Pareto fronts at k = "
-            f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} weights "
-            f"each), {len(rows)} whole runs -> {out}/"
-        )
+        for name, (data, rows) in results.items():
+            print(
+                f"{scenario.name} {name}: Pareto fronts at k = "
+                f"{', '.join(str(s['k']) for s in data['steps'])} ({len(data['ratios'])} "
+                f"weights each), {len(rows)} whole runs -> {out}/"
+            )
     return 0
 
 
@@ -473,11 +474,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
                 runs=400 if args.quick else 8000, progress=lambda m: bar.step(note=m)
             )
             table += "\n\n" + dask_table(data["dask"])
+    text = _json.dumps(data, indent=2) if args.json else table
     if out is not None:
         with atomic_output(out, command="emdm bench") as staging:
             write_json(staging / "bench.json", data)
             (staging / "bench.md").write_text(table + "\n", encoding="utf-8")
-    print(_json.dumps(data, indent=2) if args.json else table)
+            print(text)  # before the swap: a failing standard output keeps earlier results
+    else:
+        print(text)
     return 0
 
 
@@ -511,15 +515,47 @@ def cmd_mmc(args: argparse.Namespace) -> int:
                 arms=arms, trials=args.trials, seed=args.seed, progress=lambda m: bar.step(note=m)
             )
         table = mmc_table(data)
+    text = _json.dumps(data, indent=2) if args.json else table
     if out is not None:
         with atomic_output(out, command="emdm mmc") as staging:
             write_json(staging / "mmc.json", data)
             (staging / "mmc.md").write_text(table + "\n", encoding="utf-8")
-    print(_json.dumps(data, indent=2) if args.json else table)
+            print(text)  # before the swap: a failing standard output keeps earlier results
+    else:
+        print(text)
     return 0
 
 
 # ------------------------------------------------------------------------------------ study
+def _number(value: float) -> str:
+    """``value`` as short as it reads back exactly (``5``, ``0.1``, ``0.1000000001``)."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
+def _study_tags(
+    scenarios: Sequence[Scenario], weights: Sequence[tuple[float, float]] | None
+) -> dict[tuple[str, float, float], str]:
+    """The folder of each study of a sweep, ``<scenario>-wE<w_E>-wM<w_M>``, keyed by
+    ``(scenario name, w_E, w_M)``: every weight written so that it reads back exactly; two
+    studies that would share a folder are refused before any work."""
+    tags: dict[tuple[str, float, float], str] = {}
+    seen: dict[str, str] = {}
+    for sc in scenarios:
+        pairs = weights or [(sc.weights.effort, sc.weights.manipulability)]
+        for w_e, w_m in pairs:
+            tag = safe(f"{sc.name}-wE{_number(w_e)}-wM{_number(w_m)}")
+            what = f"{sc.source} at w_E = {_number(w_e)}, w_M = {_number(w_m)}"
+            if tag in seen:
+                raise UsageError(
+                    f"study: {seen[tag]} and {what} would share the folder {tag}: give the "
+                    "scenarios different names (name = ...) or drop the repeated weights"
+                )
+            seen[tag] = what
+            tags[sc.name, float(w_e), float(w_m)] = tag
+    return tags
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     from ..outputs.study_plots import sweep_trade_off, workspace_maps
     from ..studies.montecarlo import (
@@ -535,7 +571,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     if args.engine == "local" and (args.scheduler or args.workers):
         raise UsageError("--scheduler and --workers go with --engine dask")
     if args.scheduler and not re.fullmatch(
-        r"(tcp|tls|inproc|ucx)://\S+:\d+|\S+:\d+", args.scheduler
+        r"(tcp|tls|inproc|ucx|ws|wss)://\S+:\d+|[^\s/]+:\d+", args.scheduler
     ):
         raise UsageError(
             f"--scheduler {safe(args.scheduler)}: expected a Dask scheduler address such as "
@@ -547,6 +583,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     engine = Engine(args.engine, args.scheduler, args.workers)
     out = _out(args, f"{safe(scenarios[0].name)}-study", _inputs(args))
     studies = len(scenarios) * (len(weights) if weights else 1)
+    tags = _study_tags(scenarios, weights) if studies > 1 else {}
     with Progress(f"study ({studies} × {args.runs} runs)", unit="chunk") as bar:
 
         def chunk_done(done: int, total: int) -> None:
@@ -569,14 +606,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     with atomic_output(out, command="emdm study") as staging:
         for result in results:
             scenario = next(s for s in scenarios if s.name == result["scenario"])
-            tag = (
-                ""
-                if single
-                else safe(
-                    f"{result['scenario']}-wE{result['weights']['effort']:g}"
-                    f"-wM{result['weights']['manipulability']:g}"
-                )
-            )
+            w = result["weights"]
+            tag = "" if single else tags[result["scenario"], w["effort"], w["manipulability"]]
             folder = staging / tag if tag else staging
             write_json(folder / "study.json", {**study_json(result), "weights": result["weights"]})
             write_json(folder / "timing.json", {k: result[k] for k in TIMING})
@@ -599,8 +630,8 @@ def cmd_study(args: argparse.Namespace) -> int:
             )
             sweep_trade_off(results, scenarios, staging)
         (staging / "study.txt").write_text("\n\n".join(tables) + "\n", encoding="utf-8")
-    print("\n\n".join(tables))
-    print(f"-> {out}/")
+        print("\n\n".join(tables))
+        print(f"-> {out}/")
     return 0
 
 

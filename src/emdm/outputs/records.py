@@ -317,8 +317,15 @@ def check_out(out: Path, *, need: int | None = None) -> None:
     target = _target(out)
     if target.name in ("", ".", ".."):
         raise OutputError(out, "is the root folder: give a folder below it")
-    if len(os.fsencode(target.name)) > 255:
-        raise OutputError(out, "its name is longer than 255 bytes")
+    existing = target
+    while not os.path.lexists(existing) and existing != existing.parent:
+        existing = existing.parent
+    name_max, path_max = _limits(existing)
+    for part in (*target.parts, f".{target.name[:80]}.partial-{os.getpid()}-xxxxxxxx"):
+        if len(os.fsencode(part)) > name_max:
+            raise OutputError(out, f"a folder name in it is longer than {name_max} bytes")
+    if len(os.fsencode(str(target))) + 120 > path_max:  # its staging and results inside too
+        raise OutputError(out, f"its path is too long (this system allows {path_max} bytes)")
     if os.path.lexists(target):
         if not target.is_dir():
             raise OutputError(out, "exists and is not a folder")
@@ -441,16 +448,31 @@ def _remove(path: Path) -> None:
         shutil.rmtree(path, ignore_errors=True)
 
 
+def _limits(folder: Path) -> tuple[int, int]:
+    """The longest file name and path (bytes) the filesystem of ``folder`` allows."""
+    try:
+        return os.pathconf(folder, "PC_NAME_MAX"), os.pathconf(folder, "PC_PATH_MAX")
+    except (OSError, ValueError):
+        return 255, 4096
+
+
 def _make_parents(folder: Path) -> list[Path]:
-    """Create ``folder`` and its missing ancestors; the ones created, outermost first."""
+    """Create ``folder`` and its missing ancestors; the ones created, outermost first (on a
+    failure, the ones it created are removed before the error goes on)."""
     missing = []
     while not os.path.lexists(folder):
         missing.append(folder)
         folder = folder.parent
-    created = []
-    for path in reversed(missing):
-        path.mkdir()
-        created.append(path)
+    created: list[Path] = []
+    try:
+        for path in reversed(missing):
+            path.mkdir()
+            created.append(path)
+    except OSError:
+        for path in reversed(created):
+            with contextlib.suppress(OSError):
+                path.rmdir()
+        raise
     return created
 
 
@@ -592,6 +614,7 @@ def atomic_output(out: Path, *, command: str = "") -> Iterator[Path]:
                 + "".join(f"{name}\n" for name in written),
                 encoding="utf-8",
             )
+            sys.stdout.flush()  # what the command printed: a failing stdout keeps the old
             with critical_section():  # no signal lands from here to the end of the swap
                 check_stop()  # a signal whose exception was dropped: the earlier results stay
                 _recheck(out)

@@ -6,6 +6,8 @@ the qpsolvers backends are registered by name. See :mod:`emdm.solvers.base` for 
 
 from __future__ import annotations
 
+import importlib.util
+
 from .active_set import solve_active_set, solve_kkt
 from .admm import solve_admm
 from .base import (
@@ -82,11 +84,9 @@ register(
 
 
 def _cma_installed() -> bool:
-    try:
-        import cma  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """Whether the cma package is installed, found without importing it (it imports
+    matplotlib, which a listing of the solvers does not need)."""
+    return importlib.util.find_spec("cma") is not None
 
 
 for _method, _text in (
