@@ -191,6 +191,13 @@ def test_buffer_estimates_and_a_run_too_large_for_the_machine_is_refused_up_fron
     )
     with pytest.raises(emdm.ScenarioError, match=r"arm: 60 joints need about .* use fewer joints"):
         emdm.simulate(sc, "C-EMDM")
+    # a run that never arrives, with room for a billion steps: its record grows until it would
+    # not fit, then one ScenarioError naming max_time (a pareto grid was killed at 24 GB)
+    far = emdm.load_scenario("task1", {"motion.goal": [3.0, 0.0], "motion.max_time": 5e7})
+    with pytest.raises(
+        emdm.ScenarioError, match=r"motion.max_time: a record of 4096 steps .* use a shorter one"
+    ):
+        emdm.simulate(far, "C-EMDM")
     with pytest.raises(emdm.ScenarioError, match=r"task1: (arm|motion\.max_time): .* GB"):
         emdm.simulate_batch(sc, "C-EMDM")  # a full-length record per thread: the larger part
     assert emdm.simulate(emdm.load_scenario("task1"), "C-EMDM").reached  # small runs go on

@@ -437,8 +437,11 @@ def simulate(
     kernel = _entry((arm, geo, motion, prog, True, True, rec, k, work))
     while True:
         code, k = kernel(arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work)
-        if code == Exit.FULL:
+        if code == Exit.FULL:  # a longer run than the record holds: grow it, if it fits
             cap = min(motion.n_steps, 4 * cap)
+            require_memory(
+                scenario.name, n, nx, nt, prog.rows, scenario.spatial, copies=1, steps=cap
+            )
             rec = _grow(rec, cap, n)
             continue
         if code != Exit.HANDOFF:
