@@ -570,3 +570,21 @@ def test_unicode_names_stay_in_folder_names():
     from emdm.cli.main import safe
 
     assert safe("αβγ 日本") == "αβγ_日本" and safe("../x") == "x" and safe("///") == "scenario"
+
+
+def test_study_refuses_what_would_not_fit_before_any_work(tmp_path, capsys, monkeypatch):
+    """Found by the hostile re-test: --runs 1e9 with --keep-runs and 256 local Dask workers
+    were accepted and ran on; both are one line with the estimate now."""
+    from emdm.core import checks
+
+    monkeypatch.setattr(checks, "memory_available", lambda: 24_000_000_000)  # this machine's
+    out = tmp_path / "s"
+    assert main(["study", "task1", "--runs", "1000000000", "--keep-runs", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--keep-runs with --runs 1000000000: keeping every run needs about" in err
+    assert "use at most --runs" in err and len(err.strip().splitlines()) == 1
+    argv = ["study", "task1", "--engine", "dask", "--workers", "256", "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "--workers 256: a local Dask cluster of 256 workers needs about 64 GB" in err
+    assert not out.exists()

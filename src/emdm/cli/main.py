@@ -556,6 +556,40 @@ def _study_tags(
     return tags
 
 
+WORKER_BYTES = 250e6
+"""About the memory of one Dask worker process with emdm loaded (235 MB measured)."""
+
+
+def _study_fits(args: argparse.Namespace, scenarios: Sequence[Scenario], studies: int) -> None:
+    """Refuse, before any work, a local Dask cluster or kept runs that would take more than
+    half of this machine's memory, with the estimate and the largest value that fits."""
+    from ..core.checks import memory_available
+    from ..sim.metrics import OUTCOMES
+
+    have = memory_available()
+    if not have:
+        return
+    if args.engine == "dask" and args.workers and not args.scheduler:
+        need = args.workers * WORKER_BYTES
+        if need > have / 2:
+            fits = max(1, int(have / 2 // WORKER_BYTES))
+            raise UsageError(
+                f"--workers {args.workers}: a local Dask cluster of {args.workers} workers needs "
+                f"about {need / 1e9:.3g} GB (about {WORKER_BYTES / 1e9:.2g} GB each), more than "
+                f"half of this machine's {have / 1e9:.3g} GB: use at most {fits}"
+            )
+    if args.keep_runs:
+        width = max(sc.n + sc.nt + 2 * len(CONTROLLERS) * len(OUTCOMES) for sc in scenarios)
+        need = 2 * 8 * width * args.runs * studies  # kept, and copied once when written
+        if need > have / 2:
+            fits = max(1, int(have / 2 // (16 * width * studies)))
+            raise UsageError(
+                f"--keep-runs with --runs {args.runs}: keeping every run needs about "
+                f"{need / 1e9:.3g} GB, more than half of this machine's {have / 1e9:.3g} GB: use "
+                f"at most --runs {fits}, or leave out --keep-runs"
+            )
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     from ..outputs.study_plots import sweep_trade_off, workspace_maps
     from ..studies.montecarlo import (
@@ -584,6 +618,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     out = _out(args, f"{safe(scenarios[0].name)}-study", _inputs(args))
     studies = len(scenarios) * (len(weights) if weights else 1)
     tags = _study_tags(scenarios, weights) if studies > 1 else {}
+    _study_fits(args, scenarios, studies)
     with Progress(f"study ({studies} × {args.runs} runs)", unit="chunk") as bar:
 
         def chunk_done(done: int, total: int) -> None:
