@@ -104,6 +104,7 @@ CASES = [
      lambda E: E.em.scenario_from_dict(
          {k: v for k, v in E.t1.to_dict().items() if k != "name"}, source=123), SE, "source",
      BEFORE),
+    ("scenario_from_dict(None)", lambda E: E.em.scenario_from_dict(None), SE, "data", BEFORE),
     ("scenario_from_dict(q0 ndarray)",
      lambda E: E.em.scenario_from_dict(_with(E, "motion", "q0", np.array([0.0, 0.5, 0.5]))), SE,
      "motion.q0", BEFORE),

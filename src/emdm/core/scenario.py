@@ -343,7 +343,9 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
     _Checker("scenario_from_dict").text("source", source, "a string (the data's file or name)")
     check = _Checker(source)
     if not isinstance(data, Mapping):
-        raise check.fail("", "a scenario must be a table of sections")
+        raise check.fail(
+            "data", f"a scenario must be a table of sections (a dict), got {type(data).__name__}"
+        )
     for key, value in data.items():
         if key == "name":
             if not isinstance(value, str) or not value:
