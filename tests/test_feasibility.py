@@ -129,6 +129,12 @@ def test_velocity_set_is_the_hull_of_the_box_corners():
             cross = edges[:, 0] * (c[1] - V[:, 1]) - edges[:, 1] * (c[0] - V[:, 0])
             assert cross.min() >= -1e-9
         assert all(np.min(np.linalg.norm(corners - v, axis=1)) < 1e-9 for v in V)
-    assert velocity_set(np.eye(2), np.array([-np.inf, 0.0]), np.ones(2)) is None
+    assert np.isnan(velocity_set(np.eye(2), np.array([-np.inf, 0.0]), np.ones(2))).all()
     with pytest.raises(ValueError):
         velocity_set(np.eye(3), np.zeros(3), np.ones(3))
+    # a stack is the sets one by one
+    Js, lbs, ubs = rng.normal(size=(5, 2, 4)), -rng.uniform(0, 1, (5, 4)), rng.uniform(0, 1, (5, 4))
+    lbs[2, 1] = -np.inf
+    stacked = velocity_set(Js, lbs, ubs)
+    for k in range(5):
+        assert np.array_equal(stacked[k], velocity_set(Js[k], lbs[k], ubs[k]), equal_nan=True)

@@ -183,29 +183,35 @@ def _linprog(
     return alpha, x
 
 
-def velocity_set(J: Matrix, lb: Vector, ub: Vector) -> Matrix | None:
-    """The vertices, counter-clockwise, of the set of task velocities ``{J x : lb <= x <= ub}``
-    of a two-row task (a zonotope: the polygon of tip velocities the joint bounds allow), ``(V,
-    2)`` with ``V`` twice the number of joints whose column and interval are not zero; ``None``
-    when a bound is infinite (the set is unbounded).
+def velocity_set(J: Matrix, lb: Vector, ub: Vector) -> Matrix:
+    """The corners, counter-clockwise, of the set of task velocities ``{J x : lb <= x <= ub}``
+    of a two-row task (a zonotope: the polygon of tip velocities the joint bounds allow):
+    ``(2n, 2)`` for ``J`` ``(2, n)``, or ``(..., 2n, 2)`` for a stack of them (``J`` ``(..., 2,
+    n)``, ``lb`` and ``ub`` ``(..., n)``); NaN where a bound is infinite (the set is unbounded).
 
     Each joint adds the segment ``J_j [lb_j, ub_j]``; with the segments' half-vectors ``g_j``
     turned into ``[0, pi)`` and sorted by angle, the boundary walks ``+2 g_j`` in that order from
-    the lowest-rightmost corner, then ``-2 g_j`` (the Minkowski sum of segments)."""
+    the lowest-rightmost corner, then ``-2 g_j`` (the Minkowski sum of segments). A joint with a
+    zero column or interval repeats a corner."""
     J, lb, ub = (np.asarray(a, dtype=float) for a in (J, lb, ub))
-    if J.ndim != 2 or J.shape[0] != 2 or lb.shape != ub.shape or lb.shape != (J.shape[1],):
-        raise ValueError("velocity_set: J is 2 x n and lb, ub have n entries")
-    if not (np.all(np.isfinite(lb)) and np.all(np.isfinite(ub))):
-        return None
-    centre = J @ ((lb + ub) / 2)
-    g = J * ((ub - lb) / 2)[None, :]
-    keep = np.hypot(g[0], g[1]) > 0.0
-    g = g[:, keep]
-    angle = np.arctan2(g[1], g[0])
-    flip = (angle < 0.0) | (angle >= np.pi)
-    g[:, flip] *= -1.0
-    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
-    start = centre - g.sum(axis=1)
-    steps = np.concatenate((2 * g, -2 * g), axis=1).T
-    corners = start + np.concatenate((np.zeros((1, 2)), np.cumsum(steps, axis=0)[:-1]))
+    if (
+        J.ndim < 2
+        or J.shape[-2] != 2
+        or lb.shape != ub.shape
+        or lb.shape != J.shape[:-2] + J.shape[-1:]
+    ):
+        raise ValueError("velocity_set: J is (..., 2, n) and lb, ub are (..., n)")
+    finite = np.asarray(np.isfinite(lb).all(axis=-1) & np.isfinite(ub).all(axis=-1))
+    lo = np.where(finite[..., None], lb, 0.0)
+    hi = np.where(finite[..., None], ub, 0.0)
+    centre = np.einsum("...ij,...j->...i", J, (lo + hi) / 2)
+    g = J * ((hi - lo) / 2)[..., None, :]
+    angle = np.arctan2(g[..., 1, :], g[..., 0, :])
+    g = np.where(((angle < 0.0) | (angle >= np.pi))[..., None, :], -g, g)
+    order = np.argsort(np.arctan2(g[..., 1, :], g[..., 0, :]), axis=-1, kind="stable")
+    g = np.take_along_axis(g, order[..., None, :], axis=-1)
+    steps = np.concatenate((2 * g, -2 * g), axis=-1)  # (..., 2, 2n)
+    start = centre - g.sum(axis=-1)
+    corners = np.swapaxes(start[..., None] + np.cumsum(steps, axis=-1) - steps, -1, -2)
+    corners[~finite] = np.nan
     return np.asarray(corners)

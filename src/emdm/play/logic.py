@@ -413,11 +413,7 @@ def velocity_data(run: Run, scale: float) -> dict[str, np.ndarray]:
     arms = tip[:, None, :] - pts[:, :-1]  # (K + 1, n, 2): joint j to the tip
     J = np.stack((-arms[..., 1], arms[..., 0]), axis=1)  # (K + 1, 2, n)
     corners = np.full((K + 1, 2 * n, 2), np.nan)
-    for k in range(K):
-        vertices = velocity_set(J[k], run.lo[k], run.hi[k])
-        if vertices is not None and len(vertices):
-            corners[k, : len(vertices)] = vertices
-            corners[k, len(vertices) :] = vertices[-1]
+    corners[:K] = velocity_set(J[:K], run.lo, run.hi)
     if K:
         corners[K] = corners[K - 1]
     drawn = tip[:, None, :] + scale * corners
