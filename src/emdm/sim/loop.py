@@ -84,6 +84,15 @@ F64 = NDArray[np.float64]
 FIRST_CHUNK = 256
 """Steps the record holds at first; it grows fourfold whenever a run needs more."""
 
+SLICED_FROM = 64
+"""From this many joints a step may take long (0.55 s at 400): the loop runs in slices of
+``SLICE_WORK / n**3`` steps (at least one), written into the record through views, so that the
+interpreter, and a signal, gets a turn between two slices (a slice's end is not a step's: the
+record is the same)."""
+
+SLICE_WORK = 2e7
+"""Steps times ``n**3`` per slice (76 steps at 64 joints, one at 400)."""
+
 
 class Exit(IntEnum):
     """Why :func:`run_kernel` returned (kernels return the plain integers below)."""
@@ -435,8 +444,13 @@ def simulate(
     steps = _Steps()
     k = 0
     kernel = _entry((arm, geo, motion, prog, True, True, rec, k, work))
+    per_call = max(1, int(SLICE_WORK / n**3)) if n >= SLICED_FROM else None
     while True:
-        code, k = kernel(arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, rec, k, work)
+        limit = cap if per_call is None else min(cap, k + per_call)
+        view = rec if limit == cap else Record._make(a[: a.shape[0] - (cap - limit)] for a in rec)
+        code, k = kernel(arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, view, k, work)
+        if code == Exit.FULL and k < cap:  # the end of a slice: a signal is honoured here
+            continue
         if code == Exit.FULL:  # a longer run than the record holds: grow it, if it fits
             cap = min(motion.n_steps, 4 * cap)
             require_memory(
