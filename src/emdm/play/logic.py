@@ -327,6 +327,13 @@ def ellipse_scale(scenario: Scenario) -> float:
     return ELLIPSE_SHARE * float(lengths.sum()) / float(np.sqrt(tips @ tips))
 
 
+def jacobians(points: np.ndarray) -> np.ndarray:
+    """The planar Jacobian ``(K, 2, n)`` at every state, from the joint positions ``(K, n + 1,
+    2)``: column ``j`` is the tip vector ``r_j = p - P_j`` turned by 90 degrees."""
+    r = points[:, -1:, :] - points[:, :-1, :]
+    return np.stack((-r[..., 1], r[..., 0]), axis=1)
+
+
 def ellipses(points: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Width, height (m) and angle (rad) of the scaled ellipse ``{x : x^T (J J^T)^-1 x <= 1}``
     at every state, from the joint positions ``(K, n + 1, 2)``.
@@ -335,9 +342,12 @@ def ellipses(points: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, 
     ``J J^T = [[sum ry^2, -sum rx ry], [-sum rx ry, sum rx^2]]``; its eigenvalues are the squared
     semi-axes (the ellipse of :func:`emdm.outputs.animate.ellipse_points`; tested equal).
     """
-    r = points[:, -1:, :] - points[:, :-1, :]
-    rx, ry = r[..., 0], r[..., 1]
-    a, c, b = (ry * ry).sum(axis=1), (rx * rx).sum(axis=1), -(rx * ry).sum(axis=1)
+    J = jacobians(points)
+    a, c, b = (
+        (J[:, 0] ** 2).sum(axis=1),
+        (J[:, 1] ** 2).sum(axis=1),
+        (J[:, 0] * J[:, 1]).sum(axis=1),
+    )
     mean, half = (a + c) / 2, np.hypot((a - c) / 2, b)
     major, minor = np.sqrt(mean + half), np.sqrt(np.maximum(mean - half, 0.0))
     angle = 0.5 * np.arctan2(2 * b, a - c)
@@ -410,8 +420,7 @@ def velocity_data(run: Run, scale: float) -> dict[str, np.ndarray]:
     K, n = run.steps, sc.n
     pts = joint_positions(sc.link_lengths, run.q)
     tip = pts[:, -1]
-    arms = tip[:, None, :] - pts[:, :-1]  # (K + 1, n, 2): joint j to the tip
-    J = np.stack((-arms[..., 1], arms[..., 0]), axis=1)  # (K + 1, 2, n)
+    J = jacobians(pts)
     corners = np.full((K + 1, 2 * n, 2), np.nan)
     corners[:K] = velocity_set(J[:K], run.lo, run.hi)
     if K:
@@ -735,6 +744,7 @@ __all__ = [
     "explain_pair",
     "export_toml",
     "front",
+    "jacobians",
     "joint_positions",
     "joint_states",
     "message",
