@@ -6,6 +6,7 @@ import argparse
 import csv
 import json
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -588,3 +589,41 @@ def test_study_refuses_what_would_not_fit_before_any_work(tmp_path, capsys, monk
     err = capsys.readouterr().err
     assert "--workers 256: a local Dask cluster of 256 workers needs about 64 GB" in err
     assert not out.exists()
+
+
+def test_study_refuses_what_would_take_too_long_before_any_work(tmp_path, capsys, monkeypatch):
+    """Issue 25: a time bomb (--runs 1e9 takes days) is refused up front with the estimate
+    from a pilot block and the largest --runs within --max-hours; that largest value is
+    accepted by the same estimate."""
+    from emdm.studies import montecarlo
+
+    monkeypatch.setattr(montecarlo, "seconds_per_run", lambda scenario, seed: 2e-4)
+    out = tmp_path / "s"
+    assert main(["study", "task1", "--runs", "1000000000", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and not out.exists()
+    assert "--runs 1000000000: the study would take about 2.3 days here" in err
+    assert "0.2 ms per run of every controller), more than --max-hours 1" in err
+    fits = int(re.search(r"use at most --runs (\d+)", err).group(1))
+    assert fits == 18_000_000  # 3600 s / 0.2 ms
+    argv = ["study", "task1", "--runs", "20000", "--max-hours", "1e-3", "--out", str(out)]
+    assert main(argv) == 2  # 4 s against 3.6 s
+    assert "more than --max-hours 0.001: use at most --runs 18000" in capsys.readouterr().err
+
+
+def test_study_time_pilot_is_the_study_own_first_block(monkeypatch):
+    """The pilot times the study's own first block of runs (after a few runs that compile), and
+    the estimate per run is that block's time over its runs."""
+    from emdm.studies import montecarlo
+
+    calls = []
+    real = montecarlo.run_chunk
+
+    def spy(data, seed, first, last, runs, *rest):
+        calls.append((data["name"], seed, first, last, runs))
+        return real(data, seed, first, last, runs, *rest)
+
+    monkeypatch.setattr(montecarlo, "run_chunk", spy)
+    per_run = montecarlo.seconds_per_run(emdm.load_scenario("task1"), 7)
+    assert calls == [("task1", 7, 0, 1, 4), ("task1", 7, 0, 1, montecarlo.BLOCK)]
+    assert 0.0 < per_run < 1.0

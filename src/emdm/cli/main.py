@@ -590,6 +590,54 @@ def _study_fits(args: argparse.Namespace, scenarios: Sequence[Scenario], studies
             )
 
 
+def _duration(seconds: float) -> str:
+    """A duration as a person reads it: 40 s, 12 min, 3.4 h, 2.1 days."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 172800:
+        return f"{seconds / 3600:.2g} h"
+    return f"{seconds / 86400:.2g} days"
+
+
+def _study_time(
+    args: argparse.Namespace,
+    scenarios: Sequence[Scenario],
+    weights: Sequence[tuple[float, float]] | None,
+) -> float | None:
+    """The study's time on this machine, from a pilot block of each study (None: too small to
+    need one, or a remote scheduler whose cores are unknown); refused, before the work, beyond
+    ``--max-hours``, with the estimate and the largest ``--runs`` that fits."""
+    from ..studies.montecarlo import PILOT_FROM, seconds_per_run
+
+    if args.runs < PILOT_FROM or args.scheduler:
+        return None
+    pairs: list[tuple[float, float] | None] = list(weights) if weights else [None]
+    per_run = 0.0
+    for sc in scenarios:
+        for pair in pairs:
+            if pair is not None:
+                sc = sc.with_overrides(
+                    {"weights.effort": pair[0], "weights.manipulability": pair[1]}
+                )
+            per_run += seconds_per_run(sc, args.seed)
+    if args.engine == "dask":  # single-threaded workers, against a pilot on every thread
+        import numba
+
+        per_run *= numba.get_num_threads() / (args.workers or 2)
+    need = float(per_run * args.runs)
+    limit = args.max_hours * 3600.0
+    if need > limit:
+        fits = max(1, int(limit / per_run))
+        raise UsageError(
+            f"--runs {args.runs}: the study would take about {_duration(need)} here (a pilot "
+            f"block: {per_run * 1e3:.3g} ms per run of every controller), more than --max-hours "
+            f"{args.max_hours:g}: use at most --runs {fits}, or raise --max-hours"
+        )
+    return need
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     from ..outputs.study_plots import sweep_trade_off, workspace_maps
     from ..studies.montecarlo import (
@@ -619,7 +667,9 @@ def cmd_study(args: argparse.Namespace) -> int:
     studies = len(scenarios) * (len(weights) if weights else 1)
     tags = _study_tags(scenarios, weights) if studies > 1 else {}
     _study_fits(args, scenarios, studies)
-    with Progress(f"study ({studies} × {args.runs} runs)", unit="chunk") as bar:
+    need = _study_time(args, scenarios, weights)
+    about = f", about {_duration(need)}" if need is not None else ""
+    with Progress(f"study ({studies} × {args.runs} runs{about})", unit="chunk") as bar:
 
         def chunk_done(done: int, total: int) -> None:
             if bar.bar.total != total * studies:
@@ -926,6 +976,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--keep-runs",
         action="store_true",
         help="also keep every run's outcome (runs.npz); memory grows with --runs",
+    )
+    study.add_argument(
+        "--max-hours",
+        type=positive(10**4),
+        default=1.0,
+        metavar="H",
+        help="refuse, before any work, a study estimated (from a pilot block, from 16,384 runs) "
+        "to take longer (default 1)",
     )
     add_out(study, "results/<scenario>-study")
     study.set_defaults(func=cmd_study)
