@@ -690,31 +690,42 @@ def convergence_figure(
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
     against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
     by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.15 if medium is PAPER else 2.7
+    height = 1.3 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     dashes = ("-", "--", ":", "-.")
+    marks = ("o", "s", "^", "D", "v", "P")
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         seen: dict[str, int] = {}
         for name, (family, evaluations, error) in curves.items():
             i = seen[family] = seen.get(family, -1) + 1
+            # every solver its own dash and marker, the marker at its last evaluation: a solver
+            # done in one or two evaluations (slsqp) is a point, not a line of no length
             ax.loglog(
                 evaluations,
                 error,
                 color=FAMILY_COLOR.get(family, "grey"),
                 linestyle=dashes[i % len(dashes)],
                 linewidth=medium.line,
+                marker=marks[i % len(marks)],
+                markevery=[len(evaluations) - 1],
+                markersize=3.5 if medium is PAPER else 6,
                 label=name,
             )
         ax.set_xlabel("objective evaluations", labelpad=1)
         ax.set_ylabel(r"best $|f-f^*|$ + viol.", labelpad=1)
+        # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this height
+        ax.yaxis.set_major_locator(
+            matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)])
+        )
+        ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
         ax.legend(
             loc="center left",
             bbox_to_anchor=(1.01, 0.5),
             fontsize=medium.tiny,
             frameon=False,
-            handlelength=1.8,
+            handlelength=2.2,
         )
     return stem
 

@@ -12,6 +12,7 @@ import math
 from typing import Any
 
 from ...core.controllers import Name
+from ...core.tolerances import STALL_BAND
 from .config import BYLINE, PAIRS
 from .document import Document, Figure, Section, Table
 from .trace import Cite, Data, Math, Num, Ref, Sentence, Text, format_value, sentence
@@ -142,7 +143,7 @@ class Story:
                 self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
                 " at ",
                 self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
-                " from it",
+                f" from it (then within {STALL_BAND * 1e3:g} mm)",
             )
         return sentence(
             "does not reach the goal within ",
@@ -484,12 +485,7 @@ class Story:
                 " steps (until ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                ") because the bounds leave no choice. At the start the velocity limits deliver "
-                "only ",
-                *eq(ALPHA, self.ev(t, emdm, "scaling", "initial_alpha", fmt=".2f")),
-                " of ",
-                VD,
-                "; at the largest feasible ",
+                ") because the bounds leave no choice: at the largest feasible ",
                 ALPHA,
                 " the admissible set is a single point (two joints at their bounds leave one "
                 "unknown for two task equations), so the objective has nothing to choose. ",
@@ -611,7 +607,7 @@ class Story:
             self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
             if e0 > 0
             else Text("little"),
-            " effort at k = 0" if en >= e0 else " effort",
+            " effort over the effort-minimal optimum (ratio 0) at k = 0" if en >= e0 else " effort",
         )
         later = [
             (info["nominal_E"] / info["zero_E"], i)
@@ -1090,6 +1086,17 @@ class Story:
                 M_SYM,
                 " by not moving",
             )
+            e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+            if e4.get("reached"):  # each mean is over its own run: the stall's 30 s weigh in
+                p += sentence(
+                    " (a mean over its own run; ",
+                    ivkc,
+                    " moving, with a slack, E4: ",
+                    self.evidn(
+                        "t2-c-ivkc-slack-policy", "runs", ivkc, "mean_manipulability", fmt=".3f"
+                    ),
+                    ")",
+                )
         p += sentence(
             "; its effort is ",
             self.mt(t, emdm, "total_effort", ".2f"),
@@ -1273,7 +1280,8 @@ class Story:
             "convergence",
             "figures/convergence",
             sentence(
-                "Convergence on one program (green: gradient-based, orange: gradient-free).",
+                "Convergence on one program (green: gradient-based, orange: gradient-free; "
+                "marker: last evaluation).",
             ),
         )
         if self.has_figure("convergence"):
@@ -1371,17 +1379,17 @@ class Story:
         )
         sec.answer = answer
         self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))
-        p = sentence(
-            "The largest commands, at ",
-            T_EQ0,
-            " (",
-            *eq(M_SYM, self.ev(t, ivkc, "singular", "m0", fmt=".2f", unit="m²")),
-            "), are ",
-            self.ev(t, ivkc, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
-            f" ({ivkc}) and ",
-            self.ev(t, emdm, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
-            f" ({emdm}). ",
-        )
+        p = sentence()
+        if all(self.evv(t, c, "limits", "t_qd") == 0.0 for c in (ivkc, emdm)):
+            p += sentence(  # the speeds themselves are in Table I
+                "Both peak speeds (",
+                Ref("tab", "outcomes"),
+                ") come at ",
+                T_EQ0,
+                " (",
+                *eq(M_SYM, self.ev(t, ivkc, "singular", "m0", fmt=".2f", unit="m²")),
+                "). ",
+            )
         e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             p += sentence(
@@ -1583,7 +1591,7 @@ class Story:
                 ", ".join(named[:-1]) + (" and " if len(named) > 1 else "") + named[-1],
                 " (E2)",
                 " and C-IVKC arrives (E4)" if e4.get("reached") else "",
-                "; where the path does not matter, a slack is the better default. ",
+                "; in these tasks, where the path does not matter, a slack was the better choice. ",
             )
         p += sentence(
             "Exact active-set QP solvers, certified at every step, are the right tool; "
@@ -1959,7 +1967,7 @@ class Story:
                 "Task 2 C-EMDM solvers on the same programs (medians; largest gap and bound "
                 "violation, 0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "; goal: alone in the loop).",
+                "; it./ev.: iterations/evaluations, --: none; goal: alone in the loop).",
             ),
             [
                 sentence("solver"),
@@ -1992,10 +2000,16 @@ class Story:
                     [
                         sentence(k),
                         sentence(bare(self.d.ms(f, "solvers", k, "median_time"))),
-                        sentence(
-                            self.d.num(f, "solvers", k, "median_iterations", fmt=".4g"),
+                        sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
+                            *(
+                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
+                                for key in ("median_iterations",)
+                            ),
                             "/",
-                            self.d.num(f, "solvers", k, "median_evaluations", fmt=".4g"),
+                            *(
+                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
+                                for key in ("median_evaluations",)
+                            ),
                         ),
                         sentence(  # two digits, as the text quotes them
                             self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g")

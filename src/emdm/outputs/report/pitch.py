@@ -16,6 +16,7 @@ class Slides:
     """Everything the pitch template fills in."""
 
     bullets: dict[str, list[Sentence]] = field(default_factory=dict)
+    titles: dict[str, Sentence] = field(default_factory=dict)
     animations: dict[str, dict[str, Any]] = field(default_factory=dict)
     figures: dict[str, bool] = field(default_factory=dict)
 
@@ -44,6 +45,13 @@ class Pitch:
             sentence("within joint-velocity limits and position dampers"),
             sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
         ]
+        out.titles["task1"] = sentence(
+            "Task 1 (three links): ",
+            s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
+            " dexterity for ",
+            s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
+            " effort",
+        )
         out.bullets["task1"] = [
             sentence(
                 "Tracking unchanged: goal at ",
@@ -201,7 +209,9 @@ class Pitch:
                 "Redundant arm: EMDM buys dexterity with null-space motion; tracking is untouched"
             ),
             *self.policy(),
-            sentence("Non-redundant arm: the slack, not the dexterity term, reaches the goal"),
+            sentence(
+                "Task 2's non-redundant arm: the slack, not the dexterity term, reaches the goal"
+            ),
             sentence(
                 "Solve each step exactly: an active-set QP method, certified by its KKT residuals"
             ),
