@@ -294,3 +294,21 @@ def test_animate_a_spatial_arm_writes_an_mp4(tmp_path):
     imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
     frames, _ = imageio_ffmpeg.count_frames_and_secs(str(out / "C-EMDM.mp4"))
     assert frames >= 10
+
+
+def test_time_axes_end_at_the_last_arrival_only_when_the_others_stalled():
+    """Fig. 5's time axes: Task 2's C-IVKC stalls at 4.35 s and the others arrive by 16.45 s, so
+    the axes end at 16.45 s; Task 1 (all arrive) and a run that neither arrives nor has stalled
+    keep the whole records."""
+    from emdm.outputs.paper_figures import time_end
+
+    task2 = emdm.load_scenario("task2")
+    runs = [emdm.simulate(task2, c) for c in ("C-IVKC", "C-EMDM", "UC-IVKC", "UC-EMDM")]
+    assert runs[0].stalled_from is not None and not runs[0].reached
+    assert time_end(runs) == max(r.t[-1] for r in runs[1:]) == runs[1].t[-1]
+    task1 = emdm.load_scenario("task1")
+    assert time_end([emdm.simulate(task1, c) for c in ("C-IVKC", "C-EMDM")]) is None
+    short = task2.with_overrides({"motion.max_time": 3.0})  # stopped before it stalled
+    cut = emdm.simulate(short, "C-IVKC")
+    assert not cut.reached and cut.stalled_from is None
+    assert time_end([cut, runs[1]]) is None

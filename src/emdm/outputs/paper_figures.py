@@ -166,6 +166,18 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
+def time_end(runs: Sequence[Run]) -> float | None:
+    """Where a figure's time axes end when some runs arrived and every other one had stalled by
+    the last arrival (their records run on unchanged, within the stall band, to the time limit):
+    the last arrival. ``None``: the whole records (nothing stalled, or nothing arrived)."""
+    arrived = [float(r.t[-1]) for r in runs if r.reached]
+    stalls = [(r, r.stalled_from) for r in runs if not r.reached]
+    if not arrived or not stalls or any(k is None for _, k in stalls):
+        return None
+    end = max(arrived)
+    return end if max(float(r.t[k]) for r, k in stalls if k is not None) <= end else None
+
+
 def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
     """A pair (or all four controllers of a task) in one composite: (a) m(t), (b) E(t), (c) the
     tracking error ||e||(t) above, (d) q(t) and (e) qd(t) below, one strip per joint."""
@@ -254,6 +266,10 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
+        end = time_end(runs)
+        if end is not None:  # the stalled runs' flat tails add nothing: the arrivals get room
+            for ax in (ax_m, q_axes[0], qd_axes[0]):  # each shares its time axis with others
+                ax.set_xlim(-0.02 * end, 1.03 * end)
         q_axes[-1].set_xlabel(r"$t$ (s)")
         qd_axes[-1].set_xlabel(r"$t$ (s)")
         q_axes[0].set_title(

@@ -1117,8 +1117,22 @@ class Story:
             caption += sentence(
                 ", on the constrained runs' scale (unconstrained peaks up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
-                ").",
+                ")",
             )
+            # time axes end at the last arrival when the runs that missed had stalled by then
+            # (paper_figures.time_end, the same rule on the same records)
+            four = (*PAIRS["UC"], *PAIRS["C"])
+            missed = [c for c in four if not self.mv(t, c, "reached")]
+            last = max((self.mv(t, c, "time_to_goal") for c in four if c not in missed), default=0)
+            if missed and all(
+                self.evv(t, c, "stall") and self.evv(t, c, "stall", "t") <= last for c in missed
+            ):
+                caption += sentence(
+                    "; time axes end at the last arrival (",
+                    ", ".join(missed),
+                    " stalled)",
+                )
+            caption += sentence(".")
             sec.figures.append(self.figure("t2-c", "figures/task2-all", caption))
         else:
             sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
