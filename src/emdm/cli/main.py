@@ -656,7 +656,7 @@ def cmd_study(args: argparse.Namespace) -> int:
         r"(tcp|tls|inproc|ucx|ws|wss)://\S+:\d+|[^\s/]+:\d+", args.scheduler
     ):
         raise UsageError(
-            f"--scheduler {safe(args.scheduler)}: expected a Dask scheduler address such as "
+            f"--scheduler {args.scheduler[:80]!r}: expected a Dask scheduler address such as "
             "tcp://10.0.0.5:8786"
         )
     overrides = _overrides(args)
