@@ -203,10 +203,11 @@ def test_buffer_estimates_and_a_run_too_large_for_the_machine_is_refused_up_fron
     assert emdm.simulate(emdm.load_scenario("task1"), "C-EMDM").reached  # small runs go on
 
 
-def test_simulate_passes_one_signature_to_the_loop(monkeypatch):
+def test_simulate_passes_one_signature_per_kind_of_run_to_the_loop(monkeypatch):
     """simulate calls the loop's machine code without numba's per-call type lookup
-    (loop._entry): sound only while every kind of arm, task, program and obstacle gives the
-    loop arguments of one type, which this checks."""
+    (loop._entry, one entry for plain planar runs and one for all others): sound only while
+    every kind of arm, task, program and obstacle gives the loop arguments of one of these two
+    types, told apart by the last (``full``), which this checks."""
     from emdm.sim import loop
 
     seen: set[tuple[object, ...]] = set()
@@ -225,7 +226,38 @@ def test_simulate_passes_one_signature_to_the_loop(monkeypatch):
         sc = emdm.load_scenario(preset, {"motion.max_time": 0.2, **overrides})
         for name in ("UC-IVKC", "C-EMDM", "MMC", "NEO"):
             emdm.simulate(sc, name)
-    assert len(seen) == 1, seen
+    assert len(seen) == 2, seen
+    assert sorted(str(signature[-1]) for signature in seen) == ["bool", "none"]
+
+
+@pytest.mark.parametrize(
+    ("preset", "overrides"),
+    [
+        ("task1", {}),
+        ("task2", {}),
+        ("task1", {"arm.lengths": [0.3] * 7, "motion.q0": [0.3] * 7, "weights.effort": 0.001}),
+        ("task1", {"controller.on_infeasible": "slack"}),
+        ("task2", {"motion.goal": [-0.5, -0.6], "motion.max_time": 3.0}),
+    ],
+)
+def test_a_plain_planar_run_records_what_the_full_loop_records(monkeypatch, preset, overrides):
+    """The loop compiled for plain planar runs (``full`` None: no spatial, obstacle or row code)
+    records, bit for bit, what the loop compiled for every kind of run records on the same
+    scenario (the solve times aside, which are measured)."""
+    from emdm.sim import loop
+
+    sc = emdm.load_scenario(preset, overrides)
+    names = ("UC-IVKC", "C-IVKC", "UC-EMDM", "C-EMDM")
+    plain = {name: emdm.simulate(sc, name) for name in names}
+    assert loop.full_flag(sc, emdm.get_controller("C-EMDM").program_data(sc)) is None
+    monkeypatch.setattr(loop, "full_flag", lambda scenario, prog: True)
+    for name in names:
+        full = emdm.simulate(sc, name)
+        for key in ("q", "qd", "p", "e", "v", "m", "alpha", "delta", "lo", "hi", "active"):
+            np.testing.assert_array_equal(getattr(full, key), getattr(plain[name], key))
+        for key in ("iterations", "kkt", "rows", "clearance"):
+            np.testing.assert_array_equal(getattr(full, key), getattr(plain[name], key))
+        assert full.solver == plain[name].solver and full.reached == plain[name].reached
 
 
 def test_a_large_arm_runs_in_slices_with_the_same_record(monkeypatch):

@@ -368,7 +368,7 @@ def _step_program(
         gaps,
         float(floor),
     )
-    rows = build_program(data, state, out)
+    rows = build_program(data, state, out, True)
     return QP._trusted(out.P, out.c, out.A, out.b, out.lb, out.ub, n, out.G[:rows], out.h[:rows])
 
 

@@ -32,6 +32,8 @@ from .loop import (
     Exit,
     _arguments,
     _warm_up,
+    _warm_up_plain,
+    full_flag,
     motion_data,
     run_kernel,
     simulate,
@@ -53,8 +55,10 @@ def run_share(
     stride: int,
     out: F64,
     codes: NDArray[np.int64],
+    full: Any,
 ) -> None:
-    """Runs ``first, first + stride, ...`` with one record and one set of buffers."""
+    """Runs ``first, first + stride, ...`` with one record and one set of buffers (``full``:
+    :func:`~emdm.sim.loop.run_kernel`'s)."""
     runs, n = q0s.shape
     nt = goals.shape[1]
     nx = nt + n if prog.slack else n
@@ -72,7 +76,7 @@ def run_share(
         )
         for j in range(n):
             rec.q[0, j] = q0s[r, j]
-        code, k = run_kernel(arm, geo, task, prog, True, True, rec, 0, work)
+        code, k = run_kernel(arm, geo, task, prog, True, True, rec, 0, work, full)
         codes[r] = code
         if code == REACHED or code == TIMEOUT:
             reached = code == REACHED
@@ -102,16 +106,17 @@ def run_all(
     threads: int,
     out: F64,
     codes: NDArray[np.int64],
+    full: bool | None,
 ) -> None:
     """Run ``goals[r]`` from ``q0s[r]`` for every ``r`` on ``threads`` threads; ``out[r]`` =
     outcomes, ``codes[r]`` = how the run ended. :func:`run_share` releases the GIL, so plain
     threads run in parallel (no parallel compile of the whole loop is needed)."""
     if threads <= 1:
-        run_share(arm, geo, motion, prog, goals, q0s, 0, 1, out, codes)
+        run_share(arm, geo, motion, prog, goals, q0s, 0, 1, out, codes, full)
         return
     with ThreadPoolExecutor(max_workers=threads) as pool:
         jobs = [
-            pool.submit(run_share, arm, geo, motion, prog, goals, q0s, t, threads, out, codes)
+            pool.submit(run_share, arm, geo, motion, prog, goals, q0s, t, threads, out, codes, full)
             for t in range(threads)
         ]
         for job in jobs:
@@ -123,22 +128,32 @@ def precompile() -> None:
     them from the cache): once, before many processes start (``make test`` before its workers,
     an image build, a Dask cluster's set-up), so that each of them loads the kernels in under a
     second instead of compiling them again."""
+    ensure_compiled(_warm_up_plain)
     ensure_compiled(_warm_up)
+    ensure_compiled(_warm_up_batch_plain, what="the batch loop")
     ensure_compiled(_warm_up_batch, what="the batch loop")
 
 
-def _warm_up_batch() -> None:
-    """Compile (or load) the batch kernel on a two-step run of each kind of program."""
+def _warm_up_batch(plain: bool = False) -> None:
+    """Compile (or load) the batch kernel on a two-step run of each kind of program (``plain``:
+    of the plain planar presets only, as :func:`~emdm.sim.loop._warm_up`)."""
     from ..core.loading import load_scenario
 
-    for task in WARM_UP_PRESETS:
+    for task in WARM_UP_PRESETS[:2] if plain else WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in (Name.UC_IVKC, Name.C_EMDM):
             q0s = np.array([sc.motion.q0], dtype=float)
             goals = np.array([sc.motion.goal], dtype=float)
             out, codes = np.empty((1, len(OUTCOMES))), np.empty(1, dtype=np.int64)
             prog = get_controller(name).program_data(sc)
-            run_share(sc.arm_data, sc.geometry, motion_data(sc), prog, goals, q0s, 0, 1, out, codes)
+            full = full_flag(sc, prog) if plain else True
+            args = (sc.arm_data, sc.geometry, motion_data(sc), prog, goals, q0s, 0, 1, out, codes)
+            run_share(*args, full)
+
+
+def _warm_up_batch_plain() -> None:
+    """:func:`_warm_up_batch` for plain planar runs."""
+    _warm_up_batch(plain=True)
 
 
 @dataclass(frozen=True)
@@ -235,8 +250,10 @@ def simulate_batch(
     """
     ctrl, _ = _arguments("simulate_batch", scenario, controller)
     g, q = _starts(scenario, goals, q0s)
-    ensure_compiled(_warm_up)
-    ensure_compiled(_warm_up_batch, what="the batch loop")
+    prog = ctrl.program_data(scenario)
+    full = full_flag(scenario, prog)
+    ensure_compiled(_warm_up_plain if full is None else _warm_up)
+    ensure_compiled(_warm_up_batch_plain if full is None else _warm_up_batch, what="the batch loop")
     n = scenario.n
     runs = 0 if 0 in (g.shape[0], q.shape[0]) else max(g.shape[0], q.shape[0])
     g = np.ascontiguousarray(np.broadcast_to(g, (runs, scenario.nt)))
@@ -244,7 +261,6 @@ def simulate_batch(
     out = np.empty((runs, len(OUTCOMES)))
     codes = np.full(runs, Exit.HANDOFF, dtype=np.int64)
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
-        prog = ctrl.program_data(scenario)
         threads = min(numba.get_num_threads(), runs)
         nx = n + scenario.nt if prog.slack else n
         steps = motion_data(scenario).n_steps
@@ -268,6 +284,7 @@ def simulate_batch(
             threads,
             out,
             codes,
+            full,
         )
     redo = np.flatnonzero((codes != Exit.REACHED) & (codes != Exit.TIMEOUT))
     stopped: list[int] = []

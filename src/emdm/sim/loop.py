@@ -56,6 +56,7 @@ from ..core.simplex import task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
 from ..core.terms.base import TermKind
 from ..core.terms.obstacle import SLOWEST
+from ..core.terms.program import SHAPED
 from ..core.tolerances import STALL_BAND, STALL_TIME
 from ..core.validation import Policy
 from ..core.zonotope import task_scale
@@ -117,8 +118,16 @@ def run_kernel(
     rec: Record,
     k0: int,
     w: StepWork,
+    full: Any,
 ) -> tuple[int, int]:
-    """Run from state ``k0`` (``rec.q[k0]`` set) until an :class:`Exit`; returns ``(exit, k)``."""
+    """Run from state ``k0`` (``rec.q[k0]`` set) until an :class:`Exit`; returns ``(exit, k)``.
+
+    ``full`` is ``None`` for a plain planar run (a planar task, no obstacles, a program without
+    inequality rows: :func:`plain_planar`) and ``True`` otherwise. numba removes every branch
+    that tests ``full is None`` or ``full is not None`` before it compiles (its dead-branch
+    pruning of ``None`` arguments), so a plain planar run compiles no spatial kinematics,
+    obstacle distances or row handling: about a third of the first use's compile time. The
+    record is the same either way (the removed code does nothing without rows and obstacles)."""
     n = arm.lengths.size
     nt = rec.p.shape[1]
     if k0 == 0:  # a new run: no working set to try first, so a run never depends on the last
@@ -128,7 +137,7 @@ def run_kernel(
     cap = rec.qd.shape[0]
     out = ProgramOut(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.ids)
     for k in range(k0, cap + 1):
-        if nt == 2:  # the planar kinematics directly: the hot path carries no spatial code
+        if full is None or nt == 2:  # the planar kinematics directly: no spatial code on this path
             m = kinematics(arm.lengths, rec.q[k], rec.p[k], w.J, w.Jm, w.kin)
             rec.e[k, 0] = motion.goal[0] - rec.p[k, 0]
             rec.e[k, 1] = motion.goal[1] - rec.p[k, 1]
@@ -148,7 +157,7 @@ def run_kernel(
             )
         rec.m[k] = m
         t = k * motion.dt
-        if motion.obstacles.size:
+        if full is not None and motion.obstacles.size:
             chain_points(geo, rec.p[k], w.kin, w.sp, w.pts, w.axes)
             rec.clearance[k] = link_gaps(motion.obstacles, t, w.pts, w.gaps)
         err2 = 0.0
@@ -168,10 +177,13 @@ def run_kernel(
                 rec.q[k], w.J, w.Jm, rec.v[k], err, rec.p[k], t, w.pts, w.axes, w.gaps, SLOWEST
             ),
             out,
+            full,
         )
         G, h = w.G[:ng], w.h[:ng]
-        near = partition_rows(w.G, w.h, w.ids, w.lb, w.ub, ng) if ng > 0 else 0
-        if w.qp.warm[0] and (ng > 0 or w.rows[1] > 0):
+        near = 0
+        if full is not None and ng > 0:
+            near = partition_rows(w.G, w.h, w.ids, w.lb, w.ub, ng)
+        if full is not None and w.qp.warm[0] and (ng > 0 or w.rows[1] > 0):
             recall_rows(w, ng)
         Gn, hn = (G, h) if near == ng else (w.G[:near], w.h[:near])  # the rows solved first
         w.rows[0] = ng
@@ -179,7 +191,7 @@ def run_kernel(
             rec.lo[k, j], rec.hi[k, j] = w.lb[j], w.ub[j]
         if not solve:
             return HANDOFF, k
-        if nt == 2:  # the exact 2-D task scale first (cheap), then the solve
+        if full is None or nt == 2:  # the exact 2-D task scale first (cheap), then the solve
             alpha = task_scale(w.A, w.b, w.lb, w.ub, w.qp.feas)
             if alpha < 0.0 or (alpha < 1.0 and not scale_policy):
                 return HANDOFF, k
@@ -187,9 +199,9 @@ def run_kernel(
                 w.b[i] *= alpha
             start = ticks()
             code, iterations = active_set(w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res)
-            if ng > 0 and code != INFEASIBLE:
+            if full is not None and ng > 0 and code != INFEASIBLE:
                 code, iterations = settle_rows(w, near, ng, code, iterations)
-            if code == INFEASIBLE and ng > 0:  # the rows cut the task the bounds allow: the
+            if full is not None and code == INFEASIBLE and ng > 0:  # the rows cut the task: the
                 for i in range(nt):  # exact scale under the rows too (a linear program)
                     w.b[i] = rec.v[k, i]
                 alpha = task_scale_rows(w.A, w.b, G, h, w.lb, w.ub, w.qp.feas)
@@ -248,9 +260,9 @@ def run_kernel(
         rec.effort[k] = 0.5 * effort
         rec.manip[k] = manip
         mark_active(rec.qd[k], w.lb, w.ub, rec.active[k])
-        if ng > 0 or w.rows[1] > 0:
+        if full is not None and (ng > 0 or w.rows[1] > 0):
             hold_rows(w, ng)
-        if ng > 0:
+        if full is not None and ng > 0:
             rec.rows[k] = ng
             rec.rows_active[k] = count_active_rows(G, h, w.x)
         if prog.slack:
@@ -344,6 +356,23 @@ class Run:
         return float(self.t[-1]) if self.reached else None
 
 
+def plain_planar(scenario: Scenario, prog: ProgramData) -> bool:
+    """Whether a run needs none of :func:`run_kernel`'s spatial, obstacle and row code: a
+    planar task (two rows), no obstacles and a program with no inequality rows and no term that
+    reads obstacles (:data:`~emdm.core.terms.program.SHAPED`)."""
+    return (
+        scenario.nt == 2
+        and not scenario.obstacles
+        and prog.rows == 0
+        and SHAPED.isdisjoint(prog.codes.tolist())  # 0.2 us (np.isin: 10 us, per run)
+    )
+
+
+def full_flag(scenario: Scenario, prog: ProgramData) -> bool | None:
+    """:func:`run_kernel`'s ``full`` argument: ``None`` for a :func:`plain_planar` run."""
+    return None if plain_planar(scenario, prog) else True
+
+
 def motion_data(scenario: Scenario, goal: Vector | None = None) -> Motion:
     """The scenario's task as kernel input (``goal`` replaces the scenario's when given; without
     one, built once per scenario and kept in its memo)."""
@@ -429,9 +458,10 @@ def simulate(
     chain = [solver, *[f for f in fallback if f != solver]]
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
-    ensure_compiled(_warm_up)
     n, nt = scenario.n, scenario.nt
     prog = ctrl.program_data(scenario)
+    full = full_flag(scenario, prog)
+    ensure_compiled(_warm_up_plain if full is None else _warm_up)
     nx = n + nt if prog.slack else n
     arm, geo, motion = scenario.arm_data, scenario.geometry, motion_data(scenario)
     policy = scenario.controller.on_infeasible
@@ -443,12 +473,14 @@ def simulate(
     work = _work(n, nx, nt, prog.rows, len(scenario.obstacles))
     steps = _Steps()
     k = 0
-    kernel = _entry((arm, geo, motion, prog, True, True, rec, k, work))
+    kernel = _entry((arm, geo, motion, prog, True, True, rec, k, work, full))
     per_call = max(1, int(SLICE_WORK / n**3)) if n >= SLICED_FROM else None
     while True:
         limit = cap if per_call is None else min(cap, k + per_call)
         view = rec if limit == cap else Record._make(a[: a.shape[0] - (cap - limit)] for a in rec)
-        code, k = kernel(arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, view, k, work)
+        code, k = kernel(
+            arm, geo, motion, prog, policy is Policy.SCALE, in_kernel, view, k, work, full
+        )
         if code == Exit.FULL and k < cap:  # the end of a slice: a signal is honoured here
             continue
         if code == Exit.FULL:  # a longer run than the record holds: grow it, if it fits
@@ -470,7 +502,7 @@ def simulate(
     return _run(scenario, ctrl, rec, k, steps, reached=code == Exit.REACHED)
 
 
-_entries: list[Callable[..., tuple[int, int]]] = []
+_entries: dict[bool, Callable[..., tuple[int, int]]] = {}
 
 
 def _entry(args: tuple[Any, ...]) -> Callable[..., tuple[int, int]]:
@@ -482,15 +514,17 @@ def _entry(args: tuple[Any, ...]) -> Callable[..., tuple[int, int]]:
     (:func:`~emdm.sim.buffers.new_record`, :func:`~emdm.sim.buffers.step_work`,
     :func:`motion_data`, ``Scenario.arm_data`` and ``geometry``, ``Controller.program_data``),
     each with a fixed dtype, number of dimensions and C layout, so the lookup is done on the
-    first call and its entry point reused (``tests/test_simulate.py`` checks that every kind of
-    arm, task, program and obstacle gives this one signature)."""
-    if not _entries:
+    first call and its entry point reused; one for plain planar runs (``full`` is ``None``), one
+    for all others (``tests/test_simulate.py`` checks that every kind of arm, task, program and
+    obstacle gives one of these two signatures)."""
+    plain = args[-1] is None
+    if plain not in _entries:
         dispatcher: Any = run_kernel
         signature = tuple(dispatcher.typeof_pyval(a) for a in args)
         if signature not in dispatcher.overloads:  # not warmed up for it: compiled (or loaded)
             dispatcher.compile(signature)
-        _entries.append(dispatcher.overloads[signature].entry_point)
-    return _entries[0]
+        _entries[plain] = dispatcher.overloads[signature].entry_point
+    return _entries[plain]
 
 
 def _arguments(
@@ -654,12 +688,13 @@ WARM_UP_PRESETS = ("task1", "task2", "panda", "ur5")
 """One preset of each kind of task and program: planar (redundant, slack), pose (redundant, slack)."""
 
 
-def _warm_up() -> None:
-    """Compile (or load) every kernel of the loop: one short run of each kind of program."""
+def _warm_up(plain: bool = False) -> None:
+    """Compile (or load) every kernel of the loop: one short run of each kind of program, for
+    runs that are not plain planar (``plain``: for those that are, the planar presets only)."""
     from ..core.loading import load_scenario
 
     seconds_per_tick()
-    for task in WARM_UP_PRESETS:
+    for task in WARM_UP_PRESETS[:2] if plain else WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in (Name.UC_IVKC, Name.C_EMDM):
             ctrl = get_controller(name)
@@ -668,7 +703,14 @@ def _warm_up() -> None:
             rec = new_record(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
             work = step_work(sc.n, nx, sc.nt, 0, 0)
-            run_kernel(sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
+            full = full_flag(sc, prog) if plain else True
+            args = (sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
+            run_kernel(*args, full)
+
+
+def _warm_up_plain() -> None:
+    """:func:`_warm_up` for plain planar runs: the first use of a planar task compiles no more."""
+    _warm_up(plain=True)
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

@@ -10,7 +10,7 @@ terms' writers, so adding a term means adding its module and one line below.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +44,9 @@ from .base import (
     StepInput,
 )
 
+SHAPED = frozenset((int(PLANE), int(OBSTACLE), int(CLEARANCE)))
+"""The terms that read obstacles or write inequality rows."""
+
 
 class ProgramData(NamedTuple):
     """A controller's terms as kernel input: ``codes`` (one integer per term, in order),
@@ -60,9 +63,11 @@ class ProgramData(NamedTuple):
 
 
 @kernel(refcount=False)
-def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
+def build_program(prog: ProgramData, s: StepInput, out: ProgramOut, full: Any) -> int:
     """Write the program of ``prog`` at the state ``s`` into ``out``; returns the number of
-    inequality rows written (``G[:rows]``, ``h[:rows]``)."""
+    inequality rows written (``G[:rows]``, ``h[:rows]``). ``full`` is ``None`` when ``prog`` has
+    no term that reads obstacles or writes rows (:data:`SHAPED`; the loop's plain planar runs):
+    numba then compiles none of their writers (see :func:`emdm.sim.loop.run_kernel`)."""
     nx = out.c.size
     for i in range(nx):
         for j in range(nx):
@@ -91,12 +96,12 @@ def build_program(prog: ProgramData, s: StepInput, out: ProgramOut) -> int:
             damper.write(data, s.q, out.lb, out.ub)
         elif code == CENTRING:
             centring.write(weight, data, s.q, out.c)
-        elif code == PLANE:
+        elif full is not None and code == PLANE:
             rows = plane.write(data, s.p, s.J, out.G, out.h, out.ids, rows)
-        elif code == OBSTACLE:
+        elif full is not None and code == OBSTACLE:
             rows = obstacle.write(
                 data, s.pts, s.axes, s.gaps, out.lb, out.ub, out.G, out.h, out.ids, rows, s.floor
             )
-        elif code == CLEARANCE:
+        elif full is not None and code == CLEARANCE:
             clearance.write(weight, data, s.t, s.pts, s.axes, out.c)
     return rows
