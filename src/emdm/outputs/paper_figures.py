@@ -309,7 +309,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 1.7 if medium is PAPER else 2.7
+    height = 1.55 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -706,7 +706,7 @@ def convergence_figure(
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
     against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
     by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.3 if medium is PAPER else 2.7
+    height = 1.2 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     dashes = ("-", "--", ":", "-.")
     marks = ("o", "s", "^", "D", "v", "P")

@@ -222,11 +222,14 @@ def _job_pareto(task: str, controller: str, cfg: ReportConfig, data_dir: Path) -
             finer = simulate(
                 load_scenario(task, {**over, "motion.dt": scenario.motion.dt / 5}), controller
             )
+            done = metrics(finer)
             row["finer_dt"] = {
                 "dt": scenario.motion.dt / 5,
                 "reached": finer.reached,
                 "time_to_goal": finer.time_to_goal,
-                "max_abs_qd": metrics(finer)["max_abs_qd"],
+                "max_abs_qd": done["max_abs_qd"],
+                "mean_manipulability": done["mean_manipulability"],
+                "total_effort": done["total_effort"],
             }
         except (NoSolution, EmdmError) as exc:
             row["finer_dt"] = {"error": str(exc)}
