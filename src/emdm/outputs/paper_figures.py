@@ -697,6 +697,10 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
     return stem
 
 
+SHADES = (0.0, -0.45, 0.4, -0.25, 0.6, 0.2)
+"""How far each solver of a family moves from the family's colour (towards white when > 0)."""
+
+
 def convergence_figure(
     curves: Mapping[str, tuple[str, Sequence[float], Sequence[float]]],
     step: int,
@@ -715,12 +719,15 @@ def convergence_figure(
         seen: dict[str, int] = {}
         for name, (family, evaluations, error) in curves.items():
             i = seen[family] = seen.get(family, -1) + 1
-            # every solver its own dash and marker, the marker at its last evaluation: a solver
-            # done in one or two evaluations (slsqp) is a point, not a line of no length
+            # every solver its own shade of its family's colour, dash and marker, the marker at
+            # its last evaluation: a solver done in one or two evaluations (slsqp) is a point
+            base = np.array(matplotlib.colors.to_rgb(FAMILY_COLOR.get(family, "grey")))
+            mix = SHADES[i % len(SHADES)]  # > 0 towards white, < 0 towards black
+            shade = base + mix * (1.0 - base) if mix > 0 else base * (1.0 + mix)
             ax.loglog(
                 evaluations,
                 error,
-                color=FAMILY_COLOR.get(family, "grey"),
+                color=tuple(shade),
                 linestyle=dashes[i % len(dashes)],
                 linewidth=medium.line,
                 marker=marks[i % len(marks)],
