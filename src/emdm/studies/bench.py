@@ -624,9 +624,9 @@ def bench_table(data: dict[str, Any]) -> str:
         f"Batch ({b['scenario']}): {b['runs']} runs, {b['steps']} steps in "
         f"{b['seconds']:.3f} s = {b['steps_per_second']:.3g} steps/s on "
         f"{data['machine']['cpus']} CPUs.",
-        "First `emdm.simulate` in a new process: "
+        "First `emdm.simulate` (task1, a plain planar run) in a new process: "
         + ", ".join(
-            f"{'compiling every kernel' if k == 'compile_s' else 'loading them from the cache'} "
+            f"{'compiling its kernels' if k == 'compile_s' else 'loading them from the cache'} "
             f"{v:.1f} s"
             for k, v in first.items()
         )
