@@ -627,3 +627,19 @@ def test_study_time_pilot_is_the_study_own_first_block(monkeypatch):
     per_run = montecarlo.seconds_per_run(emdm.load_scenario("task1"), 7)
     assert calls == [("task1", 7, 0, 1, 4), ("task1", 7, 0, 1, montecarlo.BLOCK)]
     assert 0.0 < per_run < 1.0
+
+
+def test_a_refused_command_says_one_line_even_after_a_scenario_warning(tmp_path, capsys):
+    """Found by the long fuzz run: a scenario that warns (its goal out of reach) with an --out
+    holding a user's file said the warning, then the refusal: two lines. The warning waits for
+    the up-front checks: a refused command says only its error; one that runs says both."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mine.txt").write_text("the user's", encoding="utf-8")
+    argv = ["run", "task2", "--set", "arm.lengths=[1, 2]", "--set", "motion.max_time=0.3"]
+    assert main([*argv, "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "emdm did not write" in lines[0], lines
+    assert main([*argv, "--out", str(tmp_path / "fresh")]) == 0
+    err = capsys.readouterr().err
+    assert "emdm: warning: task2: motion.goal:" in err and "outside the reachable annulus" in err

@@ -77,13 +77,24 @@ def _overrides(args: argparse.Namespace) -> dict[str, Any]:
     return dict(parse_override(text) for text in args.set or [])
 
 
+_pending: list[str] = []
+"""The scenarios' warnings, said once the command's up-front checks have passed (a command
+refused before any work says one line, not a warning and then its error)."""
+
+
 def _load(name: str, overrides: dict[str, Any]) -> Scenario:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         scenario = load_scenario(name, overrides)
-    for message in scenario.warnings:
-        print(f"emdm: warning: {scenario.source}: {message}", file=sys.stderr)
+    _pending.extend(f"emdm: warning: {scenario.source}: {m}" for m in scenario.warnings)
     return scenario
+
+
+def _say_warnings() -> None:
+    """Print the pending scenario warnings (once)."""
+    for line in _pending:
+        print(line, file=sys.stderr)
+    _pending.clear()
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
@@ -102,6 +113,7 @@ def _out(args: argparse.Namespace, default: str, inputs: Iterable[str | Path] = 
             raise UsageError(
                 f"--out {out} holds the input {given}, which replacing it would delete"
             )
+    _say_warnings()  # the folder is fine: the work begins
     return out
 
 
@@ -722,14 +734,18 @@ def cmd_study(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------- scenario, play, list
 def cmd_scenario(args: argparse.Namespace) -> int:
-    print(_scenario(args).to_toml(), end="")
+    scenario = _scenario(args)
+    _say_warnings()
+    print(scenario.to_toml(), end="")
     return 0
 
 
 def cmd_play(args: argparse.Namespace) -> int:
     from ..play import serve  # planar: the Bokeh page; spatial: the 3-D viser page
 
-    return serve(_scenario(args), port=args.port, open_browser=not args.no_browser)
+    scenario = _scenario(args)
+    _say_warnings()
+    return serve(scenario, port=args.port, open_browser=not args.no_browser)
 
 
 def cmd_list(args: argparse.Namespace) -> int:
@@ -1089,8 +1105,14 @@ def main(argv: Sequence[str] | None = None, *, final: bool = False) -> int:
     :func:`console`)."""
 
     def command() -> int:
-        args = build_parser().parse_args(argv)
-        return int(args.func(args))
+        _pending.clear()
+        try:
+            args = build_parser().parse_args(argv)
+            status = int(args.func(args))
+            _say_warnings()  # a command without --out says them here
+            return status
+        finally:
+            _pending.clear()  # a refused command's are dropped: its one line is the error
 
     return run_command(command, final=final)
 
