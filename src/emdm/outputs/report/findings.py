@@ -805,7 +805,7 @@ class Story:
                 self.d.num(lab, "solvers", "quadprog", "failures", fmt="d"),
                 " of the ",
                 self.d.num(lab, "solvers", "quadprog", "resolved_steps", fmt="d"),
-                " re-solved C-EMDM programs",
+                " C-EMDM programs the solver lab re-solves",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp["failures"]:
                 p += sentence(", all scaled ones")
@@ -1085,7 +1085,13 @@ class Story:
             )
             # each mean is over its own run: the stall's 30 s weigh in (E4's moving C-IVKC is
             # in Table II)
-            p += sentence(" (each mean over its own run)")
+            p += sentence(
+                " (each mean over its own run: ",
+                ivkc,
+                "'s ",
+                self.mt(t, ivkc, "final_time", ".0f", "s"),
+                ")",
+            )
         p += sentence(
             "; its effort is ",
             self.mt(t, emdm, "total_effort", ".2f"),

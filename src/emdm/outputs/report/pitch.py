@@ -83,7 +83,9 @@ class Pitch:
                 sentence(
                     "Constrained: identical commands for the first ",
                     s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
-                    ": the bounds leave a single admissible command (task scaled, ",
+                    ": the bounds leave no choice (",
+                    s.pairn(t1, "C", "coincide_scaled_steps", "d"),
+                    " steps task-scaled, grey; ",
                     ALPHA,
                     " down to ",
                     s.ev(t1, Name.C_EMDM, "scaling", "min_alpha", fmt=".2f"),
