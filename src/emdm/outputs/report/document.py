@@ -43,6 +43,8 @@ class Table:
     number: int = 0
     html_only: bool = False
     font: str = "footnotesize"
+    colsep: float = 4.0
+    """Space either side of a column (pt, LaTeX's ``\\tabcolsep``): less for a wide table."""
 
 
 @dataclass

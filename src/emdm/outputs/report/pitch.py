@@ -247,11 +247,11 @@ class Pitch:
         i = self.s.dearest_later(uc)
         if i is None:
             return ()
-        return (
-            ", up to ",
+        return (  # a step the slide's fronts may not show: said as a time of the run
+            ", ",
             self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
-            " at k = ",
-            self.d.num(uc, "steps", i, "k", fmt="d"),
+            " at ",
+            self.d.num(uc, "steps", i, "t", fmt=".1f", unit="s"),
         )
 
     def policy(self) -> list[Sentence]:
@@ -343,7 +343,7 @@ class Pitch:
         if self.d.value(uc, "steps", 0, "zero_E") > 0:
             out.append(
                 sentence(
-                    "The nominal ratio (50) costs ",
+                    "Nominal ratio: ",
                     self.d.pct(
                         (uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f"
                     ),
