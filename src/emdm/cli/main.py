@@ -621,19 +621,11 @@ def _study_time(
     """The study's time on this machine, from a pilot block of each study (None: too small to
     need one, or a remote scheduler whose cores are unknown); refused, before the work, beyond
     ``--max-hours``, with the estimate and the largest ``--runs`` that fits."""
-    from ..studies.montecarlo import PILOT_FROM, seconds_per_run
+    from ..studies.montecarlo import PILOT_FROM, seconds_per_run, sweep_scenarios
 
     if args.runs < PILOT_FROM or args.scheduler:
         return None
-    pairs: list[tuple[float, float] | None] = list(weights) if weights else [None]
-    per_run = 0.0
-    for sc in scenarios:
-        for pair in pairs:
-            if pair is not None:
-                sc = sc.with_overrides(
-                    {"weights.effort": pair[0], "weights.manipulability": pair[1]}
-                )
-            per_run += seconds_per_run(sc, args.seed)
+    per_run = sum(seconds_per_run(sc, args.seed) for sc in sweep_scenarios(scenarios, weights))
     if args.engine == "dask":  # single-threaded workers, against a pilot on every thread
         import numba
 

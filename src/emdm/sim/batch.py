@@ -28,6 +28,7 @@ from .buffers import Motion, new_record, require_memory, step_work
 from .loop import (
     REACHED,
     TIMEOUT,
+    WARM_UP_PLANAR,
     WARM_UP_PRESETS,
     Exit,
     _arguments,
@@ -139,7 +140,7 @@ def _warm_up_batch(plain: bool = False) -> None:
     of the plain planar presets only, as :func:`~emdm.sim.loop._warm_up`)."""
     from ..core.loading import load_scenario
 
-    for task in WARM_UP_PRESETS[:2] if plain else WARM_UP_PRESETS:
+    for task in WARM_UP_PLANAR if plain else WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in (Name.UC_IVKC, Name.C_EMDM):
             q0s = np.array([sc.motion.q0], dtype=float)

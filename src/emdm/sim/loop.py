@@ -684,7 +684,9 @@ def _run(
     )
 
 
-WARM_UP_PRESETS = ("task1", "task2", "panda", "ur5")
+WARM_UP_PLANAR = ("task1", "task2")
+"""The presets whose runs are plain planar (:func:`plain_planar`): the plain warm-up's."""
+WARM_UP_PRESETS = (*WARM_UP_PLANAR, "panda", "ur5")
 """One preset of each kind of task and program: planar (redundant, slack), pose (redundant, slack)."""
 
 
@@ -694,7 +696,7 @@ def _warm_up(plain: bool = False) -> None:
     from ..core.loading import load_scenario
 
     seconds_per_tick()
-    for task in WARM_UP_PRESETS[:2] if plain else WARM_UP_PRESETS:
+    for task in WARM_UP_PLANAR if plain else WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in (Name.UC_IVKC, Name.C_EMDM):
             ctrl = get_controller(name)

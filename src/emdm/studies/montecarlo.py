@@ -437,6 +437,20 @@ def parse_weights(text: str) -> list[tuple[float, float]]:
     return pairs
 
 
+def sweep_scenarios(
+    scenarios: Sequence[Scenario], weights: Sequence[tuple[float, float]] | None
+) -> list[Scenario]:
+    """The scenario of each study of a sweep, in order: every scenario with each weight pair
+    ``(w_E, w_M)``, or as it is without ``weights``."""
+    if not weights:
+        return list(scenarios)
+    return [
+        sc.with_overrides({"weights.effort": w_e, "weights.manipulability": w_m})
+        for sc in scenarios
+        for w_e, w_m in weights
+    ]
+
+
 def run_sweep(
     scenarios: Sequence[Scenario],
     weights: Sequence[tuple[float, float]] | None,
@@ -457,30 +471,21 @@ def run_sweep(
         engine = Engine(EngineKind.DASK, scheduler=cluster.scheduler_address)
     try:
         results = []
-        for scenario in scenarios:
-            pairs: list[tuple[float, float] | None] = list(weights) if weights else [None]
-            for pair in pairs:
-                sc = (
-                    scenario
-                    if pair is None
-                    else scenario.with_overrides(
-                        {"weights.effort": pair[0], "weights.manipulability": pair[1]}
-                    )
-                )
-                result = run_study(
-                    sc,
-                    runs,
-                    seed,
-                    engine=engine,
-                    chunk_blocks=chunk_blocks,
-                    keep_runs=keep_runs,
-                    progress=progress,
-                )
-                result["weights"] = {
-                    "effort": sc.weights.effort,
-                    "manipulability": sc.weights.manipulability,
-                }
-                results.append(result)
+        for sc in sweep_scenarios(scenarios, weights):
+            result = run_study(
+                sc,
+                runs,
+                seed,
+                engine=engine,
+                chunk_blocks=chunk_blocks,
+                keep_runs=keep_runs,
+                progress=progress,
+            )
+            result["weights"] = {
+                "effort": sc.weights.effort,
+                "manipulability": sc.weights.manipulability,
+            }
+            results.append(result)
         return results
     finally:
         if cluster is not None:
