@@ -295,13 +295,14 @@ def _settle(s) -> None:
 
 def test_the_page_recomputes_on_a_goal_drag(session):
     s = session()
-    before = s.status.text
+    before, restarts = s.status.text, s.restart.data["n"][0]
     assert "C-EMDM" in before and "C-IVKC" in before and s.banner.text == ""
     s.goal.data = {"x": [0.3], "y": [0.7]}
     _settle(s)
     assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
     assert s.steps[0].data["ex"][-1] == pytest.approx(0.3, abs=2e-3)
-    assert s.status.text != before and s.play.active  # the new motion plays from the start
+    # the new motion plays from the start (restart.js)
+    assert s.status.text != before and s.restart.data["n"][0] == restarts + 1
     assert s.save_toml.tags[1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.save_toml.tags[0]
 
 
@@ -541,6 +542,7 @@ def test_the_page_in_a_real_browser(tmp_path):
         assert math.hypot(ex[-1] - 0.3, ey[-1] - 0.7) < 0.02
         _wait(driver, MODEL + ".text != arguments[1]", "status", status)
         assert "of 163" not in _text(driver, "status")
+        _wait(driver, MODEL + ".active", "play")  # the new run plays from its start (restart.js)
 
         # move the manipulability-weight slider to its left end (w_M = 0): EMDM becomes IVKC
         x, y, left = driver.execute_script(HANDLE, "slider-w_M")

@@ -134,6 +134,8 @@ class Session:
         self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
+        for source in (self.address, self.restart, *self.batch):  # messages to the page's scripts
+            self.doc.add_root(source)
         self.doc.title = "emdm play"
         self.doc.template = template()
 
@@ -166,16 +168,26 @@ class Session:
 
         self.scene = self._scene()
         self.plots = self._plots()
+        self.batch = [ColumnDataSource({"k": [0]}, name=f"batch-{i}") for i in range(2)]
+        for source, hold in zip(self.batch, (True, False), strict=True):
+            source.js_on_change(
+                "data",
+                CustomJS(
+                    args={"figures": [self.scene, *self.figures], "hold": hold},
+                    code=asset("batch.js"),
+                ),
+            )
         controls = self._controls()
         transport = self._transport()
         sheet: list[Any] = [InlineStyleSheet(css=asset("play.css"))]
         self.status = Div(width=SCENE, stylesheets=sheet, name="status")
         self.banner = Div(width=280 + SCENE + 2 * PLOT_W, stylesheets=sheet, name="banner")
         self.legend = Div(width=2 * PLOT_W, stylesheets=sheet)
-        # the settings in force as the page address's query (address.js writes it to the URL)
-        self.address = Div(text="", visible=False, name="address")
+        # the settings in force as the page address's query (address.js writes it to the URL);
+        # a data source, not a hidden Div: a Div's change re-lays out the whole page (8 ms)
+        self.address = ColumnDataSource({"query": [""]}, name="address")
         address = CustomJS(args={"address": self.address}, code=asset("address.js"))
-        self.address.js_on_change("text", address)
+        self.address.js_on_change("data", address)
         self.doc.js_on_event("document_ready", address)
         self.doc.js_on_event(
             "connection_lost", CustomJS(args={"banner": self.banner}, code=asset("reconnect.js"))
@@ -191,7 +203,6 @@ class Session:
             header,
             self.banner,
             row(controls, middle, column(self.plots, self.legend)),
-            self.address,
         )
         frame = CustomJS(
             args={
@@ -372,6 +383,7 @@ class Session:
             y_units="screen",
             text="t = 0.00 s",
             text_font_size="16px",
+            level="overlay",
             text_color="#222222",
         )
         self.scale_note = Label(
@@ -495,9 +507,18 @@ class Session:
         pareto.title = self.pareto_title
         self.pareto = pareto
         for fig in figs:
-            span = Span(location=0, dimension="height", line_color="#D55E00", line_width=1.5)
+            # on the overlay layer: a frame that moves only the cursor leaves the curves
+            # painted (repainting six plots per frame kept the page busy while playing)
+            span = Span(
+                location=0,
+                dimension="height",
+                line_color="#D55E00",
+                line_width=1.5,
+                level="overlay",
+            )
             fig.add_layout(span)
             self.cursors.append(span)
+        self.figures = [*figs, pareto]
         figs[2].xaxis.axis_label = "t (s)"
         figs[3].xaxis.axis_label = "t (s)"
         return gridplot(
@@ -580,11 +601,19 @@ class Session:
                     "scrub": self.scrub,
                     "speed": self.speed,
                     "speeds": list(SPEEDS),
+                    "interval": FRONT_INTERVAL * 1e3,
                 },
                 code=asset("play.js"),
             ),
         )
         self.scrub.on_change("value", self._guard(self._on_scrub))
+        # a new run plays from its start; a data source, since a change of the Toggle's label
+        # re-lays out the page (setting it off and on again cost 17 ms per change)
+        self.restart = ColumnDataSource({"n": [0]}, name="restart")
+        self.restart.js_on_change(
+            "data",
+            CustomJS(args={"toggle": self.play, "scrub": self.scrub}, code=asset("restart.js")),
+        )
         return column(row(self.play, self.speed), self.scrub)
 
     # ------------------------------------------------------------------------ callbacks
@@ -618,7 +647,6 @@ class Session:
         pending, self._pending = self._pending, set()
         if "run" in pending or "replay" in pending:
             self._recompute(replay="replay" in pending)
-            self._request("front")  # after the trajectory has gone to the page
         elif "front" in pending:
             self._refresh_front()
 
@@ -771,14 +799,16 @@ class Session:
         if self.settings != self._valid:  # a change applied: an earlier refusal is history
             self._refusal = None
         self._valid = copy.deepcopy(self.settings)
-        self.address.text = logic.settings_query(self.settings)
+        _set(self.address, data={"query": [logic.settings_query(self.settings)]})
         ran = time.perf_counter()
         outcomes = logic.run_pair(scenario, self.settings.pair)
         self.timing["runs"] = time.perf_counter() - ran
         self.scenario, self.outcomes = scenario, outcomes
         end = max([scenario.motion.dt] + [float(o.run.t[-1]) for o in outcomes if o.run])
         self.t = 0.0 if replay else min(self.t, end)
-        self.doc.hold("combine")  # one message; the Python callbacks of held changes run later
+        # the page paints the change once, when its last message has arrived (batch.js)
+        self._batch(True)
+        self.doc.hold("combine")  # the Python callbacks of held changes run later
         try:
             self._draw(scenario, outcomes, end)
             # a refused value stays explained while the page recomputes what is in force (the
@@ -793,7 +823,17 @@ class Session:
         finally:
             self._syncing = False
         self.timing["change"] = time.perf_counter() - start
-        self._refresh_status()
+        try:  # in the same batch: the page paints the change, its status and front once
+            self._refresh_front()
+        finally:
+            self._batch(False)
+
+    def _batch(self, hold: bool) -> None:
+        """Open (``hold``) or close the page's paint batch: each property change is a message of
+        its own, and a page painting them as they came drew a change up to four times (each run,
+        the widgets, the status)."""
+        source = self.batch[0 if hold else 1]
+        source.data = {"k": [source.data["k"][0] + 1]}
 
     def _draw(self, scenario: Scenario, outcomes: Sequence[Outcome], end: float) -> None:
         scale = logic.ellipse_scale(scenario)
@@ -884,9 +924,8 @@ class Session:
                 slider.value = position
             if control.key == "weights.slack":
                 _set(slider, disabled=scenario.redundant and not scenario.obstacles)
-        if replay:
-            self.play.active = False
-            self.play.active = True
+        if replay:  # restart.js: from the start, playing (the Toggle is set only if paused)
+            self.restart.data = {"n": [self.restart.data["n"][0] + 1]}
 
     def _limits(self, scenario: Scenario) -> None:
         arm, damper = scenario.arm, scenario.damper

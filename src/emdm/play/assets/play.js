@@ -1,11 +1,13 @@
 // Play the motion in real time: advance the scrub bar by the elapsed time times the speed.
-// args: toggle (Toggle), scrub (Slider), speed (RadioButtonGroup), speeds (its factors).
+// args: toggle (Toggle), scrub (Slider), speed (RadioButtonGroup), speeds (its factors),
+// interval (ms): the scrubbed time goes to the server (for the status and the Pareto front) at
+// most this often and at the last frame; every frame is drawn here without a round trip.
 const key = "emdm_play_" + toggle.id
 if (window[key] != null) {
   cancelAnimationFrame(window[key])
   window[key] = null
 }
-toggle.label = toggle.active ? "\u275a\u275a Pause" : "\u25b6 Play"
+toggle.setv({label: toggle.active ? "\u275a\u275a Pause" : "\u25b6 Play"}, {sync: false})
 if (toggle.active) {
   const dt = scrub.step
   if (scrub.value >= scrub.end - dt / 2) {
@@ -13,6 +15,7 @@ if (toggle.active) {
   }
   let t = scrub.value
   let last = performance.now()
+  let sent = last
   const tick = (now) => {
     if (!toggle.active) {
       return
@@ -24,7 +27,9 @@ if (toggle.active) {
     last = now
     const shown = Math.min(scrub.end, Math.round(t / dt) * dt)
     if (shown != scrub.value) {
-      scrub.value = shown
+      const sync = t >= scrub.end || now - sent >= interval
+      sent = sync ? now : sent
+      scrub.setv({value: shown}, {sync})
     }
     if (t >= scrub.end) {
       toggle.active = false

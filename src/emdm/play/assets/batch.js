@@ -1,0 +1,20 @@
+// Paint a change once. The server opens a batch before the first message of a change and closes
+// it after the last; in between the plots wait, so that the first run, the second run and the
+// status are not each painted on their own. A batch left open is closed after 0.5 s.
+// args: figures (the page's plots), hold (true: open the batch, false: close it).
+const views = figures.map((figure) => Bokeh.index.find_one(figure)).filter((v) => v != null)
+const release = () => {
+  clearTimeout(window.emdm_batch)
+  window.emdm_batch = null
+  for (const view of views) {
+    view.unpause()
+  }
+}
+if (hold && window.emdm_batch == null) {
+  for (const view of views) {
+    view.pause()
+  }
+  window.emdm_batch = setTimeout(release, 500)
+} else if (!hold && window.emdm_batch != null) {
+  release()
+}
