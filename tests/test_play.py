@@ -306,6 +306,26 @@ def test_the_page_recomputes_on_a_goal_drag(session):
     assert s.save_toml.tags[1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.save_toml.tags[0]
 
 
+def test_a_goal_being_dragged_is_followed_without_replaying(session):
+    s = session()
+    restarts, goal = s.restart.data["n"][0], dict(s.goal.data)
+    s.live.data = {"what": ["goal"], "x": [0.3], "y": [0.7]}  # live.js, mid-drag
+    _settle(s)
+    assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
+    assert s.steps[0].data["ex"][-1] == pytest.approx(0.3, abs=2e-3)
+    # the drag tool keeps the goal and the motion goes on: nothing that would end the drag
+    assert s.goal.data == goal and s.restart.data["n"][0] == restarts
+    s.live.data = {"what": ["nonsense"], "x": [0.0], "y": [0.0]}
+    _settle(s)
+    assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
+    s.goal.data = {"x": [0.3], "y": [0.7]}  # the release there: the motion plays from the start
+    _settle(s)
+    assert s.restart.data["n"][0] == restarts + 1
+    s.goal.data = {"x": [0.3], "y": [0.7]}  # the same goal again, no drag: nothing to do
+    _settle(s)
+    assert s.restart.data["n"][0] == restarts + 1
+
+
 def test_the_page_drags_the_start_and_switches_pair_links_and_scenario(session):
     s = session(scenario="task2")
     q0 = s.scenario.motion.q0.copy()
@@ -533,10 +553,31 @@ def test_the_page_in_a_real_browser(tmp_path):
         assert len(driver.execute_script(MODEL + ".data.x1", "want")) == 1
         assert len(driver.execute_script(MODEL + ".data.x1", "got")) == 1
 
-        # drag the goal: a new trajectory ends there and the status changes
+        # drag the goal: the trajectory follows while the button is held (live.js) ...
+        from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
         goal = driver.execute_script(WHERE, "scene", -0.7, 0.5)
+        middle = driver.execute_script(WHERE, "scene", -0.2, 0.6)
+        actions = ActionBuilder(driver)
+        actions.pointer_action.move_to_location(round(goal[0]), round(goal[1])).pointer_down()
+        for f in (0.25, 0.5, 0.75, 1.0):
+            actions.pointer_action.move_to_location(
+                round(goal[0] + f * (middle[0] - goal[0])),
+                round(goal[1] + f * (middle[1] - goal[1])),
+            )
+        actions.perform()
+        _wait(driver, CHANGED, "steps0", "ex", trace)
+        assert not driver.execute_script(MODEL + ".active", "play")  # followed, not replayed
+        ex, ey = (driver.execute_script(MODEL + f".data.{c}", "steps0") for c in ("ex", "ey"))
+        assert math.hypot(ex[-1] + 0.2, ey[-1] - 0.6) < 0.02
+        # ... the release replays it from the start, and a drag elsewhere goes there
+        actions = ActionBuilder(driver)
+        actions.pointer_action.pointer_up()
+        actions.perform()
+        _wait(driver, MODEL + ".active", "play")
         target = driver.execute_script(WHERE, "scene", 0.3, 0.7)
-        _drag(driver, goal, target)
+        trace = _series(driver, "ex")
+        _drag(driver, middle, target)
         _wait(driver, CHANGED, "steps0", "ex", trace)
         ex, ey = (driver.execute_script(MODEL + f".data.{c}", "steps0") for c in ("ex", "ey"))
         assert math.hypot(ex[-1] - 0.3, ey[-1] - 0.7) < 0.02

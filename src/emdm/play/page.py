@@ -129,12 +129,13 @@ class Session:
         self._ran_at = -math.inf  # time.monotonic() of the last recompute
         self._due: set[str] = set()  # requests scheduled by _soon
         self._dirty = False  # a slider moved since the last recompute
+        self._followed = False  # the goal's last change came from a drag in progress
         layout = self._build()
         self._recompute(replay=False, refused=refused)
         self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
-        for source in (self.address, self.restart, *self.batch):  # messages to the page's scripts
+        for source in (self.address, self.restart, self.live, *self.batch):  # scripts' messages
             self.doc.add_root(source)
         self.doc.title = "emdm play"
         self.doc.template = template()
@@ -164,6 +165,9 @@ class Session:
         self.front_now = ColumnDataSource({"M": [], "E": []})
         self.coloured: list[list[Any]] = [[], []]  # renderers drawn in each run's colour
         self.goal.on_change("data", self._guard(self._on_goal))
+        # a drag of the goal in progress: live.js writes where the hand is
+        self.live = ColumnDataSource({"what": [], "x": [], "y": []}, name="live")
+        self.live.on_change("data", self._guard(self._on_live))
         self.handles.on_change("data", self._guard(self._on_handles))
 
         self.scene = self._scene()
@@ -226,6 +230,17 @@ class Session:
             code=asset("frame.js"),
         )
         self.doc.js_on_event("document_ready", frame)
+        self.doc.js_on_event(
+            "document_ready",
+            CustomJS(
+                args={
+                    "goal": self.goal,
+                    "live": self.live,
+                    "interval": LIVE_INTERVAL * 1e3,
+                },
+                code=asset("live.js"),
+            ),
+        )
         self.scrub.js_on_change("value", frame)
         self.scrub.js_on_change("step", frame)
         for source in (*self.points, *self.steps, self.velocity):
@@ -645,8 +660,9 @@ class Session:
     def _flush(self) -> None:
         self._scheduled = False
         pending, self._pending = self._pending, set()
-        if "run" in pending or "replay" in pending:
-            self._recompute(replay="replay" in pending)
+        if pending & {"run", "replay", "live"}:
+            # "live" alone: a drag in progress, whose dragged point the page already shows
+            self._recompute(replay="replay" in pending, live=pending <= {"live", "front"})
         elif "front" in pending:
             self._refresh_front()
 
@@ -718,7 +734,13 @@ class Session:
         if self._dirty:
             self._request("run")
 
-    def _on_goal(self, attr: str, old: Any, new: Any) -> None:
+    def _on_live(self, attr: str, old: Any, new: Any) -> None:
+        """A drag of the goal in progress (live.js): where the hand is. (A ring of the start pose
+        is applied on release: its links beyond move with it, which the drag tool cannot show.)"""
+        if list(new.get("what", []))[:1] == ["goal"]:
+            self._on_goal(attr, old, new, request="live")
+
+    def _on_goal(self, attr: str, old: Any, new: Any, request: str = "replay") -> None:
         x, y = list(new.get("x", [])), list(new.get("y", []))
         if self.scenario is None or len(x) != 1 or len(y) != 1:
             self._request("run")  # redraw what the page lost
@@ -728,9 +750,13 @@ class Session:
             self._show(["motion.goal: the dragged goal is not a finite position"], [])
             return
         if np.allclose(point, self.scenario.motion.goal, rtol=0, atol=1e-12):
+            if request == "replay" and self._followed:  # released where the run already goes
+                self._followed = False
+                self._request("replay")
             return
+        self._followed = request == "live"
         self.settings.overrides["motion.goal"] = [round(v, 4) for v in point]
-        self._request("replay")
+        self._request(request)
 
     def _on_handles(self, attr: str, old: Any, new: Any) -> None:
         if self.scenario is None:
@@ -763,9 +789,10 @@ class Session:
         items += [f'<div class="note">{html.escape(n)}</div>' for n in notes]
         self.banner.text = "".join(items)
 
-    def _recompute(self, *, replay: bool, refused: Sequence[str] = ()) -> None:
+    def _recompute(self, *, replay: bool, refused: Sequence[str] = (), live: bool = False) -> None:
         """Run the settings in force and draw them; ``refused``: the page address's values that
-        could not be used, shown as errors above the run."""
+        could not be used, shown as errors above the run; ``live``: during a drag (the dragged
+        goal or ring is left to the drag tool)."""
         start = time.perf_counter()
         self._ran_at, self._dirty = time.monotonic(), False
         try:
@@ -819,7 +846,7 @@ class Session:
             self.doc.unhold()
         self._syncing = True  # not held: these changes call back now, and are muted
         try:
-            self._sync_widgets(scenario, end, replay)
+            self._sync_widgets(scenario, end, replay, live=live)
         finally:
             self._syncing = False
         self.timing["change"] = time.perf_counter() - start
@@ -900,15 +927,20 @@ class Session:
         self.save_png.tags = [f"{name}.png", self._caption(scenario, outcomes)]
         _set(self.legend, text=self._legend(outcomes, scenario.n))
 
-    def _sync_widgets(self, scenario: Scenario, end: float, replay: bool) -> None:
+    def _sync_widgets(
+        self, scenario: Scenario, end: float, replay: bool, *, live: bool = False
+    ) -> None:
         """Show the scenario's values: goal, start pose, widgets, scrub bar; ``replay`` plays
-        the motion from the start. Called with the callbacks muted."""
-        start = scenario.planar_arm.joint_positions(scenario.motion.q0)
-        goal = scenario.motion.goal
-        _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
-        _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
-        self.goal.selected.indices = []
-        self.handles.selected.indices = []
+        the motion from the start; ``live``: a drag of the goal is in progress, and the goal and
+        the rings stay as the drag tool moves them (setting them, or clearing their selection, would end
+        the drag). Called with the callbacks muted."""
+        if not live:
+            start = scenario.planar_arm.joint_positions(scenario.motion.q0)
+            goal = scenario.motion.goal
+            _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
+            _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
+            self.goal.selected.indices = []
+            self.handles.selected.indices = []
         self.scrub.update(end=end, step=scenario.motion.dt, value=self.t)
         _set(self.choose, value=self.settings.scenario)
         _set(self.links, value=scenario.n)

@@ -9,6 +9,7 @@ const release = () => {
   for (const view of views) {
     view.unpause()
   }
+  window.dispatchEvent(new Event("emdm-batch-closed"))  // the latency benchmark waits for it
 }
 if (hold && window.emdm_batch == null) {
   for (const view of views) {
