@@ -26,10 +26,13 @@ from bokeh.models import (
     ColumnDataSource,
     CustomJS,
     CustomJSTickFormatter,
+    HoverTool,
     InlineStyleSheet,
     LinearColorMapper,
+    PanTool,
     PointDrawTool,
     Range1d,
+    WheelZoomTool,
 )
 from bokeh.models.annotations import Arrow, BoxAnnotation, Label, OpenHead, Span, Title, VeeHead
 from bokeh.models.widgets import Button, Div, RadioButtonGroup, Select, Slider, Spinner, Toggle
@@ -161,7 +164,7 @@ class Session:
         self.annulus = ColumnDataSource({"x": [0.0], "y": [0.0], "inner": [0.0], "outer": [1.0]})
         self.obstacles = ColumnDataSource({"xs": [], "ys": []})  # bodies, at t = 0
         self.stop_zones = ColumnDataSource({"xs": [], "ys": []})  # within the stop distance
-        self.front_src = ColumnDataSource({"M": [], "E": [], "fill": []}, name="front")
+        self.front_src = ColumnDataSource({"M": [], "E": [], "fill": [], "ratio": []}, name="front")
         self.front_now = ColumnDataSource({"M": [], "E": []})
         self.coloured: list[list[Any]] = [[], []]  # renderers drawn in each run's colour
         self.goal.on_change("data", self._guard(self._on_goal))
@@ -424,6 +427,8 @@ class Session:
             ("alpha", "task scale \u03b1", "alpha"),
         ]
         figs = []
+        # a read-out per run and plot: the time and the value, named by the run (see _draw)
+        self.hovers: list[tuple[HoverTool, int, str]] = []
         for key, title, column_name in specs:
             fig = figure(
                 width=PLOT_W,
@@ -445,6 +450,9 @@ class Session:
                     name=f"{key}{i}",
                 )
                 self.coloured[i].append(line)
+                hover = HoverTool(renderers=[line], mode="vline", tooltips=[("t", "@t{0.00} s")])
+                fig.add_tools(hover)
+                self.hovers.append((hover, i, column_name))
             figs.append(fig)
         joints = figure(
             width=PLOT_W,
@@ -476,6 +484,7 @@ class Session:
                 line_dash="dashed" if i else "solid",
                 line_alpha=0.6 if i else 1.0,
             )
+        joints.add_tools(HoverTool(tooltips=[("t", "$x{0.00} s"), ("q", "$y{0.000} rad")]))
         figs.append(joints)
         pareto = figure(
             width=PLOT_W,
@@ -489,13 +498,23 @@ class Session:
         )
         _style(pareto)
         pareto.line("M", "E", source=self.front_src, color="#999999", line_width=1.5)
-        pareto.scatter(
+        points = pareto.scatter(
             "M",
             "E",
             source=self.front_src,
             size=8,
             fill_color="fill",
             line_color="#0072B2",
+        )
+        pareto.add_tools(
+            HoverTool(
+                renderers=[points],
+                tooltips=[
+                    ("w_M / w_E", "@ratio{0.[000]}"),
+                    ("M", "@M{0.0000}"),
+                    ("E", "@E{0.0000}"),
+                ],
+            )
         )
         pareto.scatter(
             "M",
@@ -534,10 +553,25 @@ class Session:
             fig.add_layout(span)
             self.cursors.append(span)
         self.figures = [*figs, pareto]
+        # the time axis zooms (Ctrl + wheel) and pans (drag) on every time plot at once; a double
+        # click shows the whole run again (reset_start/reset_end, set with each run)
+        reset = CustomJS(
+            args={"r": self.time_range}, code="r.setv({start: r.reset_start, end: r.reset_end})"
+        )
+        for fig in figs:
+            zoom = WheelZoomTool(dimensions="width", modifiers={"ctrl": True})
+            pan = PanTool(dimensions="width")
+            fig.add_tools(zoom, pan)
+            fig.toolbar.active_scroll = zoom
+            fig.toolbar.active_drag = pan
+            fig.js_on_event("doubletap", reset)
         figs[2].xaxis.axis_label = "t (s)"
         figs[3].xaxis.axis_label = "t (s)"
-        return gridplot(
-            [figs[0], figs[1], figs[2], figs[3], figs[4], pareto], ncols=2, toolbar_location=None
+        return gridplot(  # each plot keeps its own (hidden) toolbar: its active tools
+            [figs[0], figs[1], figs[2], figs[3], figs[4], pareto],
+            ncols=2,
+            toolbar_location=None,
+            merge_tools=False,
         )
 
     def _controls(self) -> Any:
@@ -917,7 +951,10 @@ class Session:
                 },
             )
         start = arm.joint_positions(scenario.motion.q0)
-        _set(self.time_range, start=0.0, end=end)
+        _set(self.time_range, start=0.0, end=end, reset_start=0.0, reset_end=end)
+        for hover, i, key in self.hovers:  # the read-out names its run
+            name = outcomes[i].name if i < len(outcomes) else ""
+            _set(hover, tooltips=[(name, ""), ("t", "@t{0.00} s"), (key, f"@{{{key}}}")])
         _set(self.start, data={"x": start[:, 0].tolist(), "y": start[:, 1].tolist()})
         _set(self.scale_note, text=f"ellipse: {scale:.2g} m per m/s of tip speed")
         self._limits(scenario)
@@ -1051,7 +1088,12 @@ class Session:
         self.doc.hold("combine")
         try:
             fill = np.where(result.dominated, "white", "#0072B2")
-            self.front_src.data = {"M": result.M, "E": result.E, "fill": fill}
+            self.front_src.data = {
+                "M": result.M,
+                "E": result.E,
+                "fill": fill,
+                "ratio": result.ratio,
+            }
             if result.current >= 0:
                 self.front_label.text = f"\u25ef w_M / w_E = {result.ratio[result.current]:.3g}"
                 self.front_now.data = {
