@@ -3,7 +3,9 @@ as a process, and the page in a real browser (Debian's chromium and chromedriver
 
 from __future__ import annotations
 
+import base64
 import html
+import io
 import math
 import re
 import signal
@@ -326,6 +328,44 @@ def test_a_goal_being_dragged_is_followed_without_replaying(session):
     assert s.restart.data["n"][0] == restarts + 1
 
 
+def test_a_clip_of_the_runs_shown_is_a_gif_at_the_playback_speed_or_faster(bases):
+    from PIL import Image
+
+    long = bases["task1"].with_overrides({"motion.max_time": 60.0, "motion.goal": [3.0, 3.0]})
+    for scenario, speed in ((bases["task1"], 2.0), (long, 1.0)):
+        runs = [o.run for o in logic.run_pair(scenario, "C")]
+        gif, speedup = logic.clip_gif(runs, speed)
+        duration = max(float(run.t[-1]) for run in runs)
+        assert speedup == max(speed, duration / logic.CLIP_SECONDS)
+        with Image.open(io.BytesIO(gif)) as image:
+            assert image.format == "GIF" and image.n_frames > 10
+            shown = 0.0
+            for frame in range(image.n_frames):
+                image.seek(frame)
+                shown += image.info["duration"] / 1e3
+        # the motion at that speed-up, and the last frame held 1 s
+        assert shown == pytest.approx(duration / speedup + 1.0, abs=0.1)
+        assert shown <= logic.CLIP_SECONDS + 1.1
+
+
+def test_the_clip_button_writes_it_in_a_worker_and_sends_it_once(session):
+    s = session()
+    ticks, sent = [], []
+    s.doc.add_next_tick_callback = ticks.append  # the server loop, run by hand below
+    s.clip.on_change("data", lambda attr, old, new: sent.append(dict(new)))
+    s._on_clip()
+    assert s.save_gif.disabled and "Writing" in s.save_gif.label
+    s._on_clip()  # a second press while it works is ignored
+    end = time.monotonic() + 60
+    while not ticks and time.monotonic() < end:
+        time.sleep(0.05)
+    assert len(ticks) == 1
+    ticks[0]()
+    assert not s.save_gif.disabled and s.save_gif.label == "Export clip (GIF)"
+    assert [d["name"] for d in sent] == [["task1-play.gif"], []]  # then no copy is kept
+    assert base64.b64decode(sent[0]["gif"][0])[:6] == b"GIF89a"
+
+
 def test_the_page_drags_the_start_and_switches_pair_links_and_scenario(session):
     s = session(scenario="task2")
     q0 = s.scenario.motion.q0.copy()
@@ -625,6 +665,18 @@ def test_the_page_in_a_real_browser(tmp_path):
         )  # fmt: skip
         assert done.returncode == 0, done.stderr
         assert (out / "metrics.json").is_file()
+
+        # the clip: a GIF of the runs shown, downloaded by the page
+        driver.execute_script(
+            "Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name('save-gif'))"
+            ".shadow_el.querySelector('button').click()"
+        )
+        clip = tmp_path / "task1-play.gif"
+        end = time.monotonic() + 30
+        while not (clip.is_file() and clip.stat().st_size) and time.monotonic() < end:
+            time.sleep(0.1)
+        time.sleep(0.3)  # the download is renamed into place once complete
+        assert clip.read_bytes()[:6] == b"GIF89a"
 
         # a second tab is a session of its own
         driver.switch_to.new_window("tab")

@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import functools
 import math
+import tempfile
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 from urllib.parse import urlencode
 
@@ -287,6 +289,23 @@ def run_controller(scenario: Scenario, name: str) -> Outcome:
     except NoSolution as exc:
         run, error = getattr(exc, "run", None), str(exc)
     return Outcome(controller, run, error, time.perf_counter() - start)
+
+
+CLIP_SECONDS = 20.0
+"""A clip lasts at most this long: a longer run is recorded faster than the playback speed."""
+
+
+def clip_gif(runs: Sequence[Run], speed: float) -> tuple[bytes, float]:
+    """A GIF of ``runs`` side by side, as :func:`emdm.outputs.animate.animate` draws them (the
+    animations of ``emdm animate`` and the report), at ``speed`` times real time or faster, so
+    that it lasts at most :data:`CLIP_SECONDS`; returns its bytes and the speed-up used."""
+    from ..outputs.animate import animate
+
+    duration = max(float(run.t[-1]) for run in runs)
+    speedup = max(float(speed), duration / CLIP_SECONDS)
+    with tempfile.TemporaryDirectory(prefix="emdm-clip-") as folder:
+        (path,) = animate(runs, Path(folder) / "clip", speedup=speedup, mp4=False)
+        return path.read_bytes(), speedup
 
 
 def run_pair(scenario: Scenario, pair: str) -> tuple[Outcome, Outcome]:

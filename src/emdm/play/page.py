@@ -7,6 +7,7 @@ Changes are coalesced: a burst of slider or drag events costs one recomputation.
 
 from __future__ import annotations
 
+import base64
 import copy
 import dataclasses
 import html
@@ -14,6 +15,7 @@ import logging
 import math
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from functools import cache, partial
 from importlib import resources
 from typing import Any
@@ -138,7 +140,7 @@ class Session:
         self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
-        for source in (self.address, self.restart, self.live, *self.batch):  # scripts' messages
+        for source in (self.address, self.restart, self.live, self.clip, *self.batch):
             self.doc.add_root(source)
         self.doc.title = "emdm play"
         self.doc.template = template()
@@ -616,13 +618,24 @@ class Session:
         )
         self.save_png = Button(label="Export view (PNG)", width=260, name="save-png")
         self.save_toml.js_on_click(
-            CustomJS(args={"button": self.save_toml}, code=asset("save_toml.js"))
+            CustomJS(
+                args={"button": self.save_toml}, code=asset("download.js") + asset("save_toml.js")
+            )
         )
         self.save_png.js_on_click(
             CustomJS(
                 args={"button": self.save_png, "scene": self.scene, "plots": self.plots},
-                code=asset("save_png.js"),
+                code=asset("download.js") + asset("save_png.js"),
             )
+        )
+        # the clip is written on the server (emdm.outputs.animate) in a worker thread, and its
+        # bytes come back through a data source that save_clip.js downloads
+        self.save_gif = Button(label="Export clip (GIF)", width=260, name="save-gif")
+        self.save_gif.on_click(lambda: self._safe(self._on_clip))
+        self.clip = ColumnDataSource({"gif": [], "name": []}, name="clip")
+        self.clip.js_on_change(
+            "data",
+            CustomJS(args={"clip": self.clip}, code=asset("download.js") + asset("save_clip.js")),
         )
         return column(
             self.choose,
@@ -633,6 +646,7 @@ class Session:
             reset,
             self.save_toml,
             self.save_png,
+            self.save_gif,
             width=280,
         )
 
@@ -703,6 +717,33 @@ class Session:
     def _on_choose(self, attr: str, old: Any, new: Any) -> None:
         self.settings = Settings(scenario=str(new), pair=self.settings.pair)
         self._request("replay")
+
+    def _on_clip(self) -> None:
+        """Write a GIF of the runs shown, at the playback speed (faster for a long run), in a
+        worker thread; the page is told when it is ready (:meth:`_clip_done`)."""
+        runs = [o.run for o in self.outcomes if o.run is not None and o.run.steps > 0]
+        if self.scenario is None or not runs or self.save_gif.disabled:
+            return
+        name = f"{self.scenario.name}-play.gif"
+        active = self.speed.active
+        speed = SPEEDS[active] if active is not None and 0 <= active < len(SPEEDS) else 1.0
+        self.save_gif.update(disabled=True, label="Writing the clip\u2026")
+        doc = self.doc
+        future = _clip_worker().submit(logic.clip_gif, runs, speed)
+        future.add_done_callback(
+            lambda done: doc.add_next_tick_callback(lambda: self._safe(self._clip_done, done, name))
+        )
+
+    def _clip_done(self, done: Future[tuple[bytes, float]], name: str) -> None:
+        self.save_gif.update(disabled=False, label="Export clip (GIF)")
+        try:
+            gif, speedup = done.result()
+        except (EmdmError, ValueError, OSError) as exc:
+            self._show([f"No clip: {exc}"], [])
+            return
+        self.clip.data = {"gif": [base64.b64encode(gif).decode("ascii")], "name": [name]}
+        self.clip.data = {"gif": [], "name": []}  # the page keeps no copy of the bytes
+        log.info("clip %s: %d kB at %gx", name, len(gif) // 1024, speedup)
 
     def _on_links(self, attr: str, old: Any, new: Any) -> None:
         valid = isinstance(new, int | float) and math.isfinite(new) and float(new).is_integer()
@@ -1117,6 +1158,13 @@ once. Recomputing at every move queued work that the release then waited for."""
 FRONT_INTERVAL = 0.15
 """While the motion plays, the Pareto front and the status follow the scrub bar at most this
 often (s): refreshing them at every frame kept the server and the page busy when a drag came."""
+
+
+@cache
+def _clip_worker() -> ThreadPoolExecutor:
+    """One thread for the clips of every tab: a clip takes about 2 s, and the server goes on
+    answering meanwhile."""
+    return ThreadPoolExecutor(max_workers=1, thread_name_prefix="emdm-clip")
 
 
 def build(doc: Document, bases: dict[str, Scenario]) -> None:

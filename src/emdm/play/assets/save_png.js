@@ -18,11 +18,4 @@ for (const part of parts) {
   ctx.drawImage(part, x, pad)
   x += part.width
 }
-canvas.toBlob((blob) => {
-  const link = document.createElement("a")
-  link.href = URL.createObjectURL(blob)
-  link.download = name
-  document.body.appendChild(link)
-  link.click()
-  link.remove()
-}, "image/png")
+canvas.toBlob((blob) => download(blob, name), "image/png")
