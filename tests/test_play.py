@@ -366,6 +366,50 @@ def test_the_clip_button_writes_it_in_a_worker_and_sends_it_once(session):
     assert base64.b64decode(sent[0]["gif"][0])[:6] == b"GIF89a"
 
 
+def test_a_run_is_compared_with_a_pinned_one_from_their_records(bases):
+    from emdm.sim.metrics import metrics
+
+    base = bases["task1"]
+    pinned = logic.run_pair(base, "C")[0]
+    lighter = base.with_overrides({"weights.manipulability": 0.5})
+    now = logic.run_pair(lighter, "C")[0]
+    rows = {row[0]: row[1:] for row in logic.compare(now, pinned)}
+    a, b = metrics(now.run), metrics(pinned.run)
+    assert rows["time to goal (s)"][:2] == (f"{a['time_to_goal']:.2f}", f"{b['time_to_goal']:.2f}")
+    effort = rows["effort \u222bE dt (rad\u00b2/s)"]
+    change = a["total_effort"] - b["total_effort"]
+    assert effort[2] == f"{change:+.4g} ({change / b['total_effort']:+.0%})"
+    assert rows["scaled steps"][2] in ("same", f"{a['scaled_steps'] - b['scaled_steps']:+d}")
+    assert logic.compare(pinned, pinned)[0][3] == "same"
+    assert logic.scenario_changes(base, lighter) == ["weights.manipulability: 5.0 \u2192 0.5"]
+    assert logic.scenario_changes(base, base) == []
+    far = base.with_overrides({"motion.goal": [3.0, 3.0], "motion.max_time": 2.0})
+    unreached = logic.run_pair(far, "C")[0]
+    assert logic.compare(unreached, pinned)[0][1:] == (
+        "not reached",
+        rows["time to goal (s)"][1],
+        "\u2013",
+    )
+
+
+def test_the_page_pins_a_reference_and_compares_with_it(session):
+    s = session()
+    s._on_pin()
+    assert s.pin.label == "Unpin the reference" and len(s.ref.data["t"]) == len(
+        s.steps[0].data["t"]
+    )
+    assert "Against the pinned run" in s.status.text
+    assert "the same scenario" in s.status.text and "pinned C-EMDM" in s.legend.text
+    s.sliders["w_M"].value = s.sliders["w_M"].start  # w_M = 0: EMDM becomes IVKC
+    _settle(s)
+    text = html.unescape(s.status.text)
+    assert "weights.manipulability: 5.0 \u2192 0.0" in text and "C-EMDM now" in text
+    assert len(s.ref.data["t"]) != 0  # the reference stays while the settings change
+    s._on_pin()
+    assert s.pin.label == "Pin as reference" and len(s.ref.data["t"]) == 0
+    assert "Against the pinned run" not in s.status.text
+
+
 def test_the_page_drags_the_start_and_switches_pair_links_and_scenario(session):
     s = session(scenario="task2")
     q0 = s.scenario.motion.q0.copy()

@@ -35,6 +35,7 @@ from ..core.validation import POLICIES
 from ..errors import EmdmError, NoSolution, ScenarioError, one_line
 from ..sim import passages
 from ..sim.loop import Run, simulate
+from ..sim.metrics import metrics
 from ..studies.pareto import front_at, ratios
 
 PAIRS: dict[str, tuple[str, str]] = {
@@ -652,6 +653,60 @@ def time_to_goal(outcome: Outcome) -> str:
     if run is None or not run.reached:
         return "not reached"
     return f"{run.t[-1]:.2f} s"
+
+
+# ------------------------------------------------------------------------------ pinned run
+COMPARED = (
+    ("time to goal (s)", "time_to_goal", ".2f"),
+    ("mean m", "mean_manipulability", ".4g"),
+    ("min m", "min_manipulability", ".4g"),
+    ("effort \u222bE dt (rad\u00b2/s)", "total_effort", ".4g"),
+    ("final \u2016e\u2016 (m)", "final_error", ".2g"),
+    ("scaled steps", "scaled_steps", "d"),
+    ("min joint margin (rad)", "min_joint_margin", ".3f"),
+)
+"""The outcomes compared with a pinned run: label, key of :func:`emdm.sim.metrics.metrics`,
+format."""
+
+
+def compare(now: Outcome, pinned: Outcome) -> list[tuple[str, str, str, str]]:
+    """Rows ``(outcome, now, pinned, change)`` of two runs, from their records
+    (:func:`emdm.sim.metrics.metrics`): the change is ``now - pinned``, with its percentage of
+    the pinned value where that is not zero."""
+    if now.run is None or pinned.run is None:
+        return []
+    a, b = metrics(now.run), metrics(pinned.run)
+    rows = []
+    for label, key, spec in COMPARED:
+        x, y = a[key], b[key]
+        if x is None or y is None:  # a run that did not reach the goal has no time to it
+            rows.append((label, "not reached" if x is None else format(x, spec),
+                         "not reached" if y is None else format(y, spec), "\u2013"))  # fmt: skip
+            continue
+        change = "same" if x == y else format(x - y, "+" + spec)
+        if y != 0 and x != y and key != "scaled_steps":
+            change += f" ({(x - y) / abs(y):+.0%})"
+        rows.append((label, format(x, spec), format(y, spec), change))
+    return rows
+
+
+def scenario_changes(pinned: Scenario, now: Scenario) -> list[str]:
+    """The scenario keys whose values differ, as ``key: pinned -> now`` (the name aside)."""
+    old, new = pinned.to_dict(), now.to_dict()
+    changes = []
+    for section in sorted(set(old) | set(new)):
+        a, b = old.get(section), new.get(section)
+        if section == "name" or a == b:
+            continue
+        if not (isinstance(a, dict) and isinstance(b, dict)):
+            changes.append(f"{section}: {toml_value(a)} \u2192 {toml_value(b)}")
+            continue
+        for key in sorted(set(a) | set(b)):
+            if a.get(key) != b.get(key):
+                before = toml_value(a[key]) if key in a else "(none)"
+                after = toml_value(b[key]) if key in b else "(none)"
+                changes.append(f"{section}.{key}: {before} \u2192 {after}")
+    return changes
 
 
 # ------------------------------------------------------------------------------------ Pareto

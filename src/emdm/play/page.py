@@ -53,6 +53,8 @@ log = logging.getLogger("emdm.play")
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 VELOCITY_COLOR = "#56B4E9"
 """Outline and fill of the tip velocity set drawn at the tip (a colour no controller uses)."""
+PINNED_COLOR = "#9A9A9A"
+"""The pinned reference run's trace and curves (grey, dotted: no controller's colour)."""
 JOINT_COLORS = ("white", "#F0E442", "#CC79A7", "black", "#444444")
 """Fill of the joint markers by state (see :data:`emdm.play.logic.JOINT_STATES`)."""
 JOINT_LINES = (
@@ -168,6 +170,11 @@ class Session:
         self.stop_zones = ColumnDataSource({"xs": [], "ys": []})  # within the stop distance
         self.front_src = ColumnDataSource({"M": [], "E": [], "fill": [], "ratio": []}, name="front")
         self.front_now = ColumnDataSource({"M": [], "E": []})
+        # the pinned reference run (the first run when it was pinned), drawn grey and dotted
+        self.ref = ColumnDataSource(
+            {"t": [], "ex": [], "ey": [], "m": [], "E": [], "err": [], "alpha": []}, name="pinned"
+        )
+        self.pinned: tuple[Outcome, Scenario] | None = None
         self.coloured: list[list[Any]] = [[], []]  # renderers drawn in each run's colour
         self.goal.on_change("data", self._guard(self._on_goal))
         # a drag of the goal in progress: live.js writes where the hand is
@@ -307,6 +314,9 @@ class Session:
             line_dash="dotted",
             line_width=1.5,
         )
+        fig.line(
+            "ex", "ey", source=self.ref, color=PINNED_COLOR, line_width=2.5, line_dash="dotted"
+        )
         cmap = LinearColorMapper(palette=list(JOINT_COLORS), low=-0.5, high=4.5)
         for i in (1, 0):  # the baseline (ghost) first, under EMDM
             ghost = i == 1
@@ -442,6 +452,14 @@ class Session:
                 name=f"plot-{key}",
             )
             _style(fig)
+            fig.line(
+                "t",
+                column_name,
+                source=self.ref,
+                color=PINNED_COLOR,
+                line_width=2.5,
+                line_dash="dotted",
+            )
             for i in (1, 0):
                 line = fig.line(
                     "t",
@@ -652,7 +670,7 @@ class Session:
 
     def _transport(self) -> Any:
         self.play = Toggle(label="\u25b6 Play", active=False, width=90, name="play")
-        self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=200)
+        self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=190)
         self.scrub = Slider(
             title="t (s)", start=0.0, end=1.0, step=0.05, value=0.0, width=SCENE, name="scrub"
         )
@@ -670,6 +688,8 @@ class Session:
             ),
         )
         self.scrub.on_change("value", self._guard(self._on_scrub))
+        self.pin = Button(label="Pin as reference", width=150, name="pin")
+        self.pin.on_click(lambda: self._safe(self._on_pin))
         # a new run plays from its start; a data source, since a change of the Toggle's label
         # re-lays out the page (setting it off and on again cost 17 ms per change)
         self.restart = ColumnDataSource({"n": [0]}, name="restart")
@@ -677,7 +697,7 @@ class Session:
             "data",
             CustomJS(args={"toggle": self.play, "scrub": self.scrub}, code=asset("restart.js")),
         )
-        return column(row(self.play, self.speed), self.scrub)
+        return column(row(self.play, self.speed, self.pin), self.scrub)
 
     # ------------------------------------------------------------------------ callbacks
     def _safe(self, callback: Callable[..., None], *args: Any) -> None:
@@ -717,6 +737,25 @@ class Session:
     def _on_choose(self, attr: str, old: Any, new: Any) -> None:
         self.settings = Settings(scenario=str(new), pair=self.settings.pair)
         self._request("replay")
+
+    def _on_pin(self) -> None:
+        """Pin the first run as the reference the page compares with, or unpin it."""
+        outcome = self.outcomes[0] if self.outcomes else None
+        if self.pinned is not None or outcome is None or outcome.run is None:
+            self.pinned = None
+            data: dict[str, Any] = {key: [] for key in self.ref.data}
+        else:
+            assert self.scenario is not None
+            self.pinned = (outcome, self.scenario)
+            run = outcome.run
+            steps = self.steps[0].data
+            data = {key: steps[key] for key in ("t", "ex", "ey", "m", "E", "err", "alpha")}
+            data["t"] = run.t
+        self.ref.data = data
+        _set(self.pin, label="Unpin the reference" if self.pinned else "Pin as reference")
+        if self.scenario is not None:
+            _set(self.legend, text=self._legend(self.outcomes, self.scenario.n))
+        self._refresh_status()
 
     def _on_clip(self) -> None:
         """Write a GIF of the runs shown, at the playback speed (faster for a long run), in a
@@ -1076,6 +1115,8 @@ class Session:
         )
         items.append(f"{line.format('ghost', '#000000')}P velocity")
         items.append(f"{line.format('solid', '#000000')}tip velocity J qd")
+        if self.pinned is not None:
+            items.append(f"{line.format('dotted', PINNED_COLOR)}pinned {self.pinned[0].name}")
         joints = "".join(  # the joint-angle plot's curves
             f"{line.format('solid', JOINT_LINES[j % len(JOINT_LINES)])}q{j + 1} " for j in range(n)
         )
@@ -1113,9 +1154,36 @@ class Session:
             f'(both runs <span class="runs">{ms["runs"]}</span> ms); Pareto front '
             f'<span class="front">{ms["front"]}</span> ms</p>'
         )
-        # the explanation first: it is what a teacher reads out, and it stays in view
+        # the explanation first: it is what a teacher reads out, and it stays in view; the
+        # comparison with a pinned run after the table of the step shown
         self.status.text = (
-            f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>{timing}'
+            f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>'
+            f"{self._comparison()}{timing}"
+        )
+
+    def _comparison(self) -> str:
+        """The first run against the pinned one: what changed in the scenario, and a table of
+        outcomes with their changes."""
+        if self.pinned is None or not self.outcomes or self.scenario is None:
+            return ""
+        (pinned, scenario), now = self.pinned, self.outcomes[0]
+        rows = logic.compare(now, pinned)
+        if not rows:
+            return ""
+        changes = logic.scenario_changes(scenario, self.scenario)
+        shown = changes[:3] + ([f"and {len(changes) - 3} more"] if len(changes) > 3 else [])
+        what = "; ".join(shown) if shown else "the same scenario"
+        head = (
+            f"<p><b>Against the pinned run</b> ({html.escape(pinned.name)}, grey dotted); "
+            f"changed since: {html.escape(what)}</p>"
+        )
+        body = "".join(
+            "<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>"
+            for row in rows
+        )
+        return (
+            f'{head}<table class="status"><tr><th></th><th>{html.escape(now.name)} now</th>'
+            f"<th>pinned</th><th>change</th></tr>{body}</table>"
         )
 
     def _refresh_front(self) -> None:
