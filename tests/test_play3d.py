@@ -433,3 +433,41 @@ def _screen(camera, point: np.ndarray) -> np.ndarray:
     c = R.T @ (np.asarray(point) - camera.position)
     f = 360 / math.tan(camera.fov / 2)
     return np.array([640 + f * c[0] / c[2], 360 + f * c[1] / c[2]])
+
+
+def test_each_tab_is_a_page_of_its_own(bases):
+    spatial = pytest.importorskip("emdm.play.spatial")
+    server = spatial.start(0)
+    pages = spatial.Pages(server, bases, Session3D(bases, "panda"))
+    driver = headless_chromium(1280, 720)
+    url = f"http://127.0.0.1:{server.get_port()}/"
+
+    def wait_for(count: int) -> list:
+        deadline = time.monotonic() + 25
+        while len(pages.pages) != count:
+            assert time.monotonic() < deadline, f"{len(pages.pages)} pages, not {count}"
+            time.sleep(0.2)
+        return list(pages.pages.values())
+
+    try:
+        driver.get(url)
+        (first,) = wait_for(1)
+        driver.switch_to.new_window("tab")
+        driver.get(url)
+        second = next(p for p in wait_for(2) if p is not first)
+        assert first.client is not None and second.client is not None
+        assert first.client.client_id != second.client.client_id
+        goal = second.session.goal().copy()
+        first.set_goal(goal[:3] + np.array([0.0, -0.2, 0.0]), first.session.goal_wxyz())
+        assert first.flush()
+        assert not np.allclose(first.session.goal(), goal)
+        assert np.allclose(second.session.goal(), goal)  # the other tab keeps its own
+        assert first.nodes["path0"] is not second.nodes["path0"]
+        driver.close()  # the second tab leaves: its page closes, the first stays
+        driver.switch_to.window(driver.window_handles[0])
+        assert wait_for(1) == [first] and second.closing
+    finally:
+        driver.quit()
+        pages.close()
+        with spatial.quiet():
+            server.stop()

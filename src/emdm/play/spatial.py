@@ -2,11 +2,11 @@
 installed package (no CDN).
 
 What it shows comes from :mod:`emdm.play.scene3d` (tested without a browser); this module draws
-it and wires the controls. Every tab shows the same scene (viser's model: one scene and one panel
-for the whole server). Gizmo drags and slider moves are queued and computed by one worker thread
-at most :data:`RATE` times a second (the last change always gets computed); the player thread
-moves the time on. Every callback is guarded: a failure becomes a line in the status, never a
-traceback, and never stops the server.
+it and wires the controls. Each tab is a page of its own (:class:`Pages`: viser gives every
+client its own scene and panel), with its own settings and runs. Gizmo drags and slider moves are
+queued and computed by the page's worker thread at most :data:`RATE` times a second (the last
+change always gets computed); the player thread moves the time on. Every callback is guarded: a
+failure becomes a line in the status, never a traceback, and never stops the server.
 """
 
 from __future__ import annotations
@@ -130,12 +130,7 @@ def serve(bases: Mapping[str, Scenario], *, port: int = 8080, open_browser: bool
     session = Session3D(bases)  # compiles and warms what a page computes
     warm = time.perf_counter() - began
     server = start(port)
-    try:
-        page = Page(server, session)
-    except BaseException:
-        with quiet():
-            server.stop()
-        raise
+    pages = Pages(server, bases, session)
     url = f"http://127.0.0.1:{server.get_port()}/"
     stop = threading.Event()
     handlers = {
@@ -149,7 +144,7 @@ def serve(bases: Mapping[str, Scenario], *, port: int = 8080, open_browser: bool
         while not stop.wait(0.5):
             pass
     finally:
-        page.close()
+        pages.close()
         with quiet():
             server.stop()
         for sig, handler in handlers.items():
@@ -208,14 +203,60 @@ def segments_of(path: np.ndarray) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------------- page
+class Pages:
+    """A :class:`Page` for every tab of ``server``, opened when the tab connects (the first on
+    the session the server warmed up with) and closed when it leaves."""
+
+    def __init__(
+        self, server: viser.ViserServer, bases: Mapping[str, Scenario], first: Session3D
+    ) -> None:
+        self.server, self.bases = server, dict(bases)
+        self.pages: dict[int, Page] = {}
+        self.lock = threading.Lock()
+        self.spare: Session3D | None = first
+        server.on_client_connect(self.opened)
+        server.on_client_disconnect(self.closed)
+
+    def opened(self, client: viser.ClientHandle) -> None:
+        with self.lock:
+            session, self.spare = self.spare, None
+        try:
+            page = Page(self.server, session or Session3D(self.bases), client=client)
+        except Exception as exc:  # a tab that cannot be drawn must not stop the server
+            print(f"emdm play: a tab could not be opened: {exc}", file=sys.stderr, flush=True)
+            return
+        with self.lock:
+            self.pages[client.client_id] = page
+
+    def closed(self, client: viser.ClientHandle) -> None:
+        with self.lock:
+            page = self.pages.pop(client.client_id, None)
+        if page is not None:
+            page.close()
+
+    def close(self) -> None:
+        with self.lock:
+            pages, self.pages = list(self.pages.values()), {}
+        for page in pages:
+            page.close()
+
+
 class Page:
-    """The scene and the panel of one server, drawn from a :class:`Session3D`.
+    """The scene and the panel of one tab (``client``; without it, of every tab of ``server``),
+    drawn from a :class:`Session3D`.
 
     :meth:`set_goal`, :meth:`move_obstacle`, :meth:`set_override`, ... queue a change as the
     page's controls do; :meth:`flush` computes the queued changes at once (tests call it)."""
 
-    def __init__(self, server: viser.ViserServer, session: Session3D) -> None:
-        self.server = server
+    def __init__(
+        self,
+        server: viser.ViserServer,
+        session: Session3D,
+        *,
+        client: viser.ClientHandle | None = None,
+    ) -> None:
+        self.server, self.client = server, client
+        self.target: viser.ViserServer | viser.ClientHandle = server if client is None else client
         self.session = session
         self.lock = threading.RLock()
         self.pending: dict[str, Callable[[], bool]] = {}
@@ -359,7 +400,7 @@ class Page:
 
     # ------------------------------------------------------------------------ panel
     def _gui(self) -> None:
-        gui = self.server.gui
+        gui = self.target.gui
         s = self.session
         gui.configure_theme(control_width="medium", show_share_button=False)
         self.intro = gui.add_markdown("")
@@ -485,7 +526,7 @@ class Page:
     # ------------------------------------------------------------------------ scene
     def _scene(self) -> None:
         """Every node of the scene for the session's scenario (replacing those there)."""
-        scene = self.server.scene
+        scene = self.target.scene
         s = self.session
         computed = s.computed
         assert computed is not None
@@ -622,13 +663,16 @@ class Page:
     def _camera(self) -> None:
         """The first view of every tab (and of open tabs, after another scenario)."""
         position, look = self.session.camera()
-        self.server.initial_camera.position = tuple(position)
-        self.server.initial_camera.look_at = tuple(look)
-        self.server.initial_camera.up = (0.0, 0.0, 1.0)
-        for client in self.server.get_clients().values():
+        clients = [self.client] if self.client is not None else self.server.get_clients().values()
+        if self.client is None:
+            self.server.initial_camera.position = tuple(position)
+            self.server.initial_camera.look_at = tuple(look)
+            self.server.initial_camera.up = (0.0, 0.0, 1.0)
+        for client in clients:
             with contextlib.suppress(Exception):
                 client.camera.position = tuple(position)
                 client.camera.look_at = tuple(look)
+                client.camera.up_direction = (0.0, 0.0, 1.0)
 
     # ------------------------------------------------------------------------- draw
     def draw(self, geometry: bool = True) -> None:
