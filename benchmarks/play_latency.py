@@ -38,7 +38,7 @@ if (!window.__emdm) {
   window.__emdm = {up: null, shown: {steps: [], status: [], front: []}};
   window.addEventListener('pointerup', (e) => { window.__emdm.up = e.timeStamp; }, true);
   const doc = Bokeh.documents[0];
-  for (const [key, name, prop] of [['steps', 'steps0', 'data'], ['status', 'status', 'text'],
+  for (const [key, name, prop] of [['steps', 'steps0', 'data'], ['status', 'status-html', 'data'],
                                    ['front', 'front', 'data']]) {
     doc.get_model_by_name(name).properties[prop].change.connect(() => {
       // after the paint of the frame that shows the change: a change inside the page's paint
@@ -61,9 +61,9 @@ LOADED = """
 const done = arguments[arguments.length - 1];
 const check = () => {
   const doc = window.Bokeh && Bokeh.documents[0];
-  const status = doc && doc.get_model_by_name('status');
+  const status = doc && doc.get_model_by_name('status-html');
   const steps = doc && doc.get_model_by_name('steps0');
-  if (status && status.text.includes('C-EMDM') && steps && steps.data.ex && steps.data.ex.length) {
+  if (status && status.data.html[0].includes('C-EMDM') && steps && steps.data.ex && steps.data.ex.length) {
     requestAnimationFrame(() => done(performance.now()));
   } else {
     setTimeout(check, 5);
@@ -83,7 +83,7 @@ const handle = view.shadow_el.querySelector('.noUi-handle').getBoundingClientRec
 const bar = view.shadow_el.querySelector('.noUi-base').getBoundingClientRect();
 return [handle.left + handle.width / 2, handle.top + handle.height / 2, bar.left, bar.width];
 """
-TIMING = "return Bokeh.documents[0].get_model_by_name('status').text"
+TIMING = "return Bokeh.documents[0].get_model_by_name('status-html').data.html[0]"
 
 
 def browser(width: int = 1500, height: int = 1000) -> Any:

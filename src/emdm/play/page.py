@@ -70,7 +70,7 @@ JOINT_LINES = (
 """Colours of the joint-angle curves, one per joint (up to the 8 links a page allows): none of
 them is a controller's colour (:data:`emdm.outputs.style.CONTROLLER_STYLE`) or a zone's, so a
 curve is never read as a run."""
-SCENE, PLOT_W, PLOT_H = 460, 250, 180
+SCENE, PLOT_W, PLOT_H, STATUS_H = 460, 250, 180, 560
 """Sizes (px) that fit a projector's 1280 x 720 with the explanation in view."""
 
 
@@ -83,7 +83,7 @@ def asset(name: str) -> str:
 @cache
 def template() -> Any:
     """Bokeh's page without the scripts the playground never uses (MathJax, tables, WebGL):
-    about 2.5 MB less to parse at every page load."""
+    about 2.5 MB less to parse at every page load; then ``canvas.js``."""
     from bokeh.core.templates import get_env
 
     skip = ("bokeh-mathjax", "bokeh-tables", "bokeh-gl")
@@ -91,7 +91,8 @@ def template() -> Any:
         '{% extends "file.html.jinja" %}{% block js_resources %}'
         '{% for line in bokeh_js.split("\\n") %}'
         "{% if not (" + " or ".join(f"{name!r} in line" for name in skip) + ") %}"
-        "{{ line }}\n{% endif %}{% endfor %}{% endblock %}"
+        "{{ line }}\n{% endif %}{% endfor %}"
+        "<script>{% raw %}\n" + asset("canvas.js") + "{% endraw %}</script>\n{% endblock %}"
     )
 
 
@@ -142,7 +143,14 @@ class Session:
         self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
-        for source in (self.address, self.restart, self.live, self.clip, *self.batch):
+        for source in (
+            self.address,
+            self.restart,
+            self.live,
+            self.clip,
+            self.status_html,
+            *self.batch,
+        ):
             self.doc.add_root(source)
         self.doc.title = "emdm play"
         self.doc.template = template()
@@ -184,19 +192,36 @@ class Session:
 
         self.scene = self._scene()
         self.plots = self._plots()
-        self.batch = [ColumnDataSource({"k": [0]}, name=f"batch-{i}") for i in range(2)]
+        self.batch = [
+            ColumnDataSource({"k": [0], "live": [False]}, name=f"batch-{i}") for i in range(2)
+        ]
         for source, hold in zip(self.batch, (True, False), strict=True):
             source.js_on_change(
                 "data",
                 CustomJS(
-                    args={"figures": [self.scene, *self.figures], "hold": hold},
+                    args={"figures": [self.scene, *self.figures], "hold": hold, "batch": source},
                     code=asset("batch.js"),
                 ),
             )
         controls = self._controls()
         transport = self._transport()
         sheet: list[Any] = [InlineStyleSheet(css=asset("play.css"))]
-        self.status = Div(width=SCENE, stylesheets=sheet, name="status")
+        # the status box has a fixed size and its content is written in place (status.js): a
+        # Div's new text re-lays out every model of the page (10 ms), and the status changes
+        # several times a second while the motion plays
+        self.status = Div(
+            width=SCENE,
+            height=STATUS_H,
+            stylesheets=sheet,
+            name="status",
+            styles={"overflow-y": "auto"},
+        )
+        self.status_html = ColumnDataSource({"html": [""]}, name="status-html")
+        shown = CustomJS(
+            args={"status": self.status, "source": self.status_html}, code=asset("status.js")
+        )
+        self.status_html.js_on_change("data", shown)
+        self.doc.js_on_event("document_ready", shown)
         self.banner = Div(width=280 + SCENE + 2 * PLOT_W, stylesheets=sheet, name="banner")
         self.legend = Div(width=2 * PLOT_W, stylesheets=sheet)
         # the settings in force as the page address's query (address.js writes it to the URL);
@@ -669,6 +694,8 @@ class Session:
         )
 
     def _transport(self) -> Any:
+        # one label for both states, pressed while playing: a label that changed re-laid out
+        # the whole page (10 ms) whenever a new run started to play
         self.play = Toggle(label="\u25b6 Play", active=False, width=90, name="play")
         self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=190)
         self.scrub = Slider(
@@ -897,6 +924,11 @@ class Session:
         self.t = float(new) if math.isfinite(float(new)) else 0.0
         self._soon("front", FRONT_INTERVAL, self._front_at)  # playing: one refresh per interval
 
+    @property
+    def status_text(self) -> str:
+        """The status box's HTML: the explanations, the table of the step shown, the timing."""
+        return str(self.status_html.data["html"][0])
+
     # ------------------------------------------------------------------------- updating
     def _show(self, errors: Sequence[str], notes: Sequence[str]) -> None:
         items = [f'<div class="error">{html.escape(e)}</div>' for e in errors]
@@ -948,7 +980,7 @@ class Session:
         end = max([scenario.motion.dt] + [float(o.run.t[-1]) for o in outcomes if o.run])
         self.t = 0.0 if replay else min(self.t, end)
         # the page paints the change once, when its last message has arrived (batch.js)
-        self._batch(True)
+        self._batch(True, live=live)
         self.doc.hold("combine")  # the Python callbacks of held changes run later
         try:
             self._draw(scenario, outcomes, end)
@@ -967,14 +999,15 @@ class Session:
         try:  # in the same batch: the page paints the change, its status and front once
             self._refresh_front()
         finally:
-            self._batch(False)
+            self._batch(False, live=live)
 
-    def _batch(self, hold: bool) -> None:
+    def _batch(self, hold: bool, *, live: bool = False) -> None:
         """Open (``hold``) or close the page's paint batch: each property change is a message of
         its own, and a page painting them as they came drew a change up to four times (each run,
-        the widgets, the status)."""
+        the widgets, the status). ``live``: the change of a drag in progress (a page whose drag
+        has ended since skips its paint for the release's, which follows)."""
         source = self.batch[0 if hold else 1]
-        source.data = {"k": [source.data["k"][0] + 1]}
+        source.data = {"k": [source.data["k"][0] + 1], "live": [live]}
 
     def _draw(self, scenario: Scenario, outcomes: Sequence[Outcome], end: float) -> None:
         scale = logic.ellipse_scale(scenario)
@@ -1156,10 +1189,12 @@ class Session:
         )
         # the explanation first: it is what a teacher reads out, and it stays in view; the
         # comparison with a pinned run after the table of the step shown
-        self.status.text = (
-            f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>'
-            f"{self._comparison()}{timing}"
-        )
+        self.status_html.data = {
+            "html": [
+                f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>'
+                f"{self._comparison()}{timing}"
+            ]
+        }
 
     def _comparison(self) -> str:
         """The first run against the pinned one: what changed in the scenario, and a table of

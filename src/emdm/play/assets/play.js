@@ -7,7 +7,6 @@ if (window[key] != null) {
   cancelAnimationFrame(window[key])
   window[key] = null
 }
-toggle.setv({label: toggle.active ? "\u275a\u275a Pause" : "\u25b6 Play"}, {sync: false})
 if (toggle.active) {
   const dt = scrub.step
   if (scrub.value >= scrub.end - dt / 2) {
