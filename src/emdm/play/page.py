@@ -654,6 +654,8 @@ class Session:
             slider.on_change("value", self._guard(partial(self._on_slider, control)))
             slider.on_change("value_throttled", self._guard(self._on_release))
             self.sliders[control.name] = slider
+        self.pin = Button(label="Pin as reference", width=260, name="pin")
+        self.pin.on_click(lambda: self._safe(self._on_pin))
         reset = Button(label="Reset to the scenario", width=260)
         reset.on_click(lambda: self._safe(self._on_choose, "value", None, self.settings.scenario))
         self.save_toml = Button(
@@ -686,6 +688,7 @@ class Session:
             self.pair,
             self.policy,
             *self.sliders.values(),
+            self.pin,
             reset,
             self.save_toml,
             self.save_png,
@@ -697,7 +700,7 @@ class Session:
         # one label for both states, pressed while playing: a label that changed re-laid out
         # the whole page (10 ms) whenever a new run started to play
         self.play = Toggle(label="\u25b6 Play", active=False, width=90, name="play")
-        self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=190)
+        self.speed = RadioButtonGroup(labels=[f"{s:g}x" for s in SPEEDS], active=2, width=200)
         self.scrub = Slider(
             title="t (s)", start=0.0, end=1.0, step=0.05, value=0.0, width=SCENE, name="scrub"
         )
@@ -715,8 +718,6 @@ class Session:
             ),
         )
         self.scrub.on_change("value", self._guard(self._on_scrub))
-        self.pin = Button(label="Pin as reference", width=150, name="pin")
-        self.pin.on_click(lambda: self._safe(self._on_pin))
         # a new run plays from its start; a data source, since a change of the Toggle's label
         # re-lays out the page (setting it off and on again cost 17 ms per change)
         self.restart = ColumnDataSource({"n": [0]}, name="restart")
@@ -724,7 +725,7 @@ class Session:
             "data",
             CustomJS(args={"toggle": self.play, "scrub": self.scrub}, code=asset("restart.js")),
         )
-        return column(row(self.play, self.speed, self.pin), self.scrub)
+        return column(row(self.play, self.speed), self.scrub)
 
     # ------------------------------------------------------------------------ callbacks
     def _safe(self, callback: Callable[..., None], *args: Any) -> None:
