@@ -297,35 +297,35 @@ def _settle(s) -> None:
 
 def test_the_page_recomputes_on_a_goal_drag(session):
     s = session()
-    before, restarts = s.status_text, s.restart.data["n"][0]
+    before, restarts = s.status_text, s.restarts
     assert "C-EMDM" in before and "C-IVKC" in before and s.banner.text == ""
     s.goal.data = {"x": [0.3], "y": [0.7]}
     _settle(s)
     assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
-    assert s.steps[0].data["ex"][-1] == pytest.approx(0.3, abs=2e-3)
-    # the new motion plays from the start (restart.js)
-    assert s.status_text != before and s.restart.data["n"][0] == restarts + 1
-    assert s.save_toml.tags[1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.save_toml.tags[0]
+    assert s.shown["steps0"]["ex"][-1] == pytest.approx(0.3, abs=2e-3)
+    # the new motion plays from the start (apply.js)
+    assert s.status_text != before and s.restarts == restarts + 1
+    assert s.shown_props["save-toml"]["tags"][1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.shown_props["save-toml"]["tags"][0]
 
 
 def test_a_goal_being_dragged_is_followed_without_replaying(session):
     s = session()
-    restarts, goal = s.restart.data["n"][0], dict(s.goal.data)
+    restarts, goal = s.restarts, dict(s.goal.data)
     s.live.data = {"what": ["goal"], "x": [0.3], "y": [0.7]}  # live.js, mid-drag
     _settle(s)
     assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
-    assert s.steps[0].data["ex"][-1] == pytest.approx(0.3, abs=2e-3)
+    assert s.shown["steps0"]["ex"][-1] == pytest.approx(0.3, abs=2e-3)
     # the drag tool keeps the goal and the motion goes on: nothing that would end the drag
-    assert s.goal.data == goal and s.restart.data["n"][0] == restarts
+    assert s.goal.data == goal and s.restarts == restarts
     s.live.data = {"what": ["nonsense"], "x": [0.0], "y": [0.0]}
     _settle(s)
     assert s.scenario.motion.goal.tolist() == [0.3, 0.7]
     s.goal.data = {"x": [0.3], "y": [0.7]}  # the release there: the motion plays from the start
     _settle(s)
-    assert s.restart.data["n"][0] == restarts + 1
+    assert s.restarts == restarts + 1
     s.goal.data = {"x": [0.3], "y": [0.7]}  # the same goal again, no drag: nothing to do
     _settle(s)
-    assert s.restart.data["n"][0] == restarts + 1
+    assert s.restarts == restarts + 1
 
 
 def test_a_clip_of_the_runs_shown_is_a_gif_at_the_playback_speed_or_faster(bases):
@@ -395,8 +395,8 @@ def test_a_run_is_compared_with_a_pinned_one_from_their_records(bases):
 def test_the_page_pins_a_reference_and_compares_with_it(session):
     s = session()
     s._on_pin()
-    assert s.pin.label == "Unpin the reference" and len(s.ref.data["t"]) == len(
-        s.steps[0].data["t"]
+    assert s.pin.label == "Unpin the reference" and len(s.shown["pinned"]["t"]) == len(
+        s.shown["steps0"]["t"]
     )
     assert "Against the pinned run" in s.status_text
     assert "the same scenario" in s.status_text and "pinned C-EMDM" in s.legend.text
@@ -404,9 +404,9 @@ def test_the_page_pins_a_reference_and_compares_with_it(session):
     _settle(s)
     text = html.unescape(s.status_text)
     assert "weights.manipulability: 5.0 \u2192 0.0" in text and "C-EMDM now" in text
-    assert len(s.ref.data["t"]) != 0  # the reference stays while the settings change
+    assert len(s.shown["pinned"]["t"]) != 0  # the reference stays while the settings change
     s._on_pin()
-    assert s.pin.label == "Pin as reference" and len(s.ref.data["t"]) == 0
+    assert s.pin.label == "Pin as reference" and len(s.shown["pinned"]["t"]) == 0
     assert "Against the pinned run" not in s.status_text
 
 
@@ -423,7 +423,7 @@ def test_the_page_drags_the_start_and_switches_pair_links_and_scenario(session):
     assert [o.name for o in s.outcomes] == ["UC-EMDM", "UC-IVKC"]
     s.links.value = 4
     _settle(s)
-    assert s.scenario.n == 4 and len(s.qlines[0].data["ys"]) == 4
+    assert s.scenario.n == 4 and len(s.shown["qlines0"]["ys"]) == 4
     s.choose.value = "task1"
     _settle(s)
     assert s.scenario.name == "task1" and s.settings.pair == "UC"
@@ -491,8 +491,8 @@ def test_the_scrub_bar_moves_the_status_and_the_front(session):
     s.scrub.value = 2.0
     _settle(s)
     assert "2.00 s (step 40 of 163)" in s.status_text
-    assert s.pareto_title.text == "Pareto, t = 2.00 s"
-    assert len(s.front_src.data["E"]) == len(emdm.studies.pareto.ratios()) + 2  # w_M = 0, 50
+    assert s.shown_props["pareto-title"]["text"] == "Pareto, t = 2.00 s"
+    assert len(s.shown["front"]["E"]) == len(emdm.studies.pareto.ratios()) + 2  # w_M = 0, 50
 
 
 # ------------------------------------------------------------------------------ the server
@@ -670,7 +670,7 @@ def test_the_page_in_a_real_browser(tmp_path):
         assert math.hypot(ex[-1] - 0.3, ey[-1] - 0.7) < 0.02
         _wait(driver, STATUS + " != arguments[0]", status)
         assert "of 163" not in driver.execute_script(STATUS)
-        _wait(driver, MODEL + ".active", "play")  # the new run plays from its start (restart.js)
+        _wait(driver, MODEL + ".active", "play")  # the new run plays from its start (apply.js)
 
         # move the manipulability-weight slider to its left end (w_M = 0): EMDM becomes IVKC
         x, y, left = driver.execute_script(HANDLE, "slider-w_M")

@@ -8,13 +8,15 @@ Changes are coalesced: a burst of slider or drag events costs one recomputation.
 from __future__ import annotations
 
 import base64
+import contextlib
 import copy
 import dataclasses
 import html
+import json
 import logging
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from functools import cache, partial
 from importlib import resources
@@ -138,46 +140,48 @@ class Session:
         self._due: set[str] = set()  # requests scheduled by _soon
         self._dirty = False  # a slider moved since the last recompute
         self._followed = False  # the goal's last change came from a drag in progress
+        # what the next message to the page carries (_send), and what the page was last sent
+        self._out: dict[str, Any] = {"sources": {}, "props": {}, "restart": False, "live": False}
+        self._depth = 0
+        self.shown: dict[str, dict[str, Any]] = {}
+        self.shown_props: dict[str, dict[str, Any]] = {}
+        self.restarts = 0  # messages that played the motion from the start
         layout = self._build()
         self._recompute(replay=False, refused=refused)
-        self._refresh_front()
         # attached last: every change to a document's model graph walks the whole graph
         self.doc.add_root(layout)
-        for source in (
-            self.address,
-            self.restart,
-            self.live,
-            self.clip,
-            self.status_html,
-            *self.batch,
-        ):
+        for source in (self.address, self.change, self.live, self.clip):  # the scripts' messages
             self.doc.add_root(source)
         self.doc.title = "emdm play"
         self.doc.template = template()
 
     # ------------------------------------------------------------------------- building
     def _build(self) -> Any:
-        self.points = [ColumnDataSource({"x": [], "y": [], "s": []}) for _ in range(2)]
+        self.points = [
+            ColumnDataSource({"x": [], "y": [], "s": []}, name=f"points{i}") for i in range(2)
+        ]
         self.steps = [ColumnDataSource({"t": []}, name=f"steps{i}") for i in range(2)]
         self.arms = [ColumnDataSource({"x": [], "y": [], "s": []}) for _ in range(2)]
         self.ells = [
             ColumnDataSource({"x": [], "y": [], "w": [], "h": [], "a": []}) for _ in range(2)
         ]
-        self.qlines = [ColumnDataSource({"xs": [], "ys": [], "color": []}) for _ in range(2)]
+        self.qlines = [
+            ColumnDataSource({"xs": [], "ys": [], "color": []}, name=f"qlines{i}") for i in range(2)
+        ]
         # the first run's program at the scrubbed step: its tip velocity set, all states
         # (``velocity``) and the one drawn (``polygon``), the P velocity and the tip's velocity
-        self.velocity = ColumnDataSource({"px": [], "py": []})
+        self.velocity = ColumnDataSource({"px": [], "py": []}, name="velocity")
         self.polygon = ColumnDataSource({"x": [], "y": []}, name="velocity-set")
         self.want = ColumnDataSource({"x0": [], "y0": [], "x1": [], "y1": []}, name="want")
         self.got = ColumnDataSource({"x0": [], "y0": [], "x1": [], "y1": []}, name="got")
         self.goal = ColumnDataSource({"x": [], "y": []}, name="goal")
         self.handles = ColumnDataSource({"x": [], "y": []}, name="handles")
-        self.start = ColumnDataSource({"x": [], "y": []})
+        self.start = ColumnDataSource({"x": [], "y": []}, name="start")
         self.annulus = ColumnDataSource({"x": [0.0], "y": [0.0], "inner": [0.0], "outer": [1.0]})
         self.obstacles = ColumnDataSource({"xs": [], "ys": []})  # bodies, at t = 0
         self.stop_zones = ColumnDataSource({"xs": [], "ys": []})  # within the stop distance
         self.front_src = ColumnDataSource({"M": [], "E": [], "fill": [], "ratio": []}, name="front")
-        self.front_now = ColumnDataSource({"M": [], "E": []})
+        self.front_now = ColumnDataSource({"M": [], "E": []}, name="front-now")
         # the pinned reference run (the first run when it was pinned), drawn grey and dotted
         self.ref = ColumnDataSource(
             {"t": [], "ex": [], "ey": [], "m": [], "E": [], "err": [], "alpha": []}, name="pinned"
@@ -192,17 +196,6 @@ class Session:
 
         self.scene = self._scene()
         self.plots = self._plots()
-        self.batch = [
-            ColumnDataSource({"k": [0], "live": [False]}, name=f"batch-{i}") for i in range(2)
-        ]
-        for source, hold in zip(self.batch, (True, False), strict=True):
-            source.js_on_change(
-                "data",
-                CustomJS(
-                    args={"figures": [self.scene, *self.figures], "hold": hold, "batch": source},
-                    code=asset("batch.js"),
-                ),
-            )
         controls = self._controls()
         transport = self._transport()
         sheet: list[Any] = [InlineStyleSheet(css=asset("play.css"))]
@@ -282,6 +275,36 @@ class Session:
         self.scrub.js_on_change("step", frame)
         for source in (*self.points, *self.steps, self.velocity):
             source.js_on_change("data", frame)
+        # every change of the runs arrives as one message (apply.js): Bokeh sends each changed
+        # property as a message of its own, built with a reference to every model of the page
+        # (0.8 ms each, 25 per change), and an array column as a websocket frame of its own
+        self.models = {
+            model.name: model
+            for model in (
+                *self.points,
+                *self.steps,
+                *self.qlines,
+                self.velocity,
+                self.start,
+                self.front_src,
+                self.front_now,
+                self.ref,
+                self.status_html,
+                self.time_range,
+                self.scrub,
+                self.save_toml,
+                self.save_png,
+                self.front_label,
+                self.pareto_title,
+            )
+        }
+        self.change = ColumnDataSource({"values": [np.zeros(0)], "meta": ["{}"]}, name="change")
+        apply = CustomJS(
+            args={"change": self.change, "models": self.models, "toggle": self.play},
+            code=asset("apply.js"),
+        )
+        self.change.js_on_change("data", apply)
+        self.doc.js_on_event("document_ready", apply)
         return layout
 
     def _scene(self) -> Any:
@@ -455,7 +478,7 @@ class Session:
         return fig
 
     def _plots(self) -> Any:
-        self.time_range = Range1d(start=0, end=1)
+        self.time_range = Range1d(start=0, end=1, name="time")
         self.cursors: list[Span] = []
         specs = [
             ("m", "manipulability m", "m"),
@@ -571,6 +594,7 @@ class Session:
             line_width=3,
         )
         self.front_label = Label(
+            name="front-label",
             x=6,
             y=PLOT_H - 95,
             x_units="screen",
@@ -582,7 +606,7 @@ class Session:
         pareto.add_layout(self.front_label)
         pareto.xaxis[0].ticker = BasicTicker(desired_num_ticks=3)
         pareto.yaxis[0].ticker = BasicTicker(desired_num_ticks=4)
-        self.pareto_title = Title(text="Pareto front", text_font_size="15px")
+        self.pareto_title = Title(text="Pareto front", text_font_size="15px", name="pareto-title")
         pareto.title = self.pareto_title
         self.pareto = pareto
         for fig in figs:
@@ -718,13 +742,6 @@ class Session:
             ),
         )
         self.scrub.on_change("value", self._guard(self._on_scrub))
-        # a new run plays from its start; a data source, since a change of the Toggle's label
-        # re-lays out the page (setting it off and on again cost 17 ms per change)
-        self.restart = ColumnDataSource({"n": [0]}, name="restart")
-        self.restart.js_on_change(
-            "data",
-            CustomJS(args={"toggle": self.play, "scrub": self.scrub}, code=asset("restart.js")),
-        )
         return column(row(self.play, self.speed), self.scrub)
 
     # ------------------------------------------------------------------------ callbacks
@@ -769,21 +786,21 @@ class Session:
     def _on_pin(self) -> None:
         """Pin the first run as the reference the page compares with, or unpin it."""
         outcome = self.outcomes[0] if self.outcomes else None
+        keys = ("t", "ex", "ey", "m", "E", "err", "alpha")
         if self.pinned is not None or outcome is None or outcome.run is None:
             self.pinned = None
-            data: dict[str, Any] = {key: [] for key in self.ref.data}
+            data: dict[str, Any] = {key: [] for key in keys}
         else:
             assert self.scenario is not None
             self.pinned = (outcome, self.scenario)
-            run = outcome.run
-            steps = self.steps[0].data
-            data = {key: steps[key] for key in ("t", "ex", "ey", "m", "E", "err", "alpha")}
-            data["t"] = run.t
-        self.ref.data = data
-        _set(self.pin, label="Unpin the reference" if self.pinned else "Pin as reference")
-        if self.scenario is not None:
-            _set(self.legend, text=self._legend(self.outcomes, self.scenario.n))
-        self._refresh_status()
+            steps = self.shown["steps0"]
+            data = {key: steps[key] for key in keys}
+        with self._message():
+            self._put("pinned", data)
+            _set(self.pin, label="Unpin the reference" if self.pinned else "Pin as reference")
+            if self.scenario is not None:
+                _set(self.legend, text=self._legend(self.outcomes, self.scenario.n))
+            self._refresh_status()
 
     def _on_clip(self) -> None:
         """Write a GIF of the runs shown, at the playback speed (faster for a long run), in a
@@ -928,7 +945,7 @@ class Session:
     @property
     def status_text(self) -> str:
         """The status box's HTML: the explanations, the table of the step shown, the timing."""
-        return str(self.status_html.data["html"][0])
+        return str(self.shown.get("status-html", {"html": [""]})["html"][0])
 
     # ------------------------------------------------------------------------- updating
     def _show(self, errors: Sequence[str], notes: Sequence[str]) -> None:
@@ -980,35 +997,87 @@ class Session:
         self.scenario, self.outcomes = scenario, outcomes
         end = max([scenario.motion.dt] + [float(o.run.t[-1]) for o in outcomes if o.run])
         self.t = 0.0 if replay else min(self.t, end)
-        # the page paints the change once, when its last message has arrived (batch.js)
-        self._batch(True, live=live)
-        self.doc.hold("combine")  # the Python callbacks of held changes run later
-        try:
-            self._draw(scenario, outcomes, end)
-            # a refused value stays explained while the page recomputes what is in force (the
-            # release of the slider that was refused, the next tick of a playing motion)
-            errors = [*refused, *([self._refusal] if self._refusal else [])]
-            self._show(errors, list(scenario.warnings))
-        finally:
-            self.doc.unhold()
-        self._syncing = True  # not held: these changes call back now, and are muted
-        try:
-            self._sync_widgets(scenario, end, replay, live=live)
-        finally:
-            self._syncing = False
-        self.timing["change"] = time.perf_counter() - start
-        try:  # in the same batch: the page paints the change, its status and front once
+        with self._message(restart=replay, live=live):  # the runs, status and front: one message
+            self.doc.hold("combine")  # the Python callbacks of held changes run later
+            try:
+                self._draw(scenario, outcomes, end)
+                # a refused value stays explained while the page recomputes what is in force
+                # (the release of the slider that was refused, the next tick of a playing motion)
+                errors = [*refused, *([self._refusal] if self._refusal else [])]
+                self._show(errors, list(scenario.warnings))
+            finally:
+                self.doc.unhold()
+            self._syncing = True  # not held: these changes call back now, and are muted
+            try:
+                self._sync_widgets(scenario, end, replay, live=live)
+            finally:
+                self._syncing = False
+            self.timing["change"] = time.perf_counter() - start
             self._refresh_front()
-        finally:
-            self._batch(False, live=live)
 
-    def _batch(self, hold: bool, *, live: bool = False) -> None:
-        """Open (``hold``) or close the page's paint batch: each property change is a message of
-        its own, and a page painting them as they came drew a change up to four times (each run,
-        the widgets, the status). ``live``: the change of a drag in progress (a page whose drag
-        has ended since skips its paint for the release's, which follows)."""
-        source = self.batch[0 if hold else 1]
-        source.data = {"k": [source.data["k"][0] + 1], "live": [live]}
+    # ---------------------------------------------------------------- one message a change
+    def _put(self, name: str, data: dict[str, Any]) -> None:
+        """The drawn source ``name`` gets ``data`` in the next message (see :meth:`_message`)."""
+        self._out["sources"][name] = data
+        self.shown[name] = data
+
+    def _prop(self, name: str, **values: Any) -> None:
+        """Properties of the model ``name`` set in the next message, if they changed."""
+        changed = {k: v for k, v in values.items() if self.shown_props.get(name, {}).get(k) != v}
+        if changed:
+            self._out["props"].setdefault(name, {}).update(changed)
+            self.shown_props.setdefault(name, {}).update(changed)
+
+    @contextlib.contextmanager
+    def _message(self, *, restart: bool = False, live: bool = False) -> Iterator[None]:
+        """Collect what the block puts (:meth:`_put`, :meth:`_prop`) and send it as one message
+        when the outermost block ends; ``restart``: the motion plays from the start; ``live``: a
+        change of a drag in progress (a page whose drag has ended since skips it for the
+        release's, which follows)."""
+        self._out["restart"] |= restart
+        self._out["live"] |= live
+        self._depth += 1
+        try:
+            yield
+        finally:
+            self._depth -= 1
+            if self._depth == 0:
+                self._send()
+
+    def _send(self) -> None:
+        """One message to the page (apply.js): every numeric column end to end in one float64
+        array (one websocket frame), the rest as JSON."""
+        out = self._out
+        self._out = {"sources": {}, "props": {}, "restart": False, "live": False}
+        if not (out["sources"] or out["props"] or out["restart"]):
+            return
+        chunks: list[np.ndarray] = []
+        size = 0
+
+        def pack(value: Any) -> dict[str, Any]:
+            nonlocal size
+            if isinstance(value, list) and value and all(isinstance(v, np.ndarray) for v in value):
+                return {"fs": [pack(v)["f"] for v in value]}
+            array = np.asarray(value)
+            if array.dtype.kind not in "fiub":
+                return {"v": array.tolist()}
+            chunks.append(array.astype(np.float64).ravel())
+            size += chunks[-1].size
+            return {"f": [size - chunks[-1].size, chunks[-1].size]}
+
+        sources = {
+            name: {key: pack(column) for key, column in data.items()}
+            for name, data in out["sources"].items()
+        }
+        meta = {
+            "sources": sources,
+            "props": out["props"],
+            "restart": out["restart"],
+            "live": out["live"],
+        }
+        self.restarts += out["restart"]
+        values = np.concatenate(chunks) if chunks else np.zeros(0)
+        self.change.data = {"values": [values], "meta": [json.dumps(meta)]}
 
     def _draw(self, scenario: Scenario, outcomes: Sequence[Outcome], end: float) -> None:
         scale = logic.ellipse_scale(scenario)
@@ -1018,23 +1087,26 @@ class Session:
             run = outcome.run
             if run is None:
                 if i == 0:
-                    self.velocity.data = {"px": [], "py": []}
-                self.points[i].data = {"x": [], "y": [], "s": []}
-                self.steps[i].data = {"t": [], "ex": [], "ey": []}
-                self.qlines[i].data = {"xs": [], "ys": [], "color": []}
+                    self._put("velocity", {"px": [], "py": []})
+                self._put(f"points{i}", {"x": [], "y": [], "s": []})
+                self._put(f"steps{i}", {"t": [], "ex": [], "ey": []})
+                self._put(f"qlines{i}", {"xs": [], "ys": [], "color": []})
                 continue
             points, steps = logic.scene_data(run, scale)
             if i == 0:  # the first run's program made visible (frame.js draws its step)
                 velocity = logic.velocity_data(run, scale)
                 steps |= {key: velocity[key] for key in ("vx", "vy", "ax", "ay")}
-                self.velocity.data = {"px": velocity["px"], "py": velocity["py"]}
-            self.points[i].data = points
-            self.steps[i].data = steps
-            self.qlines[i].data = {
-                "xs": [run.t] * scenario.n,
-                "ys": [run.q[:, j] for j in range(scenario.n)],
-                "color": palette,
-            }
+                self._put("velocity", {"px": velocity["px"], "py": velocity["py"]})
+            self._put(f"points{i}", points)
+            self._put(f"steps{i}", steps)
+            self._put(
+                f"qlines{i}",
+                {
+                    "xs": [run.t] * scenario.n,
+                    "ys": [run.q[:, j] for j in range(scenario.n)],
+                    "color": palette,
+                },
+            )
             for renderer in self.coloured[i]:
                 fill = {"fill_color": color} if renderer.name.startswith("ellipse") else {}
                 _set(renderer.glyph, line_color=color, **fill)
@@ -1065,17 +1137,17 @@ class Session:
                 },
             )
         start = arm.joint_positions(scenario.motion.q0)
-        _set(self.time_range, start=0.0, end=end, reset_start=0.0, reset_end=end)
+        self._prop("time", start=0.0, end=end, reset_start=0.0, reset_end=end)
         for hover, i, key in self.hovers:  # the read-out names its run
             name = outcomes[i].name if i < len(outcomes) else ""
             _set(hover, tooltips=[(name, ""), ("t", "@t{0.00} s"), (key, f"@{{{key}}}")])
-        _set(self.start, data={"x": start[:, 0].tolist(), "y": start[:, 1].tolist()})
+        self._put("start", {"x": start[:, 0], "y": start[:, 1]})
         _set(self.scale_note, text=f"ellipse: {scale:.2g} m per m/s of tip speed")
         self._limits(scenario)
         name = f"{scenario.name}-play"
         toml = logic.export_toml(dataclasses.replace(scenario, name=name))
-        self.save_toml.tags = [toml, f"{name}.toml"]
-        self.save_png.tags = [f"{name}.png", self._caption(scenario, outcomes)]
+        self._prop("save-toml", tags=[toml, f"{name}.toml"])
+        self._prop("save-png", tags=[f"{name}.png", self._caption(scenario, outcomes)])
         _set(self.legend, text=self._legend(outcomes, scenario.n))
 
     def _sync_widgets(
@@ -1092,7 +1164,9 @@ class Session:
             _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
             self.goal.selected.indices = []
             self.handles.selected.indices = []
-        self.scrub.update(end=end, step=scenario.motion.dt, value=self.t)
+        self._prop("scrub", end=end, step=scenario.motion.dt)
+        if replay or self.scrub.value > end:  # the page's time, where the server moved it
+            self._out["props"].setdefault("scrub", {})["value"] = self.t
         _set(self.choose, value=self.settings.scenario)
         _set(self.links, value=scenario.n)
         _set(self.pair, active=list(PAIRS).index(self.settings.pair))
@@ -1107,8 +1181,7 @@ class Session:
                 slider.value = position
             if control.key == "weights.slack":
                 _set(slider, disabled=scenario.redundant and not scenario.obstacles)
-        if replay:  # restart.js: from the start, playing (the Toggle is set only if paused)
-            self.restart.data = {"n": [self.restart.data["n"][0] + 1]}
+        # a replay plays the motion from the start (apply.js; the Toggle is set only if paused)
 
     def _limits(self, scenario: Scenario) -> None:
         arm, damper = scenario.arm, scenario.damper
@@ -1190,12 +1263,12 @@ class Session:
         )
         # the explanation first: it is what a teacher reads out, and it stays in view; the
         # comparison with a pinned run after the table of the step shown
-        self.status_html.data = {
-            "html": [
-                f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>'
-                f"{self._comparison()}{timing}"
-            ]
-        }
+        text = (
+            f'{why}<table class="status"><tr><th></th>{head}</tr>{body}</table>'
+            f"{self._comparison()}{timing}"
+        )
+        with self._message():
+            self._put("status-html", {"html": [text]})
 
     def _comparison(self) -> str:
         """The first run against the pinned one: what changed in the scenario, and a table of
@@ -1230,30 +1303,24 @@ class Session:
         self._front_at = time.monotonic()
         result = logic.front(scenario, self.outcomes[0], self.t)
         self.timing["front"] = time.perf_counter() - start
-        self.doc.hold("combine")
-        try:
+        with self._message():
             fill = np.where(result.dominated, "white", "#0072B2")
-            self.front_src.data = {
-                "M": result.M,
-                "E": result.E,
-                "fill": fill,
-                "ratio": result.ratio,
-            }
+            self._put("front", {"M": result.M, "E": result.E, "fill": fill, "ratio": result.ratio})
             if result.current >= 0:
-                self.front_label.text = f"\u25ef w_M / w_E = {result.ratio[result.current]:.3g}"
-                self.front_now.data = {
-                    "M": [result.M[result.current]],
-                    "E": [result.E[result.current]],
-                }
+                label = f"\u25ef w_M / w_E = {result.ratio[result.current]:.3g}"
+                self._prop("front-label", text=label)
+                self._put(
+                    "front-now", {"M": [result.M[result.current]], "E": [result.E[result.current]]}
+                )
             else:
-                self.front_label.text = ""
-                self.front_now.data = {"M": [], "E": []}
+                self._prop("front-label", text="")
+                self._put("front-now", {"M": [], "E": []})
             # short enough for the plot's 250 px: "Pareto, t = 12.35 s (1 point)"
             title = f"Pareto, t = {result.t:.2f} s" + (" (1 point)" if result.single else "")
-            self.pareto_title.text = title if not result.message else f"no front: {result.message}"
+            self._prop(
+                "pareto-title", text=title if not result.message else f"no front: {result.message}"
+            )
             self._refresh_status()
-        finally:
-            self.doc.unhold()
 
 
 LIVE_INTERVAL = 0.1
