@@ -305,7 +305,8 @@ def test_the_page_recomputes_on_a_goal_drag(session):
     assert s.shown["steps0"]["ex"][-1] == pytest.approx(0.3, abs=2e-3)
     # the new motion plays from the start (apply.js)
     assert s.status_text != before and s.restarts == restarts + 1
-    assert s.shown_props["save-toml"]["tags"][1] == "task1-play.toml" and "goal = [0.3, 0.7]" in s.shown_props["save-toml"]["tags"][0]
+    toml, name = s.shown_props["save-toml"]["tags"]
+    assert name == "task1-play.toml" and "goal = [0.3, 0.7]" in toml
 
 
 def test_a_goal_being_dragged_is_followed_without_replaying(session):
