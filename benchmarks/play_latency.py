@@ -5,7 +5,7 @@ chromium with selenium and measures, for each input, from the input event to the
 
 - the clock starts at the release of the pointer, read as the event's own ``timeStamp`` (when
   the browser received it, not when a script saw it); for a goal held mid-drag, at its last
-  pointer move (the page sends a drag's position at most every 0.1 s, so this includes that
+  pointer move (the page sends a drag's position at most every 0.05 s, so this includes that
   wait);
 - it stops after the frame that shows the new trajectory has been painted (a ``setTimeout``
   queued from ``requestAnimationFrame`` runs after that frame's paint; a change that arrives
@@ -334,7 +334,7 @@ INPUTS = (
 def table(results: dict[str, dict[str, Any]], repeats: int) -> str:
     lines = [
         f"Input (the release of the pointer; for a goal held mid-drag, its last move, which the "
-        "page sends at most 0.1 s later) to the painted frame (ms), "
+        "page sends at most 0.05 s later) to the painted frame (ms), "
         f"{repeats} inputs each: median / p90 "
         "of the trajectory, and of trajectory, status and Pareto front all shown (target: all "
         "shown < 100 median, < 150 p90).",

@@ -1,9 +1,9 @@
 // Follow a drag: while the goal moves under the hand, send where it is to the server every
-// `interval` ms, from `interval` ms after the drag began, so both runs are recomputed and drawn
-// as the hand moves (a quick flick is only its release: a change computed for its middle would
+// `interval` ms, from `delay` ms after the drag began, so both runs are recomputed and drawn as
+// the hand moves (a quick flick is only its release: a change computed for its middle would
 // delay the release's). The drag tool itself sends the release, which replays the motion from
 // the start.
-// args: goal (the dragged data source), live (where the position goes), interval (ms).
+// args: goal (the dragged data source), live (where the position goes), interval, delay (ms).
 if (window.emdm_live == null) {
   window.emdm_live = {sent: -Infinity, began: 0, timer: null}
   const state = window.emdm_live
@@ -16,7 +16,7 @@ if (window.emdm_live == null) {
       known = JSON.stringify(where())
       // the drag tool's release after a position was sent: the release's change follows the
       // drag's (batch.js paints only the release's); the server never sets the goal mid-drag
-      window.emdm_release_due = dragging && state.sent > state.began
+      window.emdm_release_due = dragging && state.sent > state.began + delay - interval
       dragging = false
       clearTimeout(state.timer)
       state.timer = null
@@ -25,9 +25,10 @@ if (window.emdm_live == null) {
       if (JSON.stringify(where()) === known) {
         return
       }
-      if (!dragging) {  // the drag's first step: its first position goes `interval` ms later
+      if (!dragging) {  // the drag's first step: its first position goes `delay` ms later
         dragging = true
-        state.began = state.sent = performance.now()
+        state.began = performance.now()
+        state.sent = state.began + delay - interval
       }
       const send = () => {
         state.timer = null
