@@ -39,3 +39,6 @@ if (!(meta.live && window.emdm_release_due)) {
     }
   }
 }
+if (meta.live && window.emdm_live != null) {  // the drag's next position may go (live.js)
+  window.emdm_live.next()
+}
