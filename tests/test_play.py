@@ -531,6 +531,7 @@ def stop_server(proc: subprocess.Popen[str], sig: int) -> str:
         raise
     assert proc.returncode == 0, err
     assert "emdm play: stopped" in err and "Traceback" not in err
+    assert "ERROR" not in err, err  # e.g. Bokeh's check of the columns every glyph reads
     return err
 
 

@@ -160,8 +160,14 @@ class Session:
         self.points = [
             ColumnDataSource({"x": [], "y": [], "s": []}, name=f"points{i}") for i in range(2)
         ]
-        self.steps = [ColumnDataSource({"t": []}, name=f"steps{i}") for i in range(2)]
-        self.arms = [ColumnDataSource({"x": [], "y": [], "s": []}) for _ in range(2)]
+        # the columns the glyphs read, empty here: the page fills them (apply.js)
+        columns = ("t", "ex", "ey", "ew", "eh", "ea", "m", "E", "err", "alpha")
+        self.steps = [
+            ColumnDataSource({key: [] for key in columns}, name=f"steps{i}") for i in range(2)
+        ]
+        self.arms = [
+            ColumnDataSource({"x": [], "y": [], "s": []}, name=f"arm-state{i}") for i in range(2)
+        ]
         self.ells = [
             ColumnDataSource({"x": [], "y": [], "w": [], "h": [], "a": []}) for _ in range(2)
         ]
