@@ -642,6 +642,19 @@ def test_the_page_in_a_real_browser(tmp_path):
         assert len(driver.execute_script(MODEL + ".data.x1", "want")) == 1
         assert len(driver.execute_script(MODEL + ".data.x1", "got")) == 1
 
+        # between two states the arm is drawn in between (smooth playback at any speed)
+        driver.execute_script(
+            "const s = Bokeh.documents[0].get_model_by_name('scrub'); s.value = 10.25 * s.step"
+        )
+        assert driver.execute_script(MODEL + ".value", "scrub") == pytest.approx(0.5125)
+        xs = np.array(driver.execute_script(MODEL + ".data.x", "points0"))
+        per = len(xs) // len(trace)  # points per state
+        drawn = np.array(driver.execute_script(MODEL + ".data.x", "arm-state0"))
+        assert drawn == pytest.approx(
+            0.75 * xs[10 * per : 11 * per] + 0.25 * xs[11 * per : 12 * per]
+        )
+        driver.execute_script(MODEL + ".value = 0", "scrub")
+
         # drag the goal: the trajectory follows while the button is held (live.js) ...
         from selenium.webdriver.common.actions.action_builder import ActionBuilder
 

@@ -24,7 +24,7 @@ if (toggle.active) {
     }
     t = Math.min(scrub.end, t + (now - last) / 1000 * speeds[speed.active])
     last = now
-    const shown = Math.min(scrub.end, Math.round(t / dt) * dt)
+    const shown = Math.min(scrub.end, t)  // between states: frame.js draws in between
     if (shown != scrub.value) {
       const sync = t >= scrub.end || now - sent >= interval
       sent = sync ? now : sent
