@@ -7,11 +7,11 @@ chromium with selenium and measures, for each input, from the input event to the
   the browser received it, not when a script saw it); for a goal held mid-drag, at its last
   pointer move (the page sends a drag's position at most every 0.05 s, so this includes that
   wait);
-- it stops after the frame that shows the new trajectory has been painted (a ``setTimeout``
-  queued from ``requestAnimationFrame`` runs after that frame's paint; a change that arrives
-  inside the page's paint batch is painted when the batch closes, so its clock waits for that),
-  and likewise for the status table and the Pareto front: an input counts as done when all
-  three show the change;
+- it stops after the frame that shows the new trajectory has been painted: after the scene's
+  own repaint (Bokeh paints a plot at most 60 times a second, so a change can wait a frame for
+  it), then after the browser's paint of that frame (a ``setTimeout`` queued from
+  ``requestAnimationFrame``); likewise for the Pareto front (its plot's repaint) and the status
+  table: an input counts as done when all three show the change;
 - inputs: a flick of the goal (to a point near the scenario's own goal, and back, in 4 moves:
   shorter than the 0.1 s after which the page follows a drag), the goal dragged in 6 moves 50 ms
   apart and held there, and a drag of the w_M slider, each with the motion paused and while it
@@ -40,21 +40,33 @@ from typing import Any
 
 HOOK = """
 if (!window.__emdm) {
-  window.__emdm = {up: null, shown: {steps: [], status: [], front: []}};
+  window.__emdm = {up: null, shown: {steps: [], status: [], front: []}, waiting: {}};
   window.addEventListener('pointerup', (e) => { window.__emdm.up = e.timeStamp; }, true);
   window.addEventListener('pointermove', (e) => { window.__emdm.moved = e.timeStamp; }, true);
+  // a plot paints a change at most 60 times a second (a throttle): wait for its own repaint
+  const plot = Bokeh.require('models/plots/plot_canvas').PlotView.prototype;
+  const repaint = plot.repaint;
+  plot.repaint = function () {
+    repaint.call(this);
+    const waiting = window.__emdm.waiting[this.model.name] || [];
+    window.__emdm.waiting[this.model.name] = [];
+    waiting.forEach((then) => then());
+  };
   const doc = Bokeh.documents[0];
-  for (const [key, name, prop] of [['steps', 'steps0', 'data'], ['status', 'status-html', 'data'],
-                                   ['front', 'front', 'data']]) {
+  for (const [key, name, prop, figure] of [['steps', 'steps0', 'data', 'scene'],
+                                           ['status', 'status-html', 'data', null],
+                                           ['front', 'front', 'data', 'plot-pareto']]) {
     doc.get_model_by_name(name).properties[prop].change.connect(() => {
-      // after the paint of the frame that shows the change: a change inside the page's paint
-      // batch (batch.js) is painted only when the batch closes
+      // after the paint of the frame that shows the change: the plot's repaint, then the
+      // browser's paint of that frame (a setTimeout queued from requestAnimationFrame); kept
+      // with the time the change arrived, which ties a status and a front to their run
+      const arrived = performance.now();
       const shown = () => requestAnimationFrame(
-        () => setTimeout(() => window.__emdm.shown[key].push(performance.now())));
-      if (window.emdm_batch != null) {
-        window.addEventListener('emdm-batch-closed', shown, {once: true});
-      } else {
+        () => setTimeout(() => window.__emdm.shown[key].push([arrived, performance.now()])));
+      if (figure == null) {
         shown();
+      } else {
+        (window.__emdm.waiting[figure] = window.__emdm.waiting[figure] || []).push(shown);
       }
     });
   }
@@ -203,12 +215,11 @@ def settled(
     if not found:
         raise RuntimeError("no new trajectory on screen")
     up, shown = found
-    last = float(shown["steps"][-1])
+    arrived, last = (float(t) for t in shown["steps"][-1])
     out = {"trajectory": last - float(up)}
     for key in ("status", "front"):
-        # the first paint of it that follows the new trajectory (while the motion plays the
-        # status changes every frame: its next frame carries the new run)
-        after = [float(t) for t in shown[key] if float(t) >= last - 1.0]
+        # the first paint of one that arrived with the new trajectory or after it
+        after = [float(p) for a, p in shown[key] if float(a) >= arrived]
         out[key] = (after[0] if after else last) - float(up)
     out["all"] = max(out.values())
     return out

@@ -309,6 +309,51 @@ def test_the_page_recomputes_on_a_goal_drag(session):
     assert name == "task1-play.toml" and "goal = [0.3, 0.7]" in toml
 
 
+def _unpack(s) -> tuple[dict, dict]:
+    """The last change message as apply.js reads it: (sources, meta)."""
+    import json
+
+    values = np.asarray(s.change.data["values"][0])
+    meta = json.loads(s.change.data["meta"][0])
+
+    def column(spec):
+        if "f" in spec:
+            return values[spec["f"][0] : spec["f"][0] + spec["f"][1]]
+        if "fs" in spec:
+            return [values[o : o + n] for o, n in spec["fs"]]
+        return spec["v"]
+
+    sources = {
+        name: {key: column(spec) for key, spec in columns.items()}
+        for name, columns in meta["sources"].items()
+    }
+    return sources, meta
+
+
+def test_a_change_goes_to_the_page_as_one_message_that_reads_back_exactly(session):
+    s = session()
+    sent = []
+    s.change.on_change("data", lambda attr, old, new: sent.append(new))
+    s.goal.data = {"x": [0.3], "y": [0.7]}
+    _settle(s)
+    assert len(sent) == 1  # the runs, the status and the front together
+    sources, meta = _unpack(s)
+    assert meta["restart"] and not meta["live"]
+    assert {"points0", "steps1", "qlines0", "velocity", "front", "status-html"} <= set(sources)
+    for name, data in sources.items():
+        for key, value in data.items():
+            expected = s.shown[name][key]
+            if isinstance(value, list) and value and isinstance(value[0], np.ndarray):
+                for got, want in zip(value, expected, strict=True):
+                    np.testing.assert_array_equal(got, np.asarray(want, dtype=float))
+            elif isinstance(value, np.ndarray):  # NaN where the record has NaN, bit for bit
+                np.testing.assert_array_equal(value, np.asarray(expected, dtype=float))
+            else:
+                assert value == list(np.asarray(expected).tolist())
+    end = max(float(s.shown[f"steps{i}"]["t"][-1]) for i in range(2))
+    assert meta["props"]["scrub"]["end"] == pytest.approx(end)
+
+
 def test_a_goal_being_dragged_is_followed_without_replaying(session):
     s = session()
     restarts, goal = s.restarts, dict(s.goal.data)
