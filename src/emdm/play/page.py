@@ -990,7 +990,8 @@ class Session:
             )
             self._syncing = True
             try:
-                self._sync_widgets(self.scenario, end, replay=False)
+                with self._message():  # what the widgets show goes out now, not with a later change
+                    self._sync_widgets(self.scenario, end, replay=False)
             finally:
                 self._syncing = False
             return
