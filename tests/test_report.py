@@ -10,9 +10,11 @@ import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import headless_chromium
 
+import emdm
 from emdm.outputs.report import format_value
 from emdm.outputs.report.render import compile_documents, document, latex_environment
 from emdm.outputs.report.trace import expected_text, number_html, render_latex
@@ -285,3 +287,48 @@ def test_the_byline_from_a_config_file(tmp_path, capsys):
         assert not out.exists()
     with pytest.raises(ScenarioError, match="cannot be read"):
         read_byline(tmp_path / "missing.toml")
+
+
+def test_limits_and_pair_events_per_joint_and_over_a_common_window():
+    """The excursion past each joint's limits, and a pair's mean manipulability over the states
+    both runs have, from the records (the paper quotes them for Task 2)."""
+    from emdm.outputs.report import explain
+
+    sc = emdm.load_scenario("task2")
+    a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
+    states = min(a.q.shape[0], b.q.shape[0])
+    ev = explain.pair_events(a, b)
+    assert ev["common_until_t"] == a.t[states - 1]
+    assert ev["mean_m_common"]["C-EMDM"] == pytest.approx(a.m[:states].mean(), rel=1e-15)
+    assert ev["mean_m_common"]["C-IVKC"] == pytest.approx(b.m[:states].mean(), rel=1e-15)
+    same = explain.pair_events(a, a)
+    assert same["mean_m_common"]["C-EMDM"] == pytest.approx(emdm.metrics(a)["mean_manipulability"])
+    uc = emdm.simulate(sc, "UC-IVKC")
+    lim = explain.limits(uc)
+    over = np.maximum(uc.q - sc.arm.q_max, sc.arm.q_min - uc.q).max(axis=0)
+    assert lim["excess_by_joint"] == [max(float(x), 0.0) for x in over]
+    assert max(lim["excess_by_joint"]) == lim["max_excess"] > 0
+    assert explain.limits(a)["excess_by_joint"] == [0.0, 0.0]  # C-: within the limits
+
+
+def test_a_paper_that_does_not_compile_replaces_nothing(
+    quick_report, tmp_path, monkeypatch, capsys
+):
+    """With a TeX engine that fails, the report is refused in one line (exit 2): the earlier
+    report stays byte for byte, and the failing source and its log are kept where it says."""
+    from emdm.cli import main
+    from emdm.outputs.report import render
+
+    out = tmp_path / "report"
+    shutil.copytree(quick_report, out)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    monkeypatch.setattr(render, "tex_engine", lambda: "pdflatex")
+    monkeypatch.setattr(render, "_command", lambda engine, name: ["false", name])
+    assert main(["report", "--quick", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "paper.tex did not compile; nothing was replaced" in err[0], err
+    kept = Path(err[0].rsplit(" ", 1)[1])
+    assert (kept / "paper.tex").read_text(encoding="utf-8").startswith("%")
+    shutil.rmtree(kept)
+    after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert after == before

@@ -166,6 +166,11 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
+GAP_FLOOR = 1e-6
+"""Where :func:`pair_figure`'s log axis of the tracking gap is floored (m/s): a task imposed
+exactly misses by rounding only (about 1e-16), drawn on the floor."""
+
+
 def time_end(runs: Sequence[Run]) -> float | None:
     """Where a figure's time axes end when some runs arrived and every other one had stalled by
     the last arrival (their records run on unchanged, within the stall band, to the time limit):
@@ -178,13 +183,27 @@ def time_end(runs: Sequence[Run]) -> float | None:
     return end if max(float(r.t[k]) for r, k in stalls if k is not None) <= end else None
 
 
-def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
+def tracking_gap(run: Run) -> np.ndarray:
+    """Per command: how far the achieved tip velocity misses the desired one, ``||J(q_k) qd_k -
+    v_d,k||`` (m/s), from the recorded states and commands (0 up to rounding for a run that
+    imposes the task; the slack, or the scaled-off part ``(1 - alpha) ||v_d||``, otherwise)."""
+    arm = run.scenario.planar_arm
+    out = np.empty(run.steps)
+    for k in range(run.steps):
+        out[k] = np.linalg.norm(arm.jacobian(run.q[k]) @ run.qd[k] - run.v[k])
+    return out
+
+
+def pair_figure(
+    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, *, gap: bool = False
+) -> Path:
     """A pair (or all four controllers of a task) in one composite: (a) m(t), (b) E(t), (c) the
-    tracking error ||e||(t) above, (d) q(t) and (e) qd(t) below, one strip per joint."""
+    distance to the goal ||e||(t) (``gap``: the velocity-tracking gap of :func:`tracking_gap`)
+    above, (d) q(t) and (e) qd(t) below, one strip per joint."""
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.75 if n == 3 else 2.3) if medium is PAPER else 3.4
+    height = (2.6 if n == 3 else 2.3) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)
@@ -201,25 +220,29 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         def drawn(run: Run) -> dict[str, Any]:
             st = _style(run, medium)
             if mixed and not run.controller.name.startswith("C-"):
-                # beside the constrained pair, the unconstrained one thinner and lighter: the
-                # two oranges and the two blues must not be read as one run
-                st = {**st, "linewidth": 0.6 * st["linewidth"], "alpha": 0.75}
+                # beside the constrained pair, the unconstrained one thinner (in its own lighter
+                # hue, drawn opaque): the two oranges and the two blues must not be read as one
+                st = {**st, "linewidth": 0.75 * st["linewidth"]}
             return st
 
         for run in runs:
             st = drawn(run)
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
-            ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
+            if gap:
+                ax_err.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
+            else:
+                ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             for j in range(n):
                 q_axes[j].plot(run.t, run.q[:, j], **st)
                 qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
         for ax in (ax_m, ax_e, ax_err, *q_axes, *qd_axes):
             _shade(ax, spans)
-        ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
+        if not gap:
+            ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
-        ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
+        ax_err.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)" if gap else r"$\|e\|$ (m)", labelpad=1)
         for ax in (ax_m, ax_e, ax_err):
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))

@@ -11,7 +11,7 @@ Gradient-free methods search the *reduced* program, where the task equality is e
 
 Either way only the linear inequalities ``G t <= h`` (from the bounds) remain. ``cobyqa``, ``cobyla``
 and ``differential-evolution`` take them natively; ``nelder-mead``, ``powell`` and ``cma-es`` see an
-exact l1 penalty ``rho * sum(max(0, G t - h))`` with ``rho = 1e4 (1 + ||P||)``. Nothing is
+exact l1 penalty ``rho * sum(max(0, G t - h))`` with ``rho = PENALTY (1 + max|P|)``. Nothing is
 projected or clipped afterwards: the returned point's constraint violation is measured by the lab.
 Random methods are seeded (seed 0) so every run is reproducible.
 """
@@ -29,6 +29,9 @@ from scipy.optimize import Bounds, LinearConstraint, differential_evolution, lin
 from ..core.arm import Matrix, Vector
 from ..core.problem import QP
 from .base import SolverResult, infeasible
+
+PENALTY = 1e4
+"""The l1 penalty weight of the penalised gradient-free methods, per unit of ``1 + max|P|``."""
 
 DEFAULT_BUDGET = 2000
 """Default number of objective evaluations for the gradient-free methods."""
@@ -149,7 +152,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             rec = _Recorder(red, keep=history)
             rec(np.zeros(0))
             return _finish(red, np.zeros(0), "optimal", 0, rec, start)
-        penalty = 1e4 * (1.0 + float(np.abs(qp.P).max()))
+        penalty = PENALTY * (1.0 + float(np.abs(qp.P).max()))
         t0 = np.zeros(red.dim)
         cons = LinearConstraint(red.G, -np.inf, red.h) if red.h.size else None
         status, iterations = "optimal", 0

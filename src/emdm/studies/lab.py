@@ -36,6 +36,7 @@ from ..core.scenario import Scenario
 from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
+from ..solvers.nlp import PENALTY
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",
@@ -359,6 +360,8 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
         "resolved_steps": lab.steps,
         "representative_steps": lab.representative,
         "installed": available_solvers(),
+        # the gradient-free methods' exact l1 penalty: rho = penalty_weight (1 + max|P|)
+        "penalty_weight": PENALTY,
         "solvers": {name: study.summary() for name, study in lab.studies.items()},
         "challenges": challenges(lab),
     }

@@ -304,6 +304,8 @@ def limits(run: Run) -> dict[str, Any]:
         "excess_joint": int(j) + 1,
         "t_excess": float(run.t[k]),
         "time_outside": float((over.max(axis=1) > 0).sum() * sc.motion.dt),
+        # every joint's deepest excursion (0: it stayed within its limits)
+        "excess_by_joint": [float(max(x, 0.0)) for x in over.max(axis=0)],
     }
     if run.steps:
         kq, jq = np.unravel_index(int(np.argmax(np.abs(run.qd))), run.qd.shape)
@@ -398,6 +400,11 @@ def pair_events(a: Run, b: Run) -> dict[str, Any]:
         "coincide_determined_steps": determined,
         "max_path_gap": float(gap.max()) if gap.size else 0.0,
         "t_max_path_gap": float(a.t[int(np.argmax(gap))]) if gap.size else 0.0,
+        # the mean manipulability over the states both runs have (each run's own mean, in its
+        # metrics, covers its own horizon: a run that stands still to the time limit weighs in
+        # its standstill)
+        "common_until_t": float(a.t[states - 1]),
+        "mean_m_common": {r.controller.name: float(np.mean(r.m[:states])) for r in (a, b)},
     }
 
 

@@ -13,9 +13,13 @@ from typing import Any
 
 from ...core.controllers import Name
 from ...core.tolerances import STALL_BAND
+from ..paper_figures import GAP_FLOOR
 from .config import BYLINE, PAIRS
 from .document import Document, Figure, Section, Table
 from .trace import Cite, Data, Math, Num, Ref, Sentence, Text, format_value, sentence
+
+FLOOR_EXP = round(math.log10(GAP_FLOOR))
+"""The decade the paper's tracking-gap axis is floored at (its caption says it)."""
 
 # ---------------------------------------------------------------------------- inline math
 ALPHA = Math(r"\alpha", "α")
@@ -35,7 +39,6 @@ DT = Math(r"\Delta t", "Δ<i>t</i>")
 COND_J = Math(r"\operatorname{cond}J", "cond&nbsp;<i>J</i>")
 VD = Math(r"v_d", "<i>v</i><sub>d</sub>")
 T_EQ = Math("t={}", "<i>t</i>&nbsp;=&nbsp;")
-T_EQ0 = Math("t=0", "<i>t</i>&nbsp;=&nbsp;0")
 
 
 def q(j: int) -> Math:
@@ -143,7 +146,7 @@ class Story:
                 self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
                 " at ",
                 self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
-                f" from it (then within {STALL_BAND * 1e3:g} mm)",
+                f" from it, its distance staying within {STALL_BAND * 1e3:g} mm from then on",
             )
         return sentence(
             "does not reach the goal within ",
@@ -319,20 +322,42 @@ class Story:
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod
-    def panels() -> Sentence:
+    def panels(gap: bool = False) -> Sentence:
         """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
-        as its captions name them (without the final stop)."""
-        return sentence(
-            "(a) manipulability ",
-            M_SYM,
-            ", (b) effort ",
-            E_SYM,
-            " (log axis, floored at ",
-            Math(r"10^{-9}", "10<sup>−9</sup>"),
-            "), (c) tracking error ",
-            ERR,
-            " (log axis; dotted: the arrival tolerance), (d) joint positions with their "
-            "limits and damper influence and stop zones, (e) joint velocities with their limits",
+        as its captions name them (without the final stop); ``gap``: panel (c) is the
+        velocity-tracking gap (``pair_figure(..., gap=True)``)."""
+        third = (
+            sentence(
+                "(c) velocity-tracking gap ",
+                Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+                " (log axis, floored at ",
+                Math(rf"10^{{{FLOOR_EXP}}}", f"10<sup>−{-FLOOR_EXP}</sup>"),
+                ": the slack ",
+                DELTA,
+                ", or the scaled-off part ",
+                Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
+                ")",
+            )
+            if gap
+            else sentence(
+                "(c) distance to the goal ", ERR, " (log axis; dotted: the arrival tolerance)"
+            )
+        )
+        return (
+            sentence(
+                "(a) manipulability ",
+                M_SYM,
+                ", (b) effort ",
+                E_SYM,
+                " (log axis, floored at ",
+                Math(r"10^{-9}", "10<sup>−9</sup>"),
+                "), ",
+            )
+            + third
+            + sentence(
+                ", (d) joint positions with their limits and damper influence and stop zones, "
+                "(e) joint velocities with their limits"
+            )
         )
 
     def pair_caption(self, task: str, group: str) -> Sentence:
@@ -369,7 +394,7 @@ class Story:
         answer += sentence(
             "; their end-effector paths differ by at most ",
             gap,
-            "; tracking errors in ",
+            "; distances to the goal in ",
             Ref("fig", "t1-uc"),
             "(c)) and raises the mean manipulability by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
@@ -502,18 +527,17 @@ class Story:
                 p += sentence(
                     "; on the other ",
                     _words(same - scaled_steps),
-                    " both optima keep a joint at its bound, again leaving two free joints for "
-                    "two equations",
+                    " joints at their bounds again fix the command",
                 )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
-            p += sentence(
-                ". With the slack policy instead of scaling (E2) the commands ",
-                "differ from the first step on." if coincide == 0 else "coincide for only ",
-            )
-            if coincide:
+            if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(
-                    self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"), " steps."
+                    ". With the slack policy instead of scaling (E2) the commands coincide for "
+                    "only ",
+                    self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"),
+                    " steps",
                 )
+            p += sentence(".")
             sec.paragraphs.append(p)
             sec.paragraphs.append(self.policy_weighed())
         pinned = self.evv(t, emdm, "pinned")
@@ -532,15 +556,11 @@ class Story:
                     " and " if i < shown - 1 else ". ",
                 )
         p += sentence(
-            "Capped speeds cut the effort to ",
-            self.mt(t, ivkc, "total_effort", ".2f"),
-            " and ",
-            self.mt(t, emdm, "total_effort", ".2f", "rad²/s"),
-            " (UC pair: ",
-            self.mt(t, Name.UC_IVKC, "total_effort", ".2f"),
-            " and ",
-            self.mt(t, Name.UC_EMDM, "total_effort", ".2f"),
-            ")",
+            "Against the UC pair, capped speeds change the effort by ",
+            self.pct(t, ivkc, Name.UC_IVKC, "total_effort"),
+            " (IVKC) and ",
+            self.pct(t, emdm, Name.UC_EMDM, "total_effort"),
+            " (EMDM)",
         )
         qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, Name.UC_EMDM, "final_q")
         if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
@@ -652,31 +672,6 @@ class Story:
         # the weight grid: failures
         grid_file = "data/task1-pareto-UC-EMDM/weight_grid.json"
         rows = self.d.value(grid_file, "runs")
-        nominal = [
-            i
-            for i, r in enumerate(rows)
-            if r.get("reached") and math.isclose(r["w_manip"] / r["w_effort"], 50.0)
-        ]
-        ok = [i for i, r in enumerate(rows) if r.get("reached")]
-        if ok and nominal:
-            p += sentence(
-                "Over whole runs, UC-EMDM's mean ",
-                M_SYM,
-                " rises from ",
-                self.d.num(grid_file, "runs", ok[0], "mean_manipulability", fmt=".3f"),
-                " (",
-                W_M,
-                " = 0) to ",
-                self.d.num(
-                    grid_file, "runs", nominal[0], "mean_manipulability", fmt=".3f", unit="m²"
-                ),
-                " at the nominal weights for ",
-                self.d.pct(
-                    (grid_file, "runs", nominal[0], "total_effort"),
-                    (grid_file, "runs", ok[0], "total_effort"),
-                ),
-                " effort. ",
-            )
         for i, r in enumerate(rows):
             if r.get("reached") or "finer_dt" not in r:
                 continue
@@ -837,7 +832,15 @@ class Story:
             ")",
         )
         if reached_e and not reached_i:
-            answer += sentence(": one can leave the straight line to the goal, the other cannot.")
+            answer += sentence(": one can leave the straight line to the goal, the other cannot")
+            e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+            if e4.get("reached"):  # the like-for-like comparison, beside the headline
+                answer += sentence(
+                    f". With a slack like {emdm}'s instead of task scaling (E4), {ivkc} "
+                    "arrives as well, in ",
+                    self.evid_goal("t2-c-ivkc-slack-policy", ivkc),
+                )
+            answer += sentence(".")
         else:
             answer += sentence(".")
         sec.answer = answer
@@ -1010,7 +1013,7 @@ class Story:
         if not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
             if e4.get("reached"):
-                p += sentence("with the slack policy instead of scaling (E4, flipping its elbow)")
+                p += sentence("with a slack (E4, flipping its elbow)")
             if e4.get("reached") and e5.get("reached"):
                 p += sentence(" and ")
             if e5.get("reached"):
@@ -1079,17 +1082,21 @@ class Story:
                 M_SYM,
                 " = 0 while ",
                 ivkc,
-                " keeps ",
-                M_SYM,
-                " by not moving",
+                " stands still",
             )
-            # each mean is over its own run: the stall's 30 s weigh in (E4's moving C-IVKC is
-            # in Table II)
+            # each mean is over its own run: the stall's 30 s weigh in, so the common window too
+            g = f"data/{t}/events.json"
             p += sentence(
-                " (each mean over its own run: ",
+                " (",
                 ivkc,
-                "'s ",
+                "'s over its ",
                 self.mt(t, ivkc, "final_time", ".0f", "s"),
+                "; over the first ",
+                self.d.num(g, "pairs", "C", "common_until_t", fmt=".2f", unit="s"),
+                " of both, ",
+                self.d.num(g, "pairs", "C", "mean_m_common", emdm, fmt=".3f"),
+                " against ",
+                self.d.num(g, "pairs", "C", "mean_m_common", ivkc, fmt=".3f", unit="m²"),
                 ")",
             )
         p += sentence(
@@ -1102,13 +1109,10 @@ class Story:
         sec.paragraphs.append(p)
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
-            caption = (
-                sentence(
-                    "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
-                    "solid, EMDM dashed): "
-                )
-                + self.panels()
-            )
+            caption = sentence(
+                "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
+                "solid, EMDM dashed): "
+            ) + self.panels(gap=True)
             caption += sentence(
                 ", on the constrained runs' scale (unconstrained peaks up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
@@ -1311,15 +1315,11 @@ class Story:
                 "Convergence on one program of the methods that evaluate the objective (green: "
                 "gradient-based, orange: gradient-free; marker: last evaluation).",
             ),
+            paper=False,  # the page's: the paper's four pages give Table III the comparison
         )
         if self.has_figure("convergence"):
             sec.figures.append(conv)
-        p = sentence(
-            "Quality (",
-            Ref("tab", "solvers"),
-            *((", ", Ref("fig", "convergence")) if self.has_figure("convergence") else ()),
-            "): ",
-        )
+        p = sentence("Quality (", Ref("tab", "solvers"), "): ")
         violators = [k for k in inexact_free if rows[k]["max_violation"] > 1e-6]
         if violators:  # the gaps are in the answer; every solver's own figures in Table III
             bad = max(violators, key=lambda k: rows[k]["max_violation"])
@@ -1384,14 +1384,21 @@ class Story:
                 *self.outcome(t, emdm),
             )
         )
-        if self.evv(t, ivkc, "limits", "max_excess") > 0:
-            answer += sentence(
-                " (joint ",
-                self.ev(t, ivkc, "limits", "excess_joint", fmt="d"),
-                " by up to ",
-                self.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
-                ") into the elbow-up configuration the constrained pair cannot use",
-            )
+        outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
+        if outside:
+            answer += sentence(" (")
+            for i, c in enumerate(outside):
+                joints = [
+                    j for j, x in enumerate(self.evv(t, c, "limits", "excess_by_joint")) if x > 0
+                ]
+                answer += sentence("; " if i else "", f"{c}: ")
+                for n, j in enumerate(joints):
+                    answer += sentence(
+                        ", " if n else "",
+                        f"joint {j + 1} by up to " if n == 0 else f"joint {j + 1} by ",
+                        self.ev(t, c, "limits", "excess_by_joint", j, fmt=".2f", unit="rad"),
+                    )
+            answer += sentence(") into the elbow-up configuration the constrained pair cannot use")
         answer += sentence(
             f"; against {ivkc}, {emdm}'s total effort differs by ",
             self.pct(t, emdm, ivkc, "total_effort"),
@@ -1401,23 +1408,14 @@ class Story:
             self.pct(t, emdm, ivkc, "mean_manipulability"),
             ", as the slack absorbs up to ",
             *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
-            " of the desired velocity",
-            *((" (", Ref("fig", shown), ")") if self.has_figure(shown) else ()),
-            ".",
+            " of the desired velocity (",
+            Ref("tab", "outcomes"),
+            *((", ", Ref("fig", shown), "(c)") if self.has_figure(shown) else ()),
+            ").",
         )
         sec.answer = answer
         self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))
         p = sentence()
-        if all(self.evv(t, c, "limits", "t_qd") == 0.0 for c in (ivkc, emdm)):
-            p += sentence(  # the speeds themselves are in Table I
-                "Both peak speeds (",
-                Ref("tab", "outcomes"),
-                ") come at ",
-                T_EQ0,
-                " (",
-                *eq(M_SYM, self.ev(t, ivkc, "singular", "m0", fmt=".2f", unit="m²")),
-                "). ",
-            )
         e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             p += sentence(

@@ -13,7 +13,9 @@ import csv
 import datetime as dt
 import os
 import platform
+import shutil
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
@@ -272,7 +274,8 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
         out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}"))]
         if task == "task2" and group == "C":  # the paper's Task 2 figure: all four overlaid
             four = [runs[c] for c in (*PAIRS["C"], *PAIRS["UC"])]
-            out.append(str(pf.pair_figure(four, stage / PAPER_FIGURES / f"{task}-all")))
+            # panel (c) the tracking gap: the slack and the scaling, where Task 2's pairs differ
+            out.append(str(pf.pair_figure(four, stage / PAPER_FIGURES / f"{task}-all", gap=True)))
         if not cfg.quick:
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))
@@ -453,6 +456,31 @@ PAGE_LIMIT = 4
 """The brief's limit for the paper; a longer first compile is redone with compact figures."""
 
 
+def _check_compiled(compiled: dict[str, Any], folder: Path) -> None:
+    """Refuse a report whose TeX engine ran but left a document without its PDF (a source it
+    cannot compile): nothing is swapped in, the earlier report stays, and the sources and logs
+    are kept in a folder of their own, named in the one-line message."""
+    failed = [
+        name
+        for name in ("paper", "pitch")
+        if name in compiled
+        and (compiled[name]["returncode"] != 0 or not (folder / f"{name}.pdf").exists())
+    ]
+    if not failed:
+        return
+    kept = Path(tempfile.mkdtemp(prefix="emdm-report-tex-"))
+    for name in failed:
+        for suffix in (".tex", ".log"):
+            if (folder / f"{name}{suffix}").exists():
+                shutil.copy2(folder / f"{name}{suffix}", kept)
+    first = compiled[failed[0]]["errors"][:1]
+    raise EmdmError(
+        f"{failed[0]}.tex did not compile"
+        + (f" ({first[0].strip()})" if first else "")
+        + f"; nothing was replaced; its source and log are in {kept}"
+    )
+
+
 def build_report(
     out: Path,
     *,
@@ -563,6 +591,7 @@ def build_report(
             again = compile_documents(stage / "paper", say, names=("paper",))
             compiled.update(paper=again["paper"], compact=True)
             compiled["seconds"] += again["seconds"]
+        _check_compiled(compiled, stage / "paper")
         prov = provenance(cfg, time.perf_counter() - start)
         prov["compiled"] = compiled
         write_json(stage / "provenance.json", prov)

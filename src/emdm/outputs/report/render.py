@@ -200,7 +200,10 @@ def compile_documents(
         for name, proc in procs.items():
             code = proc.wait()
             passes[name] += 1
-            log = (folder / f"{name}.log").read_text(encoding="utf-8", errors="replace")
+            log_file = folder / f"{name}.log"  # none when the engine could not even start
+            log = (
+                log_file.read_text(encoding="utf-8", errors="replace") if log_file.exists() else ""
+            )
             info = log_problems(log)
             info.update(returncode=code, passes=passes[name])
             out[name] = info
