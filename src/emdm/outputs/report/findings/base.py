@@ -1,0 +1,326 @@
+"""The story's shared part: symbols, the data accessors and the rules several sections use.
+
+The study's story: direct answers and explanations, every number read from the records.
+
+Each section opens with a one-sentence direct answer to its brief item, then explains what
+shaped the runs from the detected events (``events.json``), backed by evidence runs
+(``evidence.json``) that isolate each cause. Sentences are chosen by the data (a stall is only
+described when one was detected, a comparison says "more" or "less" by the sign), never canned.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ....core.controllers import Name
+from ....core.tolerances import STALL_BAND
+from ...paper_figures import GAP_FLOOR
+from ..config import PAIRS
+from ..document import Figure, Table
+from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence
+
+FLOOR_EXP = round(math.log10(GAP_FLOOR))
+"""The decade the paper's tracking-gap axis is floored at (its caption says it)."""
+
+# ---------------------------------------------------------------------------- inline math
+ALPHA = Math(r"\alpha", "α")
+ALPHA_LT1 = Math(r"\alpha<1", "α&nbsp;&lt;&nbsp;1")
+W_M = Math("w_M", "<i>w</i><sub>M</sub>")
+W_E = Math("w_E", "<i>w</i><sub>E</sub>")
+W_S = Math(r"w_S=c_S/\|e\|", "<i>w</i><sub>S</sub>&nbsp;=&nbsp;<i>c</i><sub>S</sub>/‖<i>e</i>‖")
+W_S_SYM = Math("w_S", "<i>w</i><sub>S</sub>")
+C_S = Math("c_S", "<i>c</i><sub>S</sub>")
+RATIO = Math("w_M/w_E", "<i>w</i><sub>M</sub>/<i>w</i><sub>E</sub>")
+M_SYM = Math("m", "<i>m</i>")
+E_SYM = Math("E", "<i>E</i>")
+MRATE = Math("M", "<i>M</i>")
+ERR = Math(r"\|e\|", "‖<i>e</i>‖")
+DELTA = Math(r"\|\delta\|", "‖δ‖")
+DT = Math(r"\Delta t", "Δ<i>t</i>")
+COND_J = Math(r"\operatorname{cond}J", "cond&nbsp;<i>J</i>")
+VD = Math(r"v_d", "<i>v</i><sub>d</sub>")
+T_EQ = Math("t={}", "<i>t</i>&nbsp;=&nbsp;")
+
+
+def q(j: int) -> Math:
+    return Math(f"q_{j}", f"<i>q</i><sub>{j}</sub>")
+
+
+def qd(j: int) -> Math:
+    return Math(rf"\dot q_{j}", f"<i>q̇</i><sub>{j}</sub>")
+
+
+def eq(symbol: Math, value: Num) -> list[Any]:
+    """``symbol = value`` as one piece of a sentence."""
+    return [symbol, Text(" = "), value]
+
+
+def bare(num: Num) -> Num:
+    """The number without its unit (a table states the unit in its header)."""
+    return Num(num.text, num.src, num.fmt, num.op)
+
+
+def _words(count: int) -> str:
+    return {1: "one", 2: "two", 3: "three", 4: "four"}.get(count, str(count))
+
+
+def _flat(*parts: Any) -> Sentence:
+    out: list[Any] = []
+    for p in parts:
+        if isinstance(p, list):
+            out.extend(p)
+        else:
+            out.append(p)
+    return sentence(*out)
+
+
+class StoryBase:
+    """The data, the figures and tables made so far, and what every section reads them with."""
+
+    """Builds the :class:`Document` from the report's data files."""
+
+    def __init__(self, data: Data) -> None:
+        self.d = data
+        self.figures: dict[str, Figure] = {}
+        self.tables: dict[str, Table] = {}
+        self.answers: list[tuple[str, Sentence]] = []
+
+    # ------------------------------------------------------------------ data accessors
+    def mt(self, task: str, ctrl: str, key: str, fmt: str, unit: str = "") -> Num:
+        return self.d.num(f"data/{task}/metrics.json", "controllers", ctrl, key, fmt=fmt, unit=unit)
+
+    def mv(self, task: str, ctrl: str, key: str) -> Any:
+        return self.d.value(f"data/{task}/metrics.json", "controllers", ctrl, key)
+
+    def ev(self, task: str, ctrl: str, *path: str | int, fmt: str, unit: str = "") -> Num:
+        return self.d.num(
+            f"data/{task}/events.json", "controllers", ctrl, *path, fmt=fmt, unit=unit
+        )
+
+    def evv(self, task: str, ctrl: str, *path: str | int) -> Any:
+        return self.d.value(f"data/{task}/events.json", "controllers", ctrl, *path)
+
+    def pair(self, task: str, group: str, key: str) -> Any:
+        return self.d.value(f"data/{task}/events.json", "pairs", group, key)
+
+    def pairn(self, task: str, group: str, key: str, fmt: str, unit: str = "") -> Num:
+        return self.d.num(f"data/{task}/events.json", "pairs", group, key, fmt=fmt, unit=unit)
+
+    def evid(self, key: str, *path: str | int) -> Any:
+        return self.d.value("data/evidence.json", "runs", key, *path)
+
+    def evidn(self, key: str, *path: str | int, fmt: str, unit: str = "") -> Num:
+        return self.d.num("data/evidence.json", "runs", key, *path, fmt=fmt, unit=unit)
+
+    def evid_goal(self, key: str, ctrl: str) -> Num:
+        """The time to goal of ``ctrl`` in the evidence run ``key``."""
+        return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
+
+    def pct(self, task: str, a: str, b: str, key: str) -> Num:
+        f = f"data/{task}/metrics.json"
+        return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
+
+    def ttg(self, task: str, ctrl: str) -> Num:
+        return self.mt(task, ctrl, "time_to_goal", ".2f", "s")
+
+    def anim(self, task: str, group: str) -> dict[str, Any] | None:
+        if not self.d.exists("data/animations.json"):
+            return None
+        found: dict[str, Any] | None = self.d.value("data/animations.json", "animations").get(
+            f"{task}-{group}"
+        )
+        return found
+
+    # ------------------------------------------------------------------ comparisons
+    def more_less(self, task: str, a: str, b: str, key: str) -> str:
+        return "more" if self.mv(task, a, key) > self.mv(task, b, key) else "less"
+
+    def higher_lower(self, task: str, a: str, b: str, key: str) -> str:
+        return "higher" if self.mv(task, a, key) > self.mv(task, b, key) else "lower"
+
+    def outcome(self, task: str, ctrl: str) -> Sentence:
+        """``reaches the goal in X s`` or ``stalls at Y m from the goal``."""
+        if self.mv(task, ctrl, "reached"):
+            return sentence("reaches the goal in ", self.ttg(task, ctrl))
+        stall = self.evv(task, ctrl, "stall")
+        if stall:
+            return sentence(
+                "never reaches the goal: it stalls after ",
+                self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
+                " at ",
+                self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
+                f" from it, its distance staying within {STALL_BAND * 1e3:g} mm from then on",
+            )
+        return sentence(
+            "does not reach the goal within ",
+            self.mt(task, ctrl, "final_time", ".0f", "s"),
+            " (final error ",
+            self.mt(task, ctrl, "final_error", ".3f", "m"),
+            ")",
+        )
+
+    # ------------------------------------------------------------------ figures, tables
+    def figure(
+        self, key: str, stem: str, caption: Sentence, wide: bool = False, paper: bool = True
+    ) -> str:
+        if self.d.exists(f"paper/{stem}.png"):
+            self.figures[key] = Figure(key, stem, caption, wide, paper=paper)
+        return key
+
+    def has_figure(self, key: str) -> bool:
+        return key in self.figures
+
+    def dearest_later(self, uc: str) -> int | None:
+        """The later Pareto step whose nominal optimum costs most over its effort-minimal one,
+        when that is more than at k = 0 (else None): the nominal weights' price grows."""
+        steps = self.d.value(uc, "steps")
+        e0, en = steps[0].get("zero_E"), steps[0].get("nominal_E")
+        later = [
+            (info["nominal_E"] / info["zero_E"], i)
+            for i, info in enumerate(steps)
+            if i > 0 and info.get("zero_E") and info.get("nominal_E") is not None
+        ]
+        if not later or not e0 or en is None or max(later)[0] <= en / e0:
+            return None
+        return max(later)[1]
+
+    @staticmethod
+    def exact(rows: dict[str, Any], family: str) -> list[str]:
+        """The solvers of ``family`` whose answers are exact (gap and violation tiny)."""
+        return [
+            k
+            for k, r in rows.items()
+            if r["family"] == family
+            and r["failures"] == 0
+            and abs(r["max_abs_gap"]) <= 1e-9
+            and r["max_violation"] <= 1e-9
+        ]
+
+    @staticmethod
+    def best(rows: dict[str, Any], family: str) -> str | None:
+        """The fastest of :meth:`exact`'s solvers of ``family``."""
+        exact = StoryBase.exact(rows, family)
+        return min(exact, key=lambda k: rows[k]["median_time"]) if exact else None
+
+    @staticmethod
+    def free_verdict(rows: dict[str, Any], period: float = 0.05) -> bool:
+        """True when no gradient-free method is both exact and faster than the control period."""
+        return not any(
+            r["family"] == "gradient-free"
+            and abs(r["max_abs_gap"]) <= 1e-9
+            and r["max_violation"] <= 1e-9
+            and r["median_time"] < period
+            for r in rows.values()
+        )
+
+    def _policy_terms(self) -> list[tuple[str, bool]]:
+        """Task 1's C-EMDM under the slack policy (E2) against scaling, per outcome: (metric,
+        whether the slack run is better on it)."""
+        run = self.evid("t1-c-slack-policy", "runs", Name.C_EMDM)
+        out = []
+        for metric, higher_better in (
+            ("time_to_goal", False),
+            ("total_effort", False),
+            ("mean_manipulability", True),
+        ):
+            new, old = run[metric], self.mv("task1", Name.C_EMDM, metric)
+            out.append((metric, new > old if higher_better else new < old))
+        return out
+
+    def policy_weighed(self) -> Sentence:
+        """Task scaling, the paper's own choice, weighed against its evidence (E2, E4)."""
+        e2, emdm = "t1-c-slack-policy", Name.C_EMDM
+        words = {
+            "time_to_goal": ("reaches the goal sooner", "reaches the goal later"),
+            "total_effort": (", with less effort", ", with more effort"),
+            "mean_manipulability": (
+                " and a higher mean manipulability",
+                " and a lower mean manipulability",
+            ),
+        }
+        p = sentence(
+            "Weighed against its evidence, scaling is not free: with a slack (E2, ",
+            Ref("tab", "evidence"),
+            ") C-EMDM ",
+        )
+        for metric, better in self._policy_terms():
+            p += sentence(words[metric][0 if better else 1])
+        e2r = ("data/evidence.json", "runs", e2, "runs")
+        ivkc = Name.C_IVKC
+        if self.evid(e2, "runs", ivkc, "reached"):  # the pair under the slack policy
+            p += sentence(
+                ". Under the slack C-EMDM's mean ",
+                M_SYM,
+                " is ",
+                self.d.pct(
+                    (*e2r, emdm, "mean_manipulability"), (*e2r, ivkc, "mean_manipulability")
+                ),
+                " against C-IVKC's for ",
+                self.d.pct((*e2r, emdm, "total_effort"), (*e2r, ivkc, "total_effort")),
+                " effort (scaled: ",
+                self.pct("task1", emdm, ivkc, "mean_manipulability"),
+                " for ",
+                self.pct("task1", emdm, ivkc, "total_effort"),
+                ")",
+            )
+        p += sentence(
+            "; scaling buys the straight line (path ",
+            self.mt("task1", emdm, "path_length", ".2f", "m"),
+            ", with a slack ",
+            self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
+            ").",
+        )
+        return p
+
+    # ------------------------------------------------------------------ Task 1
+    @staticmethod
+    def panels(gap: bool = False) -> Sentence:
+        """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
+        as its captions name them (without the final stop); ``gap``: panel (c) is the
+        velocity-tracking gap (``pair_figure(..., gap=True)``)."""
+        third = (
+            sentence(
+                "(c) velocity-tracking gap ",
+                Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+                " (log axis, floored at ",
+                Math(rf"10^{{{FLOOR_EXP}}}", f"10<sup>−{-FLOOR_EXP}</sup>"),
+                ": the slack ",
+                DELTA,
+                ", or the scaled-off part ",
+                Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
+                ")",
+            )
+            if gap
+            else sentence(
+                "(c) distance to the goal ", ERR, " (log axis; dotted: the arrival tolerance)"
+            )
+        )
+        return (
+            sentence(
+                "(a) manipulability ",
+                M_SYM,
+                ", (b) effort ",
+                E_SYM,
+                " (log axis, floored at ",
+                Math(r"10^{-9}", "10<sup>−9</sup>"),
+                "), ",
+            )
+            + third
+            + sentence(
+                ", (d) joint positions with their limits and damper influence and stop zones, "
+                "(e) joint velocities with their limits"
+            )
+        )
+
+    def pair_caption(self, task: str, group: str) -> Sentence:
+        ivkc, emdm = PAIRS[group]
+        out = sentence(f"{ivkc} (solid) against {emdm} (dashed): ") + self.panels() + sentence(".")
+        if (
+            self.pair(task, group, "coincide_scaled_steps")
+            and self.pair(task, group, "coincide_all_scaled") is not None
+        ):
+            scaled = self.evv(task, emdm, "scaling")
+            if scaled and not scaled["whole_run"]:
+                out += sentence(" Grey: both task-scaled (", ALPHA_LT1, ").")
+        return out

@@ -1,0 +1,261 @@
+"""Task 2.1's solver comparison: gradient-based against gradient-free."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..document import Section, Table
+from ..trace import Math, Ref, Sentence, Text, sentence
+from .base import (
+    DT,
+    StoryBase,
+    bare,
+)
+
+
+class Solvers(StoryBase):
+    def task2_solvers(self) -> Section:
+        f = "data/task2-lab-C-EMDM/solvers.json"
+        sec = Section(
+            "t2-solvers", "Task 2.1: gradient-based against gradient-free", level=2, brief="2.1"
+        )
+        if not self.d.exists(f):
+            return sec
+        rows = self.d.value(f, "solvers")
+        dt = self.d.value("data/task2/metrics.json", "scenario", "motion", "dt")
+        grad = self.best(rows, "gradient")
+        free = [k for k, r in rows.items() if r["family"] == "gradient-free"]
+        exact_free = [
+            k
+            for k in free
+            if abs(rows[k]["max_abs_gap"]) <= 1e-9 and rows[k]["max_violation"] <= 1e-9
+        ]
+        inexact_free = [k for k in free if k not in exact_free]
+        answer: Sentence = []
+        if grad:
+            answer += sentence(
+                "The gradient-based ",
+                grad,
+                " wins on both counts: it",
+                " reaches the exact optimum (largest gap ",
+                self.d.num(f, "solvers", grad, "max_abs_gap", fmt=".0e"),
+                ") in a median ",
+                self.d.ms(f, "solvers", grad, "median_time"),
+                " after ",
+                self.d.num(f, "solvers", grad, "median_iterations", fmt=".4g"),
+                " iterations and ",
+                self.d.num(f, "solvers", grad, "median_evaluations", fmt=".4g"),
+                " evaluations, while ",
+            )
+        if exact_free:
+            answer += sentence(
+                "the exact gradient-free "
+                + ("methods take a median of " if len(exact_free) > 1 else "method, ")
+            )
+            for i, k in enumerate(exact_free):
+                answer += sentence(
+                    *((k, " ") if len(exact_free) > 1 else (k, ", takes a median of ")),
+                    self.d.ms(f, "solvers", k, "median_time"),
+                    " (95th percentile ",
+                    self.d.ms(f, "solvers", k, "p95_time"),
+                    ")",
+                    "; " if i < len(exact_free) - 1 else "",
+                )
+            over = [k for k in exact_free if rows[k]["p95_time"] > dt]
+            typical = [k for k in exact_free if rows[k]["median_time"] > dt]
+            one = len(exact_free) == 1
+            answer += sentence(
+                "; against the control period of ",
+                self.d.num(
+                    "data/task2/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
+                ),
+                ", "
+                + (
+                    ("its median already exceeds it" if one else "their medians already exceed it")
+                    if len(typical) == len(exact_free)
+                    else ("it overruns it" if one else "each overruns it")
+                    + " on at least one program in 20"
+                    if len(over) == len(exact_free)
+                    else "some overrun it on at least one program in 20"
+                    if over
+                    else "its 95th percentile is within it, but it costs a hundred times the "
+                    "gradient-based method or more"
+                    if all(
+                        rows[k]["median_time"] >= 100 * rows[grad]["median_time"]
+                        for k in exact_free
+                    )
+                    and grad
+                    else "within it at the 95th percentile"
+                ),
+            )
+            if inexact_free:
+                gaps = [abs(rows[k]["max_abs_gap"]) for k in inexact_free]
+                lo = min(inexact_free, key=lambda k: abs(rows[k]["max_abs_gap"]))
+                hi = max(inexact_free, key=lambda k: abs(rows[k]["max_abs_gap"]))
+                answer += (
+                    sentence(
+                        "; the others stop short of the optimum by ",
+                        self.d.num(f, "solvers", lo, "max_abs_gap", fmt=".2g"),
+                        " (",
+                        lo,
+                        ") to ",
+                        self.d.num(f, "solvers", hi, "max_abs_gap", fmt=".2g"),
+                        " (",
+                        hi,
+                        ").",
+                    )
+                    if max(gaps) > min(gaps)
+                    else sentence("; the others are inexact.")
+                )
+            else:
+                answer += sentence(".")
+        elif inexact_free:
+            answer += sentence("every gradient-free method is inexact (")
+            for i, k in enumerate(inexact_free):
+                answer += sentence(
+                    k,
+                    ": gap ",
+                    self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g"),
+                    ", " if i < len(inexact_free) - 1 else "",
+                )
+            answer += sentence(").")
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 2.1: gradient-based and gradient-free solver, convergence speed "
+                "and solution quality",
+                answer,
+            )
+        )
+        sec.tables.append("solvers")
+        self.solver_table(f, rows)
+        sec.figures.append(
+            self.figure(
+                "solvers",
+                "figures/solvers",
+                sentence(
+                    "Task 2 C-EMDM, each solver on the same re-solved programs: median time per "
+                    "program against the largest gap to the exact optimum (",
+                    DT,
+                    ": the control period).",
+                ),
+                paper=False,
+            )
+        )
+        conv = self.figure(
+            "convergence",
+            "figures/convergence",
+            sentence(
+                "Convergence on one program of the methods that evaluate the objective (green: "
+                "gradient-based, orange: gradient-free; marker: last evaluation).",
+            ),
+            paper=False,  # the page's: the paper's four pages give Table III the comparison
+        )
+        if self.has_figure("convergence"):
+            sec.figures.append(conv)
+        p = sentence("Quality (", Ref("tab", "solvers"), "): ")
+        violators = [k for k in inexact_free if rows[k]["max_violation"] > 1e-6]
+        if violators:  # the gaps are in the answer; every solver's own figures in Table III
+            bad = max(violators, key=lambda k: rows[k]["max_violation"])
+            p += sentence(
+                f"{bad} also violates the bounds by up to ",
+                self.d.num(f, "solvers", bad, "max_violation", fmt=".2g"),
+                "; ",
+            )
+        p += sentence(
+            "in closed loop ",
+        )
+        ref_t = rows.get("active-set", {}).get("time_to_goal")
+        slower = [
+            k
+            for k in free
+            if rows[k].get("reached")
+            and ref_t is not None
+            and rows[k]["time_to_goal"] > ref_t + 1e-9
+        ]
+        if slower:
+            p += sentence(
+                " and ".join(slower),
+                " reach" if len(slower) > 1 else " reaches",
+                " the goal later (last column). ",
+            )
+        else:
+            p += sentence("every solver reaches the goal at the same time. ")
+        p += (
+            sentence(
+                "Recommendation: exact active-set QP (ours: ",
+                self.d.ms(f, "solvers", "active-set", "median_time"),
+                "), else gradient-based.",
+            )
+            if "active-set" in rows
+            else []
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    def solver_table(self, f: str, rows: dict[str, Any]) -> None:
+        table = Table(
+            "solvers",
+            sentence(
+                "Task 2 C-EMDM solvers on the same programs (medians; largest gap and bound "
+                "violation, 0: below ",
+                Math(r"10^{-12}", "10<sup>−12</sup>"),
+                "; it./ev.: iterations/evaluations, --: none; goal: alone in the loop).",
+            ),
+            [
+                sentence("solver"),
+                sentence("ms"),
+                sentence("it./ev."),
+                sentence("gap"),
+                sentence("viol."),
+                sentence("goal (s)"),
+            ],
+            align="lrrrrr",
+            font="scriptsize" if len(rows) > 8 else "footnotesize",  # 7 pt fits a column
+            colsep=3.0,
+        )
+        for family, title in (
+            ("exact", "exact QP"),
+            ("gradient", "gradient-based"),
+            ("gradient-free", "gradient-free"),
+        ):
+            names = [k for k, r in rows.items() if r["family"] == family]
+            if not names:
+                continue
+            table.rows.append([sentence(title)])
+            for k in names:
+                r = rows[k]
+                goal = (
+                    sentence(self.d.num(f, "solvers", k, "time_to_goal", fmt=".2f"))
+                    if r.get("reached")
+                    else sentence("--")
+                )
+                table.rows.append(
+                    [
+                        sentence(k),
+                        sentence(bare(self.d.ms(f, "solvers", k, "median_time"))),
+                        sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
+                            *(
+                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
+                                for key in ("median_iterations",)
+                            ),
+                            "/",
+                            *(
+                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
+                                for key in ("median_evaluations",)
+                            ),
+                        ),
+                        sentence(  # two digits, as the text quotes them
+                            self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g")
+                            if abs(r["max_abs_gap"]) >= 1e-12
+                            else Text("0")
+                        ),
+                        sentence(
+                            self.d.num(f, "solvers", k, "max_violation", fmt=".0e")
+                            if r["max_violation"] >= 1e-12
+                            else Text("0")
+                        ),
+                        goal,
+                    ]
+                )
+        self.tables["solvers"] = table

@@ -1,0 +1,192 @@
+"""The paper's tables: closed-loop outcomes, solvers and evidence runs."""
+
+from __future__ import annotations
+
+from ....core.controllers import Name
+from ..document import Section, Table
+from ..trace import Math, Ref, Sentence, sentence
+from .base import (
+    DT,
+    ERR,
+    M_SYM,
+    W_M,
+    StoryBase,
+    bare,
+    eq,
+)
+
+
+class Tables(StoryBase):
+    # ------------------------------------------------------------------ tables
+    def outcome_table(self, sections: list[Section]) -> None:
+        header = [
+            sentence("controller"),
+            sentence("goal"),
+            sentence("mean ", M_SYM),
+            sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
+            sentence("max ", Math(r"|\dot q|", "|<i>q̇</i>|")),
+            sentence("scaled"),
+        ]
+        table = Table(
+            "outcomes",
+            sentence(
+                "Closed-loop outcomes: time to goal (s; ",
+                ERR,
+                " < 1 mm) or final error (m), mean manipulability (m²), total effort "
+                "(rad²/s), largest joint speed (rad/s), task-scaled steps.",
+            ),
+            header,
+            align="lrrrrr",
+        )
+        for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
+            table.rows.append([sentence(title)])
+            for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
+                goal = (
+                    sentence(bare(self.ttg(task, name)))
+                    if self.mv(task, name, "reached")
+                    else sentence("(", self.mt(task, name, "final_error", ".3f"), " m)")
+                )
+                table.rows.append(
+                    [
+                        sentence(name),
+                        goal,
+                        sentence(self.mt(task, name, "mean_manipulability", ".3f")),
+                        sentence(self.mt(task, name, "total_effort", ".2f")),
+                        sentence(self.mt(task, name, "max_abs_qd", ".2f")),
+                        sentence(self.mt(task, name, "scaled_steps", "d")),
+                    ]
+                )
+        self.tables["outcomes"] = table
+        for s in sections:
+            if s.key == "task1":
+                s.tables.append("outcomes")
+
+    def e3_row(self) -> list[Sentence] | None:
+        """Table II's E3: the first weight setting of the grid that misses the goal, re-run with
+        a five times smaller time step, against itself at the nominal step (Section III-B)."""
+        grid = "data/task1-pareto-UC-EMDM/weight_grid.json"
+        if not self.d.exists(grid):
+            return None
+        runs = self.d.value(grid, "runs")
+        missed = [i for i, r in enumerate(runs) if not r.get("reached")]
+        if not missed or "total_effort" not in runs[missed[0]].get("finer_dt", {}):
+            return None
+        i = missed[0]
+        finer = runs[i]["finer_dt"]
+        cells = [
+            sentence(
+                self.d.num(grid, "runs", i, "finer_dt", "time_to_goal", fmt=".2f")
+                if finer["reached"]
+                else "stall",
+                " (stall)",
+            )
+        ]
+        for metric, fmt, nominal in (
+            ("mean_manipulability", ".3f", ".3f"),
+            ("total_effort", ".1f", ".0f"),  # one column: 20.1 (11749)
+        ):
+            cells.append(
+                sentence(
+                    self.d.num(grid, "runs", i, "finer_dt", metric, fmt=fmt),
+                    " (",
+                    self.d.num(grid, "runs", i, metric, fmt=nominal),
+                    ")",
+                )
+            )
+        # both changes from the nominal run: the weights (Section III-B's failing setting) and
+        # the time step (over five)
+        slower = self.d.value("data/task1/metrics.json", "scenario", "motion", "dt") / finer["dt"]
+        change = sentence(
+            DT, f"/{slower:.0f}, ", *eq(W_M, self.d.num(grid, "runs", i, "w_manip", fmt=".4g"))
+        )
+        return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
+
+    def evidence_table(self, sections: list[Section]) -> None:
+        items = [
+            ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
+            ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
+            ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
+            (
+                "E5",
+                "t2-c-ivkc-wide-limits",
+                Name.C_IVKC,
+                sentence(Math(r"|q|\leq3", "|<i>q</i>| ≤ 3"), " rad"),
+                None,
+            ),
+            ("E6", "t2-c-emdm-no-manip", Name.C_EMDM, sentence(W_M, " = 0"), None),
+            (
+                "E7",
+                "t2-c-emdm-tight-slack",
+                Name.C_EMDM,
+                sentence(Math(r"|\delta|\leq0.1", "|δ| ≤ 0.1"), " m/s"),
+                None,
+            ),
+            (
+                "E8",
+                "t2-uc-emdm-stiff-slack",
+                Name.UC_EMDM,
+                sentence(Math(r"c_S=10^4", "<i>c</i><sub>S</sub> = 10<sup>4</sup>")),
+                None,
+            ),
+        ]
+        table = Table(
+            "evidence",
+            sentence(
+                "Evidence runs: one change to a nominal run, and its outcomes as evidence "
+                "(nominal; E3's: its weights at the nominal ",
+                DT,
+                ", ",
+                Ref("sec", "t1-pareto"),
+                "); stall: goal not reached.",
+            ),
+            [
+                sentence("run"),
+                sentence("task, ctrl."),
+                sentence("change"),
+                sentence("goal (s)"),
+                sentence("mean ", M_SYM),
+                sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
+            ],
+            align="lllrrr",
+            font="scriptsize",
+            colsep=2.5,  # six columns of two numbers each at column width
+        )
+        for label, key, ctrl, change, _kind in items:
+            entry = self.evid(key)
+            task = entry["task"]
+            run = entry["runs"].get(ctrl, {})
+            cells: list[Sentence] = []
+            for metric, fmt in (
+                ("time_to_goal", ".2f"),
+                ("mean_manipulability", ".3f"),
+                ("total_effort", ".2f"),
+            ):
+                if "error" in run:
+                    cells.append(sentence("no solution"))
+                    continue
+                stall = metric == "time_to_goal"
+                new = (
+                    sentence("stall")
+                    if stall and not run["reached"]
+                    else sentence(self.evidn(key, "runs", ctrl, metric, fmt=fmt))
+                )
+                old = (
+                    sentence("stall")
+                    if stall and not self.mv(task, ctrl, "reached")
+                    else sentence(self.mt(task, ctrl, metric, fmt))
+                )
+                cells.append(new + sentence(" (") + old + sentence(")"))
+            table.rows.append(
+                [
+                    sentence(label),
+                    sentence("1" if task == "task1" else "2", ", ", ctrl),
+                    change,
+                    *cells,
+                ]
+            )
+            if label == "E2" and (e3 := self.e3_row()):
+                table.rows.append(e3)
+        self.tables["evidence"] = table
+        for s in sections:
+            if s.key == "t2-c":
+                s.tables.append("evidence")

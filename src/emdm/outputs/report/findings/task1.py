@@ -1,0 +1,469 @@
+"""Task 1: the redundant three-link arm (Tasks 1.1 and 1.2, the Pareto fronts, the custom solver)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ....core.controllers import Name
+from ..config import PAIRS
+from ..document import Section
+from ..trace import Math, Ref, Sentence, Text, sentence
+from .base import (
+    ALPHA,
+    COND_J,
+    DT,
+    E_SYM,
+    ERR,
+    M_SYM,
+    MRATE,
+    RATIO,
+    T_EQ,
+    W_M,
+    StoryBase,
+    _words,
+    eq,
+)
+
+
+class Task1(StoryBase):
+    def task1_uc(self) -> Section:
+        t = "task1"
+        ivkc, emdm = PAIRS["UC"]
+        sec = Section("t1-uc", "Task 1.1: UC-EMDM against UC-IVKC", level=2, brief="1.1")
+        same_time = self.mv(t, ivkc, "time_to_goal") == self.mv(t, emdm, "time_to_goal")
+        gap = self.pairn(
+            t,
+            "UC",
+            "max_path_gap",
+            ".1e" if self.pair(t, "UC", "max_path_gap") < 1e-3 else ".4f",
+            "m",
+        )
+        answer = sentence(f"{emdm} tracks the goal as {ivkc} does (")
+        if same_time and self.mv(t, emdm, "reached"):
+            answer += sentence("both reach it in ", self.ttg(t, emdm))
+        else:
+            answer += sentence(
+                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
+            )
+        answer += sentence(
+            "; their end-effector paths differ by at most ",
+            gap,
+            "; distances to the goal in ",
+            Ref("fig", "t1-uc"),
+            "(c)) and raises the mean manipulability by ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            " (",
+            self.mt(t, emdm, "mean_manipulability", ".3f"),
+            " against ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
+            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            ").",
+        )
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 1.1: implement and compare UC-EMDM and UC-IVKC; discuss tracking "
+                "and manipulability",
+                answer,
+            )
+        )
+        sec.figures.append(self.figure("t1-uc", "figures/task1-UC", self.pair_caption(t, "UC")))
+        # why the tracking is the same
+        p = sentence(
+            "Both programs impose ",
+            Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+            " exactly, so the end effector follows the same path; only the second-order term of "
+            "the Euler step separates the two. The controllers differ in their null-space motion "
+            "alone: with ",
+            W_M,
+            " = 0 (E1) ",
+        )
+        ref = self.evid("t1-uc-no-manip", "reference")
+        if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
+            p += sentence(f"{emdm} reproduces {ivkc} command for command. ")
+        else:
+            p += sentence(
+                f"{emdm} differs from {ivkc} by at most ",
+                self.evidn(
+                    "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
+                ),
+                ". ",
+            )
+        p += sentence(
+            "That motion raises ",
+            M_SYM,
+            " to ",
+            self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
+            f" ({ivkc}: ",
+            self.mt(t, ivkc, "final_manipulability", ".3f", "m²"),
+            ") and is paid for early: ",
+            self.ev(t, ivkc, "effort", "share_first_second", fmt=".0%"),
+            " and ",
+            self.ev(t, emdm, "effort", "share_first_second", fmt=".0%"),
+            " of the total effort fall in the first second, where ",
+            ERR,
+            " is largest. Neither controller sees the joint limits: ",
+        )
+        for name in (ivkc, emdm):
+            if self.evv(t, name, "limits", "max_excess") > 0:
+                p += sentence(
+                    f"{name} leaves joint ",
+                    self.ev(t, name, "limits", "excess_joint", fmt="d"),
+                    "'s range by ",
+                    self.ev(t, name, "limits", "max_excess", fmt=".3f", unit="rad"),
+                    ", ",
+                )
+        p += sentence(
+            "and the two command up to ",
+            self.ev(t, ivkc, "limits", "max_abs_qd", fmt=".2f"),
+            " and ",
+            self.ev(t, emdm, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
+            " (limit ",
+            self.d.num(
+                f"data/{t}/metrics.json", "scenario", "arm", "qd_max", 0, fmt=".1f", unit="rad/s"
+            ),
+            ").",
+        )
+        sec.paragraphs.append(p)
+        return sec
+
+    def task1_c(self) -> Section:
+        t = "task1"
+        ivkc, emdm = PAIRS["C"]
+        sec = Section("t1-c", "Task 1.2: C-EMDM against C-IVKC", level=2, brief="1.2")
+        answer = sentence(
+            "Both constrained controllers (",
+            Ref("fig", "t1-c"),
+            f") keep every joint outside its stop zone and within its speed limit; {emdm} ",
+            *self.outcome(t, emdm),
+            f" and {ivkc} ",
+            *self.outcome(t, ivkc),
+        )
+        scaled = self.evv(t, emdm, "scaling")
+        if scaled:
+            answer += sentence(
+                ", later than the UC pair because the task is scaled for the first ",
+                self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
+            )
+        answer += sentence(
+            f", and {emdm} again raises the mean manipulability (",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            ").",
+        )
+        sec.answer = answer
+        self.answers.append(
+            ("Task 1.2: implement and compare C-EMDM and C-IVKC, same analysis", answer)
+        )
+        sec.figures.append(self.figure("t1-c", "figures/task1-C", self.pair_caption(t, "C")))
+        same = self.pair(t, "C", "coincide_steps")
+        if same:
+            p = sentence(
+                "The commands are identical for the first ",
+                self.pairn(t, "C", "coincide_steps", "d"),
+                " steps (until ",
+                T_EQ,
+                self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
+                ") because the bounds leave no choice: at the largest feasible ",
+                ALPHA,
+                " the admissible set is a single point (two joints at their bounds leave one "
+                "unknown for two task equations), so the objective has nothing to choose. ",
+            )
+            scaled_steps = self.pair(t, "C", "coincide_scaled_steps")
+            determined = self.pair(t, "C", "coincide_determined_steps")
+            p += sentence(
+                self.pairn(t, "C", "coincide_scaled_steps", "d"),
+                " of these steps are scaled",
+            )
+            if determined == same and scaled_steps < same:
+                p += sentence(
+                    "; on the other ",
+                    _words(same - scaled_steps),
+                    " joints at their bounds again fix the command",
+                )
+            coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
+            if coincide:  # (with none in common, the next paragraph's E2 says enough)
+                p += sentence(
+                    ". With the slack policy instead of scaling (E2) the commands coincide for "
+                    "only ",
+                    self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"),
+                    " steps",
+                )
+            p += sentence(".")
+            sec.paragraphs.append(p)
+            sec.paragraphs.append(self.policy_weighed())
+        pinned = self.evv(t, emdm, "pinned")
+        p = sentence()
+        if pinned:
+            p += sentence("Over the run, ")
+            shown = min(len(pinned), 2)
+            for i, e in enumerate(pinned[:shown]):
+                p += sentence(
+                    "joint ",
+                    self.ev(t, emdm, "pinned", i, "joint", fmt="d"),
+                    f" of {emdm} runs along its {e['side']} {e['kind']} bound from ",
+                    self.ev(t, emdm, "pinned", i, "t0", fmt=".2f"),
+                    " to ",
+                    self.ev(t, emdm, "pinned", i, "t1", fmt=".2f", unit="s"),
+                    " and " if i < shown - 1 else ". ",
+                )
+        p += sentence(
+            "Against the UC pair, capped speeds change the effort by ",
+            self.pct(t, ivkc, Name.UC_IVKC, "total_effort"),
+            " (IVKC) and ",
+            self.pct(t, emdm, Name.UC_EMDM, "total_effort"),
+            " (EMDM)",
+        )
+        qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, Name.UC_EMDM, "final_q")
+        if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
+            p += sentence(
+                f", and {emdm} ends in the configuration UC-EMDM reaches (",
+                M_SYM,
+                " = ",
+                self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
+                ")",
+            )
+        p += sentence(".")
+        sec.paragraphs.append(p)
+        return sec
+
+    def pareto(self) -> Section:
+        sec = Section("t1-pareto", "Task 1: Pareto fronts and weights", level=2, brief="1.1-1.2")
+        uc, c = "data/task1-pareto-UC-EMDM/fronts.json", "data/task1-pareto-C-EMDM/fronts.json"
+        if not self.d.exists(uc):
+            return sec
+        cap = sentence(
+            "Pareto fronts between effort ",
+            E_SYM,
+            " and manipulability rate ",
+            MRATE,
+            " at ",
+            Math(
+                r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
+                "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
+            ),
+            " (columns 1-4), each point the step's optimum for one ",
+            RATIO,
+            " (colour; circle: the nominal 50); right: whole runs per weight setting.",
+        )
+        sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
+        answer = sentence(
+            "The fronts (",
+            Ref("fig", "pareto"),
+            ") show what the weights buy: at k = 0, raising ",
+            RATIO,
+            " from 0 to its largest value moves UC-EMDM's optimum from ",
+            *eq(MRATE, self.d.num(uc, "steps", 0, "M_min", fmt=".3g")),
+            " to ",
+            self.d.num(uc, "steps", 0, "M_max", fmt=".3g", unit="m²/s"),
+            " at an effort growing from ",
+            self.d.num(uc, "steps", 0, "E_min", fmt=".3g"),
+            " to ",
+            self.d.num(uc, "steps", 0, "E_max", fmt=".3g", unit="rad²/s²"),
+            "; ",
+        )
+        shares = [
+            (info["nominal_E_log_pct"], i)
+            for i, info in enumerate(self.d.value(uc, "steps"))
+            if info.get("nominal_E_log_pct") is not None
+        ]
+        if shares:
+            answer += sentence(
+                "on every UC-EMDM front the nominal ratio lies in the lowest ",
+                self.d.num(uc, "steps", max(shares)[1], "nominal_E_log_pct", fmt=".0f"),
+                "% of the effort range (log scale), costing ",
+            )
+        else:
+            answer += sentence("the nominal ratio costs ")
+        e0 = self.d.value(uc, "steps", 0, "zero_E")
+        en = self.d.value(uc, "steps", 0, "nominal_E")
+        answer += sentence(
+            self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
+            if e0 > 0
+            else Text("little"),
+            " effort over the effort-minimal optimum (ratio 0) at k = 0" if en >= e0 else " effort",
+        )
+        i = self.dearest_later(uc)
+        if i is not None:  # dearer later: say so
+            answer += sentence(
+                " but up to ",
+                self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
+                " at k = ",
+                self.d.num(uc, "steps", i, "k", fmt="d"),
+            )
+        answer += sentence(".")
+        sec.answer = answer
+        self.answers.append(("Task 1: Pareto front between E and M at t = 0, T/3, 2T/3, T", answer))
+        # degenerate and saturated fronts of C-EMDM
+        p: Sentence = []
+        if self.d.exists(c):
+            csteps = self.d.value(c, "steps")
+            for i, info in enumerate(csteps):
+                if info["degenerate"]:
+                    p += sentence(
+                        "C-EMDM's front at k = ",
+                        self.d.num(c, "steps", i, "k", fmt="d"),
+                        " is a single point no weight can move (the task-scaled step, ",
+                        *eq(ALPHA, self.d.num(c, "steps", i, "alpha", fmt=".2f")),
+                        "). ",
+                    )
+            sat = [(i, s) for i, s in enumerate(csteps) if s["saturated_from_ratio"] is not None]
+            if sat:
+                i, _ = sat[0]
+                p += sentence(
+                    "At k = ",
+                    self.d.num(c, "steps", i, "k", fmt="d"),
+                    " the front saturates: every ",
+                    RATIO,
+                    " from ",
+                    self.d.num(c, "steps", i, "saturated_from_ratio", fmt=".3g"),
+                    " on gives the same optimum, a vertex of the joint bounds, so more weight on ",
+                    MRATE,
+                    " buys nothing. ",
+                )
+        # the weight grid: failures
+        grid_file = "data/task1-pareto-UC-EMDM/weight_grid.json"
+        rows = self.d.value(grid_file, "runs")
+        for i, r in enumerate(rows):
+            if r.get("reached") or "finer_dt" not in r:
+                continue
+            p += sentence(
+                "At ",
+                *eq(RATIO, self.d.num(grid_file, "runs", i, "w_manip", fmt=".4g")),
+                Text("/"),
+                self.d.num(grid_file, "runs", i, "w_effort", fmt=".2g"),
+                " UC-EMDM fails to reach the goal (final error ",
+                self.d.num(grid_file, "runs", i, "final_error", fmt=".3f", unit="m"),
+                "): its largest joint speed reaches ",
+                self.d.num(grid_file, "runs", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
+                ", and a step of ",
+                self.d.num(
+                    "data/task1/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
+                ),
+                " at that speed leaves the linearisation ",
+                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                " far behind. ",
+            )
+            finer = r["finer_dt"]
+            if finer.get("reached"):
+                p += sentence(
+                    "The same weights with ",
+                    *eq(
+                        DT, self.d.num(grid_file, "runs", i, "finer_dt", "dt", fmt=".2f", unit="s")
+                    ),
+                    " reach the goal in ",
+                    self.d.num(
+                        grid_file, "runs", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"
+                    ),
+                    " (evidence E3): the failure is the discretisation, not the program. ",
+                )
+            break
+        if p:
+            sec.paragraphs.append(p)
+        return sec
+
+    def task1_solver(self) -> Section:
+        t = "task1"
+        sec = Section(
+            "t1-solver", "Task 1: custom solver, fallback, convergence", level=2, brief="1.1"
+        )
+        fallbacks = self.mv(t, Name.UC_EMDM, "fallback_steps") + self.mv(
+            t, Name.C_EMDM, "fallback_steps"
+        )
+        answer = sentence(
+            "The custom active-set solver returned a certified optimum (relative KKT residual at "
+            "most ",
+            Math("10^{-9}", "10<sup>−9</sup>"),
+            ") at every step of UC-EMDM (",
+            self.mt(t, Name.UC_EMDM, "steps", "d"),
+            ") and C-EMDM (",
+            self.mt(t, Name.C_EMDM, "steps", "d"),
+            "), so the off-the-shelf fallback (daqp, then quadprog) ",
+        )
+        if fallbacks == 0:
+            answer += sentence("was never needed.")
+        else:
+            answer += sentence(
+                "answered ",
+                self.mt(t, Name.UC_EMDM, "fallback_steps", "d"),
+                " and ",
+                self.mt(t, Name.C_EMDM, "fallback_steps", "d"),
+                " of them.",
+            )
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 1.1: custom solver, off-the-shelf fallback, convergence "
+                "behaviour, numerical challenges",
+                answer,
+            )
+        )
+        p = sentence(
+            "Started from the previous step's working set where that is still optimal, else "
+            "from an exact feasible point, it takes a median of ",
+            self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
+            " and at most ",
+            self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
+            " iterations, each an exact equality-constrained solve",
+        )
+        lab = "data/task1-lab-C-EMDM/solvers.json"
+        ch: dict[str, Any] = {}
+        if self.d.exists(lab):
+            ch = self.d.value(lab, "challenges", "solvers")
+        if "median_iterations_scaled" in ch.get("active-set", {}):
+            p += sentence(
+                "; on scaled steps it takes ",
+                self.d.num(
+                    lab,
+                    "challenges",
+                    "solvers",
+                    "active-set",
+                    "median_iterations_scaled",
+                    fmt=".0f",
+                ),
+                ", the feasible point being the optimum",
+            )
+        p += sentence(
+            ". Those scaled steps are Task 1's numerical challenge: their admissible set is a "
+            "single, degenerate vertex",
+        )
+        if "median_iterations_scaled" in ch.get("admm", {}):
+            p += sentence(
+                ". First-order ADMM needs ",
+                self.d.num(
+                    lab, "challenges", "solvers", "admm", "median_iterations_scaled", fmt=".4g"
+                ),
+                " iterations there against ",
+                self.d.num(
+                    lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".4g"
+                ),
+                " elsewhere",
+            )
+        rows = self.d.value(lab, "solvers") if self.d.exists(lab) else {}
+        notes = (
+            self.d.value(lab, "notes") if self.d.exists(lab) and "notes" in self.d.load(lab) else {}
+        )
+        qp = rows.get("quadprog", {})
+        if qp.get("failures"):
+            p += sentence(
+                ", and quadprog declines "
+                if "median_iterations_scaled" in ch.get("admm", {})
+                else ". The quadprog solver declines ",
+                self.d.num(lab, "solvers", "quadprog", "failures", fmt="d"),
+                " of the ",
+                self.d.num(lab, "solvers", "quadprog", "resolved_steps", fmt="d"),
+                " C-EMDM programs the solver lab re-solves",
+            )
+            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp["failures"]:
+                p += sentence(", all scaled ones")
+        p += sentence(
+            ". Otherwise Task 1 is benign: ",
+            COND_J,
+            " peaks at ",
+            self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
+            " along the whole runs and the programs have no slack.",
+        )
+        sec.paragraphs.append(p)
+        return sec

@@ -1,0 +1,514 @@
+"""Task 2: the non-redundant two-link arm (Tasks 2.1 and 2.2, its numerical challenges)."""
+
+from __future__ import annotations
+
+from ....core.controllers import Name
+from ..config import PAIRS
+from ..document import Section
+from ..trace import Math, Ref, Sentence, sentence
+from .base import (
+    ALPHA,
+    C_S,
+    COND_J,
+    DELTA,
+    ERR,
+    M_SYM,
+    T_EQ,
+    W_S,
+    StoryBase,
+    eq,
+    q,
+)
+
+
+class Task2(StoryBase):
+    # ------------------------------------------------------------------ Task 2
+    def task2_c(self) -> Section:
+        t = "task2"
+        ivkc, emdm = PAIRS["C"]
+        sec = Section("t2-c", "Task 2.1: C-EMDM against C-IVKC", level=2, brief="2.1")
+        reached_e, reached_i = self.mv(t, emdm, "reached"), self.mv(t, ivkc, "reached")
+        answer = sentence(
+            f"{emdm} ",
+            *self.outcome(t, emdm),
+            f"; {ivkc} ",
+            *self.outcome(t, ivkc),
+            " (",
+            Ref("fig", "t2-c"),
+            ", ",
+            Ref("tab", "outcomes"),
+            ")",
+        )
+        if reached_e and not reached_i:
+            answer += sentence(": one can leave the straight line to the goal, the other cannot")
+            e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+            if e4.get("reached"):  # the like-for-like comparison, beside the headline
+                answer += sentence(
+                    f". With a slack like {emdm}'s instead of task scaling (E4), {ivkc} "
+                    "arrives as well, in ",
+                    self.evid_goal("t2-c-ivkc-slack-policy", ivkc),
+                )
+            answer += sentence(".")
+        else:
+            answer += sentence(".")
+        sec.answer = answer
+        self.answers.append(
+            (
+                "Task 2.1: compare C-EMDM and C-IVKC in tracking, manipulability and time to goal",
+                answer,
+            )
+        )
+        geo = self.d.value(f"data/{t}/events.json", "geometry")
+        g = f"data/{t}/events.json"
+        if geo:
+            sec.figures.append(
+                self.figure(
+                    "workspace",
+                    "figures/workspace",
+                    sentence(
+                        "Task 2 in the workspace: the straight line to the goal enters the disc "
+                        "the arm cannot reach with ",
+                        Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
+                        " outside its stop zone (hatched); C-IVKC stalls on its edge, C-EMDM "
+                        "goes around and flips its elbow into the only goal configuration within "
+                        "the limits.",
+                    ),
+                )
+            )
+            sols = geo["solutions"]
+            inside = [i for i, s in enumerate(sols) if s["within_limits"]]
+            outside = [i for i, s in enumerate(sols) if not s["within_limits"]]
+            p: Sentence = []
+            if inside and outside:
+                i, o = inside[0], outside[0]
+                p += sentence(
+                    "Within the joint limits the goal has one configuration, elbow ",
+                    sols[i]["elbow"],
+                    ", ",
+                    Math("q", "<i>q</i>"),
+                    " = (",
+                    self.d.num(g, "geometry", "solutions", i, "q1", fmt=".2f"),
+                    ", ",
+                    self.d.num(g, "geometry", "solutions", i, "q2", fmt=".2f"),
+                    ") rad; the elbow-",
+                    sols[o]["elbow"],
+                    " one",
+                    " (the side the arm starts on)"
+                    if geo.get("start_elbow") == sols[o]["elbow"]
+                    else "",
+                    " needs ",
+                    q(sols[o]["outside_joint"]),
+                    " = ",
+                    self.d.num(
+                        g,
+                        "geometry",
+                        "solutions",
+                        o,
+                        f"q{sols[o]['outside_joint']}",
+                        fmt=".2f",
+                        unit="rad",
+                    ),
+                    ", ",
+                    self.d.num(g, "geometry", "solutions", o, "outside_by", fmt=".2f", unit="rad"),
+                    " beyond its limit. ",
+                )
+            if geo["line_blocked"]:
+                p += sentence(
+                    "With ",
+                    Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
+                    " outside its stop zone (at most ",
+                    self.d.num(g, "geometry", "max_fold", fmt=".3f", unit="rad"),
+                    ") the end effector cannot come closer than ",
+                    self.d.num(g, "geometry", "inner_reach", fmt=".3f", unit="m"),
+                    " to the base, yet the straight line to the goal passes ",
+                    self.d.num(g, "geometry", "line_min_distance", fmt=".3f", unit="m"),
+                    " from it and enters that disc ",
+                    self.d.num(g, "geometry", "line_enters_at", fmt=".3f", unit="m"),
+                    " after the start (",
+                    Ref("fig", "workspace"),
+                    ").",
+                )
+            if p:
+                sec.paragraphs.append(p)
+        stall = self.evv(t, ivkc, "stall")
+        if stall:
+            p = sentence(
+                "A non-redundant arm without slack has one command per task velocity, and scaling "
+                f"keeps its direction: {ivkc} can only slow down along the line. ",
+            )
+            sc = self.evv(t, ivkc, "scaling")
+            if sc:
+                p += sentence(
+                    "Scaled from the first step (",
+                    *eq(ALPHA, self.ev(t, ivkc, "scaling", "initial_alpha", fmt=".2f")),
+                    ")",
+                )
+            pins = self.evv(t, ivkc, "pinned")
+            if pins:
+                p += sentence(
+                    ", joint ",
+                    self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
+                    f" runs on its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                    self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
+                    " to the end",
+                )
+            p += sentence(
+                ", it freezes ",
+                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
+                " from the goal after ",
+                self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
+                " of progress (",
+                T_EQ,
+                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+                "), joint ",
+                self.ev(t, ivkc, "stall", "joint", fmt="d"),
+                " at the edge of its stop zone",
+            )
+            if sc and sc["zero_from_t"] is not None:
+                p += sentence(
+                    "; from ",
+                    T_EQ,
+                    self.ev(t, ivkc, "scaling", "zero_from_t", fmt=".2f", unit="s"),
+                    " on, its damper bound is 0 and so is ",
+                    ALPHA,
+                    ".",
+                )
+            else:
+                p += sentence(".")
+            sec.paragraphs.append(p)
+        if reached_e:
+            p = sentence(
+                "The slack (up to ",
+                *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
+                ") lets ",
+                emdm,
+                " leave the line: its path is ",
+                self.ev(t, emdm, "path_length", fmt=".2f", unit="m"),
+                " long, ",
+                self.ev(t, emdm, "detour", fmt=".0%"),
+                " longer than the line. ",
+            )
+            pins = self.evv(t, emdm, "pinned")
+            if pins:
+                p += sentence(
+                    "Joint ",
+                    self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
+                    f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound for ",
+                    self.ev(t, emdm, "pinned", 0, "duration", fmt=".2f", unit="s"),
+                    " (",
+                    self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
+                    "-",
+                    self.ev(t, emdm, "pinned", 0, "t1", fmt=".2f", unit="s"),
+                    ") while the arm stretches; ",
+                )
+            flips = self.evv(t, emdm, "singular", "elbow_flips")
+            if flips:
+                p += sentence(
+                    "at ",
+                    T_EQ,
+                    self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
+                    " it passes the singular stretched configuration (",
+                    *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
+                    ", ",
+                    *eq(COND_J, self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g")),
+                    ") and flips its elbow into the admissible goal configuration.",
+                )
+            sec.paragraphs.append(p)
+        # evidence (their numbers are in the evidence table)
+        p = sentence("The evidence runs (", Ref("tab", "evidence"), ") isolate the causes. ")
+        e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+        e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
+        if not reached_i and (e4.get("reached") or e5.get("reached")):
+            p += sentence(f"{ivkc} reaches the goal ")
+            if e4.get("reached"):
+                p += sentence("with a slack (E4, flipping its elbow)")
+            if e4.get("reached") and e5.get("reached"):
+                p += sentence(" and ")
+            if e5.get("reached"):
+                p += sentence("with the joint limits widened to ±3 rad (E5)")
+            p += sentence(
+                ": the stall comes from keeping the task direction under the limits, not from "
+                "IVKC. "
+            )
+        e6 = self.evid("t2-c-emdm-no-manip", "runs", emdm)
+        if e6.get("reached") and reached_e:
+            if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
+                higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
+                p += sentence(
+                    f"Without the dexterity term {emdm} still arrives, and sooner (E6, ",
+                    self.evid_goal("t2-c-emdm-no-manip", emdm),
+                    ")",
+                    *(
+                        (
+                            ", with a higher mean ",
+                            M_SYM,
+                            " (",
+                            self.evidn(
+                                "t2-c-emdm-no-manip",
+                                "runs",
+                                emdm,
+                                "mean_manipulability",
+                                fmt=".3f",
+                            ),
+                            " against ",
+                            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+                            "): on this arm the term works against its own purpose, and the "
+                            "slack, not the term, carries it to the goal, contrary to what the "
+                            "brief expects",
+                        )
+                        if higher
+                        else (
+                            ": the slack carries it to the goal and the dexterity term slows it "
+                            "down, contrary to what the brief expects",
+                        )
+                    ),
+                )
+            else:
+                p += sentence(
+                    f"Without the dexterity term {emdm} still arrives (E6): the slack carries it"
+                )
+            e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
+            if not e7.get("reached", True):
+                p += sentence("; with its slack bounded by 0.1 m/s it stalls (E7)")
+            p += sentence(".")
+        sec.paragraphs.append(p)
+        p = sentence(
+            emdm,
+            "'s mean ",
+            M_SYM,
+            " is ",
+            self.mt(t, emdm, "mean_manipulability", ".3f"),
+            " against ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
+            " (",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            ")",
+        )
+        if reached_e and not reached_i and self.evv(t, emdm, "singular", "near"):
+            p += sentence(
+                " because its route crosses ",
+                M_SYM,
+                " = 0 while ",
+                ivkc,
+                " stands still",
+            )
+            # each mean is over its own run: the stall's 30 s weigh in, so the common window too
+            g = f"data/{t}/events.json"
+            p += sentence(
+                " (",
+                ivkc,
+                "'s over its ",
+                self.mt(t, ivkc, "final_time", ".0f", "s"),
+                "; over the first ",
+                self.d.num(g, "pairs", "C", "common_until_t", fmt=".2f", unit="s"),
+                " of both, ",
+                self.d.num(g, "pairs", "C", "mean_m_common", emdm, fmt=".3f"),
+                " against ",
+                self.d.num(g, "pairs", "C", "mean_m_common", ivkc, fmt=".3f", unit="m²"),
+                ")",
+            )
+        p += sentence(
+            "; its effort is ",
+            self.mt(t, emdm, "total_effort", ".2f"),
+            " against ",
+            self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
+            ".",
+        )
+        sec.paragraphs.append(p)
+        if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
+            peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
+            caption = sentence(
+                "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
+                "solid, EMDM dashed): "
+            ) + self.panels(gap=True)
+            caption += sentence(
+                ", on the constrained runs' scale (unconstrained peaks up to ",
+                self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
+                ")",
+            )
+            # time axes end at the last arrival when the runs that missed had stalled by then
+            # (paper_figures.time_end, the same rule on the same records)
+            four = (*PAIRS["UC"], *PAIRS["C"])
+            missed = [c for c in four if not self.mv(t, c, "reached")]
+            last = max((self.mv(t, c, "time_to_goal") for c in four if c not in missed), default=0)
+            if missed and all(
+                self.evv(t, c, "stall") and self.evv(t, c, "stall", "t") <= last for c in missed
+            ):
+                caption += sentence(
+                    "; time axes end at the last arrival (",
+                    ", ".join(missed),
+                    " stalled)",
+                )
+            caption += sentence(".")
+            sec.figures.append(self.figure("t2-c", "figures/task2-all", caption))
+        else:
+            sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
+        return sec
+
+    def task2_uc(self) -> Section:
+        t = "task2"
+        ivkc, emdm = PAIRS["UC"]
+        sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
+        if self.d.exists("paper/figures/task2-UC.png"):  # the page's; the paper's is Fig. t2-c
+            sec.figures.append(
+                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
+            )
+        shown = "t2-c" if self.d.exists("paper/figures/task2-all.png") else "t2-uc"
+        answer = (
+            sentence(
+                f"Both unconstrained controllers reach the goal ({ivkc} in ",
+                self.ttg(t, ivkc),
+                f", {emdm} in ",
+                self.ttg(t, emdm),
+                "), but only by leaving the joint limits",
+            )
+            if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
+            else sentence(
+                f"{ivkc} ",
+                *self.outcome(t, ivkc),
+                f"; {emdm} ",
+                *self.outcome(t, emdm),
+            )
+        )
+        outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
+        if outside:
+            answer += sentence(" (")
+            for i, c in enumerate(outside):
+                joints = [
+                    j for j, x in enumerate(self.evv(t, c, "limits", "excess_by_joint")) if x > 0
+                ]
+                answer += sentence("; " if i else "", f"{c}: ")
+                for n, j in enumerate(joints):
+                    answer += sentence(
+                        ", " if n else "",
+                        f"joint {j + 1} by up to " if n == 0 else f"joint {j + 1} by ",
+                        self.ev(t, c, "limits", "excess_by_joint", j, fmt=".2f", unit="rad"),
+                    )
+            answer += sentence(") into the elbow-up configuration the constrained pair cannot use")
+        answer += sentence(
+            f"; against {ivkc}, {emdm}'s total effort differs by ",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            " and its mean ",
+            M_SYM,
+            " by ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            ", as the slack absorbs up to ",
+            *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
+            " of the desired velocity (",
+            Ref("tab", "outcomes"),
+            *((", ", Ref("fig", shown), "(c)") if self.has_figure(shown) else ()),
+            ").",
+        )
+        sec.answer = answer
+        self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))
+        p = sentence()
+        e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
+        if e8.get("reached"):
+            p += sentence(
+                "E8: with ",
+                *eq(
+                    C_S,
+                    self.d.num(
+                        "data/evidence.json",
+                        "runs",
+                        "t2-uc-emdm-stiff-slack",
+                        "overrides",
+                        "weights.slack",
+                        fmt=".0e",
+                    ),
+                ),
+                " the slack vanishes and ",
+                emdm,
+                " behaves like ",
+                ivkc,
+                " (goal in ",
+                self.evid_goal("t2-uc-emdm-stiff-slack", emdm),
+                ", effort ",
+                self.evidn(
+                    "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
+                ),
+                "): the slack is what saves effort, by giving up ",
+                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                " while ",
+                ERR,
+                " is large.",
+            )
+        sec.paragraphs.append(p)
+        return sec
+
+    def task2_challenges(self) -> Section:
+        t = "task2"
+        emdm = Name.C_EMDM
+        f = "data/task2-lab-C-EMDM/solvers.json"
+        sec = Section(
+            "t2-challenges", "Task 2: convergence and numerical challenges", level=2, brief="2.1"
+        )
+        answer = sentence(
+            "Two things make Task 2's programs harder than Task 1's: the slack weight ",
+            W_S,
+            " grows from ",
+            self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
+            " to ",
+            self.ev(t, emdm, "conditioning", "w_slack_max_solved", fmt=".3g"),
+            " over the solved steps as the error shrinks, and the singular passage drives ",
+            COND_J,
+            " to ",
+            self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
+            " at ",
+            T_EQ,
+            self.ev(t, emdm, "conditioning", "t_cond_J_max", fmt=".2f", unit="s"),
+            ".",
+        )
+        sec.answer = answer
+        self.answers.append(("Task 2.1: convergence behaviour and numerical challenges", answer))
+        sec.figures.append(
+            self.figure(
+                "conditioning",
+                "figures/conditioning",
+                sentence(
+                    "Task 2 C-EMDM along its run: ",
+                    COND_J,
+                    " and ",
+                    W_S,
+                    " at every state (top); iterations of the closed-loop solver at every step "
+                    "and of three others on the re-solved steps (bottom).",
+                ),
+                paper=False,
+            )
+        )
+        p = sentence()
+        if self.d.exists(f):
+            p += sentence(
+                "The reduced Hessian's condition number reaches ",
+                self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
+                "; at ",
+                M_SYM,
+                " = 0, where ",
+                M_SYM,
+                " is not differentiable, ",
+                Math("J_m", "<i>J</i><sub>m</sub>"),
+                " is the steepest one-sided ascent. The active-set method does not notice (a "
+                "median of ",
+                self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
+                " and at most ",
+                self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
+                " iterations warm-started, ",
+                self.d.num(f, "solvers", "active-set", "median_iterations", fmt=".4g"),
+                " cold in ",
+                Ref("tab", "solvers"),
+                "; no fallback)" if self.mv(t, emdm, "fallback_steps") == 0 else ")",
+            )
+            ch = self.d.value(f, "challenges", "solvers")
+            if "admm" not in ch or ch["admm"].get("iterations_vs_cond_spearman") is None:
+                p += sentence(".")
+            else:
+                p += sentence(
+                    "; ",
+                    "ADMM's iterations follow the conditioning (rank correlation ",
+                    self.d.num(
+                        f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
+                    ),
+                    ").",
+                )
+        sec.paragraphs.append(p)
+        return sec
