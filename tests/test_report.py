@@ -332,3 +332,54 @@ def test_a_paper_that_does_not_compile_replaces_nothing(
     shutil.rmtree(kept)
     after = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert after == before
+
+
+def test_the_story_reads_typed_records_that_the_producers_write():
+    """Issue 24, item 6: each literal key type is its dataclass's fields, the producers write
+    every field (a renamed key fails here, not when the paper renders), and the evidence keys
+    are the configured evidence runs."""
+    import dataclasses
+    import typing
+
+    from emdm.outputs.report import explain
+    from emdm.outputs.report.config import EVIDENCE
+    from emdm.outputs.report.findings import records as r
+
+    def names(cls):
+        return {f.name for f in dataclasses.fields(cls)}
+
+    assert set(typing.get_args(r.MetricKey)) == names(r.Outcomes)
+    assert set(typing.get_args(r.EventKey)) == names(r.RunEvents)
+    assert set(typing.get_args(r.PairKey)) == names(r.PairEvents)
+    assert set(typing.get_args(r.EvidenceKey)) == {ev.key for ev in EVIDENCE}
+    sc = emdm.load_scenario("task2", {"motion.max_time": 2.0})
+    a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
+    assert names(r.Outcomes) <= set(emdm.metrics(a))
+    assert names(r.RunEvents) <= set(explain.run_events(a))
+    assert names(r.PairEvents) <= set(explain.pair_events(a, b))
+
+
+def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report, tmp_path):
+    """The records are typed and checked once, when the story starts: a field that is missing
+    or of the wrong type is named in one line (file, key), before anything is rendered."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.findings.records import RecordError, Records
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report / "data", root / "data")
+    records = Records.load(Data(root))
+    assert records.outcomes["task1"]["C-EMDM"].reached is True
+    assert records.pairs["task2"]["C"].common_until_t > 0
+    assert records.evidence["t2-c-ivkc-slack-policy"].runs["C-IVKC"]["reached"] is True
+    metrics_file = root / "data" / "task2" / "metrics.json"
+    data = json.loads(metrics_file.read_text(encoding="utf-8"))
+    entry = data["controllers"]["C-IVKC"]
+    entry["mean_m"] = entry.pop("mean_manipulability")
+    metrics_file.write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(RecordError, match=r"task2/metrics.json#controllers/C-IVKC: no field "):
+        Story(Data(root))
+    entry["mean_manipulability"] = "high"
+    metrics_file.write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(RecordError, match=r"C-IVKC/mean_manipulability: expected float"):
+        Story(Data(root))

@@ -10,6 +10,7 @@ described when one was detected, a comparison says "more" or "less" by the sign)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -19,6 +20,7 @@ from ...paper_figures import GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence
+from .records import EventKey, EvidenceKey, MetricKey, PairKey, Records, traced
 
 FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the paper's tracking-gap axis is floored at (its caption says it)."""
@@ -75,6 +77,13 @@ def _flat(*parts: Any) -> Sentence:
     return sentence(*out)
 
 
+def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
+    """``node[path[0]][path[1]]...`` (an index into a list, a key into an object)."""
+    for key in path:
+        node = node[int(key)] if isinstance(node, list) else node[str(key)]
+    return node
+
+
 class StoryBase:
     """The data, the figures and tables made so far, and what every section reads them with."""
 
@@ -82,42 +91,51 @@ class StoryBase:
 
     def __init__(self, data: Data) -> None:
         self.d = data
+        self.rec = Records.load(data)  # typed, checked once: a missing field stops here
         self.figures: dict[str, Figure] = {}
         self.tables: dict[str, Table] = {}
         self.answers: list[tuple[str, Sentence]] = []
 
     # ------------------------------------------------------------------ data accessors
-    def mt(self, task: str, ctrl: str, key: str, fmt: str, unit: str = "") -> Num:
-        return self.d.num(f"data/{task}/metrics.json", "controllers", ctrl, key, fmt=fmt, unit=unit)
+    # (keys are literal types: mypy refuses one the records do not have)
+    def mt(self, task: str, ctrl: str, key: MetricKey, fmt: str, unit: str = "") -> Num:
+        value = self.mv(task, ctrl, key)
+        return traced(value, f"data/{task}/metrics.json", ("controllers", ctrl, key), fmt, unit)
 
-    def mv(self, task: str, ctrl: str, key: str) -> Any:
-        return self.d.value(f"data/{task}/metrics.json", "controllers", ctrl, key)
+    def mv(self, task: str, ctrl: str, key: MetricKey) -> Any:
+        return getattr(self.rec.outcomes[task][ctrl], key)
 
-    def ev(self, task: str, ctrl: str, *path: str | int, fmt: str, unit: str = "") -> Num:
-        return self.d.num(
-            f"data/{task}/events.json", "controllers", ctrl, *path, fmt=fmt, unit=unit
-        )
+    def ev(
+        self, task: str, ctrl: str, key: EventKey, *path: str | int, fmt: str, unit: str = ""
+    ) -> Num:
+        value = self.evv(task, ctrl, key, *path)
+        where = ("controllers", ctrl, key, *path)
+        return traced(value, f"data/{task}/events.json", where, fmt, unit)
 
-    def evv(self, task: str, ctrl: str, *path: str | int) -> Any:
-        return self.d.value(f"data/{task}/events.json", "controllers", ctrl, *path)
+    def evv(self, task: str, ctrl: str, key: EventKey, *path: str | int) -> Any:
+        return _dig(getattr(self.rec.events[task][ctrl], key), path)
 
-    def pair(self, task: str, group: str, key: str) -> Any:
-        return self.d.value(f"data/{task}/events.json", "pairs", group, key)
+    def pair(self, task: str, group: str, key: PairKey) -> Any:
+        return getattr(self.rec.pairs[task][group], key)
 
-    def pairn(self, task: str, group: str, key: str, fmt: str, unit: str = "") -> Num:
-        return self.d.num(f"data/{task}/events.json", "pairs", group, key, fmt=fmt, unit=unit)
+    def pairn(self, task: str, group: str, key: PairKey, fmt: str, unit: str = "") -> Num:
+        value = self.pair(task, group, key)
+        return traced(value, f"data/{task}/events.json", ("pairs", group, key), fmt, unit)
 
-    def evid(self, key: str, *path: str | int) -> Any:
-        return self.d.value("data/evidence.json", "runs", key, *path)
+    def evid(self, key: EvidenceKey, *path: str | int) -> Any:
+        if not path:
+            return dataclasses.asdict(self.rec.evidence[key])
+        return _dig(getattr(self.rec.evidence[key], str(path[0])), path[1:])
 
-    def evidn(self, key: str, *path: str | int, fmt: str, unit: str = "") -> Num:
-        return self.d.num("data/evidence.json", "runs", key, *path, fmt=fmt, unit=unit)
+    def evidn(self, key: EvidenceKey, *path: str | int, fmt: str, unit: str = "") -> Num:
+        value = self.evid(key, *path)
+        return traced(value, "data/evidence.json", ("runs", key, *path), fmt, unit)
 
-    def evid_goal(self, key: str, ctrl: str) -> Num:
+    def evid_goal(self, key: EvidenceKey, ctrl: str) -> Num:
         """The time to goal of ``ctrl`` in the evidence run ``key``."""
         return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
 
-    def pct(self, task: str, a: str, b: str, key: str) -> Num:
+    def pct(self, task: str, a: str, b: str, key: MetricKey) -> Num:
         f = f"data/{task}/metrics.json"
         return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
 
@@ -133,10 +151,10 @@ class StoryBase:
         return found
 
     # ------------------------------------------------------------------ comparisons
-    def more_less(self, task: str, a: str, b: str, key: str) -> str:
+    def more_less(self, task: str, a: str, b: str, key: MetricKey) -> str:
         return "more" if self.mv(task, a, key) > self.mv(task, b, key) else "less"
 
-    def higher_lower(self, task: str, a: str, b: str, key: str) -> str:
+    def higher_lower(self, task: str, a: str, b: str, key: MetricKey) -> str:
         return "higher" if self.mv(task, a, key) > self.mv(task, b, key) else "lower"
 
     def outcome(self, task: str, ctrl: str) -> Sentence:
@@ -214,23 +232,25 @@ class StoryBase:
             for r in rows.values()
         )
 
-    def _policy_terms(self) -> list[tuple[str, bool]]:
+    def _policy_terms(self) -> list[tuple[MetricKey, bool]]:
         """Task 1's C-EMDM under the slack policy (E2) against scaling, per outcome: (metric,
         whether the slack run is better on it)."""
         run = self.evid("t1-c-slack-policy", "runs", Name.C_EMDM)
         out = []
-        for metric, higher_better in (
+        terms: tuple[tuple[MetricKey, bool], ...] = (
             ("time_to_goal", False),
             ("total_effort", False),
             ("mean_manipulability", True),
-        ):
+        )
+        for metric, higher_better in terms:
             new, old = run[metric], self.mv("task1", Name.C_EMDM, metric)
             out.append((metric, new > old if higher_better else new < old))
         return out
 
     def policy_weighed(self) -> Sentence:
         """Task scaling, the paper's own choice, weighed against its evidence (E2, E4)."""
-        e2, emdm = "t1-c-slack-policy", Name.C_EMDM
+        e2: EvidenceKey = "t1-c-slack-policy"
+        emdm = Name.C_EMDM
         words = {
             "time_to_goal": ("reaches the goal sooner", "reaches the goal later"),
             "total_effort": (", with less effort", ", with more effort"),

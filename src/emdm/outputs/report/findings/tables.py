@@ -14,6 +14,7 @@ from .base import (
     bare,
     eq,
 )
+from .records import EvidenceKey, MetricKey
 
 
 class Tables(StoryBase):
@@ -102,7 +103,7 @@ class Tables(StoryBase):
         return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
 
     def evidence_table(self, sections: list[Section]) -> None:
-        items = [
+        items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
             ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
             ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
             ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
@@ -156,11 +157,12 @@ class Tables(StoryBase):
             task = entry["task"]
             run = entry["runs"].get(ctrl, {})
             cells: list[Sentence] = []
-            for metric, fmt in (
+            columns: tuple[tuple[MetricKey, str], ...] = (
                 ("time_to_goal", ".2f"),
                 ("mean_manipulability", ".3f"),
                 ("total_effort", ".2f"),
-            ):
+            )
+            for metric, fmt in columns:
                 if "error" in run:
                     cells.append(sentence("no solution"))
                     continue

@@ -19,6 +19,7 @@ from .base import (
     eq,
     q,
 )
+from .records import traced
 
 
 class Task2(StoryBase):
@@ -293,18 +294,19 @@ class Task2(StoryBase):
                 " stands still",
             )
             # each mean is over its own run: the stall's 30 s weigh in, so the common window too
-            g = f"data/{t}/events.json"
+            common = self.pair(t, "C", "mean_m_common")
+            src = ("pairs", "C", "mean_m_common")
             p += sentence(
                 " (",
                 ivkc,
                 "'s over its ",
                 self.mt(t, ivkc, "final_time", ".0f", "s"),
                 "; over the first ",
-                self.d.num(g, "pairs", "C", "common_until_t", fmt=".2f", unit="s"),
+                self.pairn(t, "C", "common_until_t", ".2f", "s"),
                 " of both, ",
-                self.d.num(g, "pairs", "C", "mean_m_common", emdm, fmt=".3f"),
+                traced(common[emdm], f"data/{t}/events.json", (*src, emdm), ".3f"),
                 " against ",
-                self.d.num(g, "pairs", "C", "mean_m_common", ivkc, fmt=".3f", unit="m²"),
+                traced(common[ivkc], f"data/{t}/events.json", (*src, ivkc), ".3f", "m²"),
                 ")",
             )
         p += sentence(

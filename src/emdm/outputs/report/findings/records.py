@@ -1,0 +1,268 @@
+"""The records the story reads, as typed data built once, and checked, from the report's files.
+
+Each dataclass below names the fields the story reads from one kind of record, with their types:
+:class:`Outcomes` (a run's ``metrics.json`` entry), :class:`RunEvents` (its ``events.json``
+entry), :class:`PairEvents` (a pair's) and :class:`EvidenceRun` (an entry of ``evidence.json``).
+:meth:`Records.load` builds all of them when the story starts and refuses a record that lacks a
+field or holds a value of the wrong type, in one line naming the file and the key: before any
+sentence is written, not while the paper renders.
+
+The story's accessors take the field names as literal types (:data:`MetricKey`,
+:data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`), so mypy refuses a misspelt key;
+``tests/test_report.py`` checks that these literals are the dataclasses' fields and that the
+producers (:func:`emdm.sim.metrics.metrics`, :func:`..explain.run_events`,
+:func:`..explain.pair_events`, :data:`..config.EVIDENCE`) write every one of them, so a renamed
+key fails a unit test.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from dataclasses import dataclass
+from typing import Any, Literal, Union
+
+from ....errors import EmdmError
+from ..trace import Data, Num, format_value
+
+
+class RecordError(EmdmError):
+    """A record of the report lacks a field the story reads, or holds the wrong type."""
+
+
+MetricKey = Literal[
+    "reached",
+    "steps",
+    "time_to_goal",
+    "final_time",
+    "final_error",
+    "mean_manipulability",
+    "final_manipulability",
+    "total_effort",
+    "max_abs_qd",
+    "path_length",
+    "scaled_steps",
+    "fallback_steps",
+    "final_q",
+]
+"""The fields of :class:`Outcomes`."""
+
+
+@dataclass(frozen=True)
+class Outcomes:
+    """One run's outcomes: ``data/TASK/metrics.json#controllers/NAME``."""
+
+    reached: bool
+    steps: int
+    time_to_goal: float | None
+    final_time: float
+    final_error: float
+    mean_manipulability: float
+    final_manipulability: float
+    total_effort: float
+    max_abs_qd: float
+    path_length: float
+    scaled_steps: int
+    fallback_steps: int
+    final_q: list[Any]
+
+
+EventKey = Literal[
+    "reached",
+    "time_to_goal",
+    "final_time",
+    "final_error",
+    "initial_error",
+    "mean_manipulability",
+    "total_effort",
+    "path_length",
+    "straight_length",
+    "detour",
+    "scaling",
+    "pinned",
+    "stall",
+    "obstacles",
+    "planes",
+    "singular",
+    "conditioning",
+    "effort",
+    "limits",
+    "solver",
+    "slack",
+]
+"""The fields of :class:`RunEvents` (the first key of an event's path)."""
+
+
+@dataclass(frozen=True)
+class RunEvents:
+    """What was detected in one run: ``data/TASK/events.json#controllers/NAME``
+    (:func:`..explain.run_events`; an event that did not happen is ``None``)."""
+
+    reached: bool
+    time_to_goal: float | None
+    final_time: float
+    final_error: float
+    initial_error: float
+    mean_manipulability: float
+    total_effort: float
+    path_length: float
+    straight_length: float
+    detour: float
+    scaling: dict[str, Any] | None
+    pinned: list[Any]
+    stall: dict[str, Any] | None
+    obstacles: dict[str, Any] | None
+    planes: dict[str, Any] | None
+    singular: dict[str, Any]
+    conditioning: dict[str, Any]
+    effort: dict[str, Any]
+    limits: dict[str, Any]
+    solver: dict[str, Any]
+    slack: dict[str, Any]
+
+
+PairKey = Literal[
+    "coincide_steps",
+    "coincide_until_t",
+    "coincide_scaled_steps",
+    "coincide_all_scaled",
+    "coincide_determined_steps",
+    "max_path_gap",
+    "t_max_path_gap",
+    "common_until_t",
+    "mean_m_common",
+]
+"""The fields of :class:`PairEvents`."""
+
+
+@dataclass(frozen=True)
+class PairEvents:
+    """How a pair's two runs relate: ``data/TASK/events.json#pairs/GROUP``
+    (:func:`..explain.pair_events`)."""
+
+    coincide_steps: int
+    coincide_until_t: float
+    coincide_scaled_steps: int
+    coincide_all_scaled: bool
+    coincide_determined_steps: int
+    max_path_gap: float
+    t_max_path_gap: float
+    common_until_t: float
+    mean_m_common: dict[str, Any]
+
+
+EvidenceKey = Literal[
+    "t1-uc-no-manip",
+    "t1-c-slack-policy",
+    "t2-c-ivkc-slack-policy",
+    "t2-c-ivkc-wide-limits",
+    "t2-c-emdm-no-manip",
+    "t2-c-emdm-tight-slack",
+    "t2-uc-emdm-stiff-slack",
+]
+"""The evidence runs the story cites (the keys of :data:`..config.EVIDENCE`)."""
+
+
+@dataclass(frozen=True)
+class EvidenceRun:
+    """One evidence run: ``data/evidence.json#runs/KEY`` (each controller's entry in ``runs``
+    holds its outcomes and events, or the ``error`` that stopped it)."""
+
+    task: str
+    controllers: list[Any]
+    overrides: dict[str, Any]
+    runs: dict[str, Any]
+    reference: dict[str, Any] | None = None
+    """With a reference controller: the first controller's commands against its nominal run."""
+    pair: dict[str, Any] | None = None
+    """With two controllers: how the pair relates (:class:`PairEvents`' fields)."""
+
+
+def _accepts(hint: Any, value: Any) -> bool:
+    """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
+    origin = typing.get_origin(hint)
+    if origin in (Union, types.UnionType):
+        return any(_accepts(h, value) for h in typing.get_args(hint))
+    if hint is type(None):
+        return value is None
+    if hint is bool:
+        return isinstance(value, bool)
+    if hint is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if hint is float:
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if hint is str:
+        return isinstance(value, str)
+    return isinstance(value, origin or hint)
+
+
+def _name(hint: Any) -> str:
+    """A type as written in Python (``float``, ``float | None``, ``dict[str, Any]``)."""
+    return hint.__name__ if isinstance(hint, type) else str(hint).replace("typing.", "")
+
+
+def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
+    """``cls`` built from the JSON object at ``file#path``, every field present and typed."""
+    where = f"{file}#{'/'.join(map(str, path))}"
+    try:
+        node = data.value(file, *path)
+    except (KeyError, IndexError, OSError, ValueError) as exc:
+        raise RecordError(f"{where}: no such record ({exc})") from None
+    if not isinstance(node, dict):
+        raise RecordError(f"{where}: expected an object, found {type(node).__name__}")
+    hints = typing.get_type_hints(cls)
+    values = {}
+    for f in dataclasses.fields(cls):
+        if f.name not in node and f.default is not dataclasses.MISSING:
+            continue  # an optional field
+        if f.name not in node:
+            raise RecordError(f"{where}: no field {f.name!r} (the report reads it)")
+        if not _accepts(hints[f.name], node[f.name]):
+            raise RecordError(
+                f"{where}/{f.name}: expected {_name(hints[f.name])}, found {node[f.name]!r:.60}"
+            )
+        values[f.name] = node[f.name]
+    return cls(**values)
+
+
+@dataclass(frozen=True)
+class Records:
+    """Every typed record of the brief's tasks, built once from the report's data."""
+
+    outcomes: dict[str, dict[str, Outcomes]]
+    events: dict[str, dict[str, RunEvents]]
+    pairs: dict[str, dict[str, PairEvents]]
+    evidence: dict[str, EvidenceRun]
+
+    @classmethod
+    def load(cls, data: Data, tasks: tuple[str, ...] = ("task1", "task2")) -> Records:
+        outcomes: dict[str, dict[str, Outcomes]] = {}
+        events: dict[str, dict[str, RunEvents]] = {}
+        pairs: dict[str, dict[str, PairEvents]] = {}
+        for task in tasks:
+            m, e = f"data/{task}/metrics.json", f"data/{task}/events.json"
+            if not data.exists(m):
+                continue
+            outcomes[task] = {
+                c: load_record(Outcomes, data, m, "controllers", c)
+                for c in data.value(m, "controllers")
+            }
+            events[task] = {
+                c: load_record(RunEvents, data, e, "controllers", c)
+                for c in data.value(e, "controllers")
+            }
+            pairs[task] = {
+                g: load_record(PairEvents, data, e, "pairs", g) for g in data.value(e, "pairs")
+            }
+        evidence: dict[str, EvidenceRun] = {}
+        f = "data/evidence.json"
+        if data.exists(f):
+            for key in typing.get_args(EvidenceKey):
+                evidence[key] = load_record(EvidenceRun, data, f, "runs", key)
+        return cls(outcomes, events, pairs, evidence)
+
+
+def traced(value: Any, file: str, path: tuple[str | int, ...], fmt: str, unit: str = "") -> Num:
+    """A record's value as a traced number (its source is where the record was read)."""
+    return Num(format_value(value, fmt), f"{file}#{'/'.join(map(str, path))}", fmt, unit=unit)
