@@ -42,6 +42,11 @@ def _cond(J: np.ndarray) -> float:
     return float(s[0] / s[-1]) if s[-1] > 1e-12 * max(s[0], 1e-300) else math.inf
 
 
+ZERO_ALPHA = 1e-12
+"""A task scale at or below this counts as zero (``zero_from_t``): a damper bound shrinks
+geometrically and never reaches 0 exactly."""
+
+
 def scaling(run: Run) -> dict[str, Any] | None:
     """Steps whose task was scaled (``alpha < 1``): when, how long, how deep, where it hit 0."""
     a = run.alpha
@@ -51,7 +56,7 @@ def scaling(run: Run) -> dict[str, Any] | None:
     dt = run.scenario.motion.dt
     eps = _episodes(mask)
     first, last = eps[0][0], eps[-1][1]
-    zero = np.flatnonzero(a <= 1e-12)
+    zero = np.flatnonzero(a <= ZERO_ALPHA)
     k_min = int(np.argmin(a))
     return {
         "steps": int(mask.sum()),

@@ -284,6 +284,11 @@ class Data:
         text = format_value(self.value(file, *path) * 1e3, fmt)
         return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, "ms", unit="ms")
 
+    def count(self, file: str, *path: str | int) -> Num:
+        """How many entries the list at ``file#path`` has."""
+        text = str(len(self.value(file, *path)))
+        return Num(text, f"{file}#{'/'.join(map(str, path))}", "d", "len")
+
     def pct(self, a: tuple[str | int, ...], b: tuple[str | int, ...], fmt: str = "+.0f") -> Num:
         """``100 (a / b - 1)`` as a signed percentage, tracing both operands."""
         va, vb = self.value(str(a[0]), *a[1:]), self.value(str(b[0]), *b[1:])
@@ -306,6 +311,8 @@ def expected_text(root: Path, src: str, fmt: str, op: str | None) -> str:
     if op == "pct":
         a, b = (value(r) for r in refs)
         return format(100.0 * (a / b - 1.0), fmt) + "%"
+    if op == "len":
+        return str(len(value(refs[0])))
     if op == "ms":
         return format_value(value(refs[0]) * 1e3, fmt)
     return format_value(value(refs[0]), fmt)

@@ -135,6 +135,15 @@ class StoryBase:
         """The time to goal of ``ctrl`` in the evidence run ``key``."""
         return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
 
+    def elbow_flip_forced(self, task: str) -> bool:
+        """Whether every goal configuration within the limits has its elbow on the other side
+        from the start (a two-link arm's ``m = l1 l2 |sin q2|`` must then pass through 0)."""
+        geo = self.d.value(f"data/{task}/events.json", "geometry")
+        if not geo:
+            return False
+        inside = [s for s in geo["solutions"] if s["within_limits"]]
+        return bool(inside) and all(s["elbow"] != geo["start_elbow"] for s in inside)
+
     def pct(self, task: str, a: str, b: str, key: MetricKey) -> Num:
         f = f"data/{task}/metrics.json"
         return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
@@ -168,7 +177,7 @@ class StoryBase:
                 self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
                 " at ",
                 self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
-                f" from it, its distance staying within {STALL_BAND * 1e3:g} mm from then on",
+                f" from it, where its distance stays within {STALL_BAND * 1e3:g} mm",
             )
         return sentence(
             "does not reach the goal within ",
@@ -295,10 +304,10 @@ class StoryBase:
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod
-    def panels(gap: bool = False) -> Sentence:
+    def panels(gap: bool = False, only_c: bool = False) -> Sentence:
         """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
         as its captions name them (without the final stop); ``gap``: panel (c) is the
-        velocity-tracking gap (``pair_figure(..., gap=True)``)."""
+        velocity-tracking gap (``pair_figure(..., gap=True)``); ``only_c``: panel (c) alone."""
         third = (
             sentence(
                 "(c) velocity-tracking gap ",
@@ -316,6 +325,8 @@ class StoryBase:
                 "(c) distance to the goal ", ERR, " (log axis; dotted: the arrival tolerance)"
             )
         )
+        if only_c:
+            return third
         return (
             sentence(
                 "(a) manipulability ",
@@ -328,14 +339,20 @@ class StoryBase:
             )
             + third
             + sentence(
-                ", (d) joint positions with their limits and damper influence and stop zones, "
+                ", (d) joint positions with their limits and damper influence zones (shaded), "
                 "(e) joint velocities with their limits"
             )
         )
 
     def pair_caption(self, task: str, group: str) -> Sentence:
+        """A pair figure's caption: its panels in full for the first (Task 1.1's), by reference
+        to it for the others."""
         ivkc, emdm = PAIRS[group]
-        out = sentence(f"{ivkc} (solid) against {emdm} (dashed): ") + self.panels() + sentence(".")
+        out = sentence(f"{ivkc} (solid) against {emdm} (dashed)")
+        if (task, group) == ("task1", "UC"):
+            out += sentence(": ") + self.panels() + sentence(".")
+        else:
+            out += sentence(", panels as in ", Ref("fig", "t1-uc"), ".")
         if (
             self.pair(task, group, "coincide_scaled_steps")
             and self.pair(task, group, "coincide_all_scaled") is not None

@@ -76,9 +76,7 @@ class Front(StoryBase):
                         free,
                         ", needs ",
                         self.d.ms(f, "solvers", free, "median_time"),
-                        " (",
-                        self.d.ms(f, "solvers", free, "p95_time"),
-                        " at the 95th percentile).",
+                        ".",
                     )
                 else:
                     out += sentence("; every gradient-free method is inexact.")
@@ -97,9 +95,8 @@ class Front(StoryBase):
                 Cite("haviland"),
                 ", we write each control step as a strictly convex quadratic program (QP), solve it "
                 "with a certified custom active-set method, and compare this EMDM controller with "
-                "IVKC, each unconstrained (UC-) or constrained by joint limits (C-). Every number "
-                "is read from the study's records, and every explanation is backed by an evidence "
-                "run that changes one thing (",
+                "IVKC, each unconstrained (UC-) or constrained by joint limits (C-); runs that "
+                "change one thing test our explanations (",
                 Ref("tab", "evidence"),
                 ").",
             )

@@ -45,6 +45,7 @@ MetricKey = Literal[
     "scaled_steps",
     "fallback_steps",
     "final_q",
+    "min_stop_margin",
 ]
 """The fields of :class:`Outcomes`."""
 
@@ -66,6 +67,7 @@ class Outcomes:
     scaled_steps: int
     fallback_steps: int
     final_q: list[Any]
+    min_stop_margin: float
 
 
 EventKey = Literal[

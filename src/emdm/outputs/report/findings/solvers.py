@@ -197,8 +197,11 @@ class Solvers(StoryBase):
         table = Table(
             "solvers",
             sentence(
-                "Task 2 C-EMDM solvers on the same programs (medians; largest gap and bound "
-                "violation, 0: below ",
+                "Task 2 C-EMDM solvers on the same ",
+                self.d.count(f, "resolved_steps"),
+                " programs of its ",
+                self.mt("task2", "C-EMDM", "steps", "d"),
+                " steps (medians; largest gap and bound violation, 0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
                 "; it./ev.: iterations/evaluations, --: none; goal: alone in the loop).",
             ),

@@ -115,14 +115,12 @@ class Task1(StoryBase):
                     ", ",
                 )
         p += sentence(
-            "and the two command up to ",
-            self.ev(t, ivkc, "limits", "max_abs_qd", fmt=".2f"),
-            " and ",
-            self.ev(t, emdm, "limits", "max_abs_qd", fmt=".2f", unit="rad/s"),
-            " (limit ",
+            "and both exceed the speed limit of ",
             self.d.num(
                 f"data/{t}/metrics.json", "scenario", "arm", "qd_max", 0, fmt=".1f", unit="rad/s"
             ),
+            " (",
+            Ref("tab", "outcomes"),
             ").",
         )
         sec.paragraphs.append(p)
@@ -135,7 +133,11 @@ class Task1(StoryBase):
         answer = sentence(
             "Both constrained controllers (",
             Ref("fig", "t1-c"),
-            f") keep every joint outside its stop zone and within its speed limit; {emdm} ",
+            ") keep every joint outside its stop zone (smallest margin ",
+            self.mt(t, ivkc, "min_stop_margin", ".3f"),
+            " and ",
+            self.mt(t, emdm, "min_stop_margin", ".3f", "rad"),
+            f") and within its speed limit; {emdm} ",
             *self.outcome(t, emdm),
             f" and {ivkc} ",
             *self.outcome(t, ivkc),
@@ -181,7 +183,7 @@ class Task1(StoryBase):
                 p += sentence(
                     "; on the other ",
                     _words(same - scaled_steps),
-                    " joints at their bounds again fix the command",
+                    ", joints at their bounds again fix the command",
                 )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
@@ -203,11 +205,12 @@ class Task1(StoryBase):
                 p += sentence(
                     "joint ",
                     self.ev(t, emdm, "pinned", i, "joint", fmt="d"),
-                    f" of {emdm} runs along its {e['side']} {e['kind']} bound from ",
+                    f"{f' of {emdm}' if i == 0 else ''} runs along its {e['side']} {e['kind']} "
+                    "bound from ",
                     self.ev(t, emdm, "pinned", i, "t0", fmt=".2f"),
                     " to ",
                     self.ev(t, emdm, "pinned", i, "t1", fmt=".2f", unit="s"),
-                    " and " if i < shown - 1 else ". ",
+                    ", " if i < shown - 1 else ". ",
                 )
         p += sentence(
             "Against the UC pair, capped speeds change the effort by ",
@@ -357,7 +360,14 @@ class Task1(StoryBase):
                     self.d.num(
                         grid_file, "runs", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"
                     ),
-                    " (evidence E3): the failure is the discretisation, not the program. ",
+                    " (E3), at an effort of ",
+                    self.d.num(
+                        grid_file, "runs", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"
+                    ),
+                    " against ",
+                    self.mt("task1", Name.UC_EMDM, "total_effort", ".3g"),
+                    " at the nominal weights: the miss comes from the step size, the cost from "
+                    "the weights. ",
                 )
             break
         if p:

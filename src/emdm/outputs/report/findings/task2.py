@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Ref, Sentence, sentence
+from ..explain import ZERO_ALPHA as ZERO
+from ..trace import Math, Num, Ref, Sentence, sentence
 from .base import (
     ALPHA,
     C_S,
@@ -20,6 +23,12 @@ from .base import (
     q,
 )
 from .records import traced
+
+M_TWO_LINK = Math(
+    r"m=l_1l_2|\sin q_2|",
+    "<i>m</i> = <i>l</i><sub>1</sub><i>l</i><sub>2</sub>|sin <i>q</i><sub>2</sub>|",
+)
+"""A two-link arm's manipulability."""
 
 
 class Task2(StoryBase):
@@ -170,8 +179,13 @@ class Task2(StoryBase):
                     "; from ",
                     T_EQ,
                     self.ev(t, ivkc, "scaling", "zero_from_t", fmt=".2f", unit="s"),
-                    " on, its damper bound is 0 and so is ",
+                    " on, its damper bound, and with it ",
                     ALPHA,
+                    ", stays below ",
+                    Math(
+                        rf"10^{{{round(math.log10(ZERO))}}}",
+                        f"10<sup>−{-round(math.log10(ZERO))}</sup>",
+                    ),
                     ".",
                 )
             else:
@@ -216,13 +230,13 @@ class Task2(StoryBase):
                 )
             sec.paragraphs.append(p)
         # evidence (their numbers are in the evidence table)
-        p = sentence("The evidence runs (", Ref("tab", "evidence"), ") isolate the causes. ")
+        p = sentence()
         e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
         e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
         if not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
-            if e4.get("reached"):
-                p += sentence("with a slack (E4, flipping its elbow)")
+            if e4.get("reached"):  # (its time is in the answer)
+                p += sentence("with a slack (E4, ", Ref("tab", "evidence"), ")")
             if e4.get("reached") and e5.get("reached"):
                 p += sentence(" and ")
             if e5.get("reached"):
@@ -253,9 +267,21 @@ class Task2(StoryBase):
                             ),
                             " against ",
                             self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
-                            "): on this arm the term works against its own purpose, and the "
-                            "slack, not the term, carries it to the goal, contrary to what the "
-                            "brief expects",
+                            "): on this arm the term does not raise ",
+                            M_SYM,
+                            *(
+                                (
+                                    ", since every route into the admissible goal configuration "
+                                    "flips the elbow through ",
+                                    M_SYM,
+                                    " = 0 (",
+                                    M_TWO_LINK,
+                                    ")",
+                                )
+                                if self.elbow_flip_forced(t)
+                                else ()
+                            ),
+                            "; the slack, not the term, carries it to the goal",
                         )
                         if higher
                         else (
@@ -296,19 +322,27 @@ class Task2(StoryBase):
             # each mean is over its own run: the stall's 30 s weigh in, so the common window too
             common = self.pair(t, "C", "mean_m_common")
             src = ("pairs", "C", "mean_m_common")
-            p += sentence(
-                " (",
-                ivkc,
-                "'s over its ",
-                self.mt(t, ivkc, "final_time", ".0f", "s"),
-                "; over the first ",
-                self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                " of both, ",
-                traced(common[emdm], f"data/{t}/events.json", (*src, emdm), ".3f"),
-                " against ",
-                traced(common[ivkc], f"data/{t}/events.json", (*src, ivkc), ".3f", "m²"),
-                ")",
-            )
+            within = [
+                traced(common[c], f"data/{t}/events.json", (*src, c), ".3f") for c in (emdm, ivkc)
+            ]
+            whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
+            p += sentence(" (", ivkc, "'s over its ", self.mt(t, ivkc, "final_time", ".0f", "s"))
+            if [n.text for n in within] == [n.text for n in whole]:
+                p += sentence(
+                    "; the same over the first ",
+                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
+                    " of both)",
+                )
+            else:
+                p += sentence(
+                    "; over the first ",
+                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
+                    " of both, ",
+                    within[0],
+                    " against ",
+                    Num(within[1].text, within[1].src, within[1].fmt, unit="m²"),
+                    ")",
+                )
         p += sentence(
             "; its effort is ",
             self.mt(t, emdm, "total_effort", ".2f"),
@@ -321,10 +355,12 @@ class Task2(StoryBase):
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
                 "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
-                "solid, EMDM dashed): "
-            ) + self.panels(gap=True)
+                "solid, EMDM dashed), panels as in ",
+                Ref("fig", "t1-uc"),
+                " but ",
+            ) + self.panels(gap=True, only_c=True)
             caption += sentence(
-                ", on the constrained runs' scale (unconstrained peaks up to ",
+                "; joint velocities on the constrained runs' scale (unconstrained peaks up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
                 ")",
             )
