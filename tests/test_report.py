@@ -383,3 +383,27 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     metrics_file.write_text(json.dumps(data), encoding="utf-8")
     with pytest.raises(RecordError, match=r"C-IVKC/mean_manipulability: expected float"):
         Story(Data(root))
+
+
+def test_each_shared_claim_is_written_once_and_said_by_the_paper_and_the_pitch(quick_report):
+    """Issue 24, item 6: a claim the abstract, the sections, the conclusion and the slides all
+    make comes from one method (findings/claims.py), so the paper and the pitch say it in the
+    same words with the same numbers."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.findings.claims import cap
+    from emdm.outputs.report.trace import Data
+
+    story = Story(Data(quick_report))
+    paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    pitch = (quick_report / "paper" / "pitch.tex").read_text(encoding="utf-8")
+    claims = {
+        "dexterity_gain": story.dexterity_gain(),
+        "ivkc_with_slack": story.ivkc_with_slack(),
+        "uc_slack_saving": story.uc_slack_saving(),
+    }
+    for name, claim in claims.items():
+        assert claim, name
+        text = render_latex(claim)
+        assert paper.count(text) + paper.count(render_latex(cap(claim))) >= 1, name
+        assert text in pitch or render_latex(cap(claim)) in pitch, name
+    assert render_latex(story.dexterity_gain()) in paper.split(r"\end{abstract}")[0]

@@ -39,6 +39,7 @@ from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
+from .animate import ellipse_points
 from .style import CONTROLLER_STYLE, FAMILY_COLOR, OKABE_ITO, RC
 
 
@@ -847,20 +848,66 @@ def manipulability_figure(
 
 
 def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
-    """Effort E(t) (log) and manipulability m(t) of a pair, two large panels (a slide's figure,
-    where the pair composite's five panels would be too small to read)."""
+    """The effort spent so far, sum E dt up to t (linear, so a saving shows as a gap that
+    stays), and the manipulability m(t) of a pair: two large panels (a slide's figure, where the
+    pair composite's five panels would be too small to read)."""
     height = 2.3 if medium is SLIDE else 1.6
     with _figure(stem, medium, medium.wide, height) as fig:
         ax_e, ax_m = fig.subplots(1, 2)
         for run in runs:
             st = _style(run, medium)
-            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
+            spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
+            ax_e.plot(run.t, spent, **st)
             ax_m.plot(run.t, run.m, **st)
-        ax_e.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
+        ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
         ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
         for ax in (ax_e, ax_m):
             ax.set_xlabel(r"$t$ (s)")
         ax_m.legend(loc="best", frameon=True, framealpha=0.9)
+    return stem
+
+
+def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
+    """What manipulability measures, on a run's own arm: at its start and at its most and
+    least dexterous states, the arm and the tip velocities unit joint speeds reach (the ellipse
+    of ``J J^T``, one scale for all three), each titled with its ``m``."""
+    arm = run.scenario.planar_arm
+    reach = arm.reach
+    picks = [0, int(np.argmax(run.m)), int(np.argmin(run.m))]
+    titles = ["start", "most dexterous", "least dexterous"]
+    biggest = max(
+        float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(run.q[k]) @ arm.jacobian(run.q[k]).T)[-1]))
+        for k in picks
+    )
+    scale = 0.35 * reach / biggest if biggest > 0 else 1.0
+    st = _style(run, medium)
+    height = 2.1 if medium is SLIDE else 1.5
+    with _figure(stem, medium, medium.wide, height) as fig:
+        axes = fig.subplots(1, 3)
+        for ax, k, title in zip(axes, picks, titles, strict=True):
+            pts = arm.joint_positions(run.q[k])
+            ell = ellipse_points(arm.jacobian(run.q[k]), pts[-1], scale)
+            ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
+            ax.fill(ell[:, 0], ell[:, 1], color=st["color"], alpha=0.35, linewidth=0)
+            ax.plot(ell[:, 0], ell[:, 1], color=st["color"], linewidth=medium.line * 0.6)
+            ax.plot(
+                pts[:, 0],
+                pts[:, 1],
+                color="black",
+                linewidth=medium.line * 1.3,
+                marker="o",
+                markersize=3,
+                markerfacecolor="white",
+            )
+            ax.set_title(
+                f"{title}\n" + rf"$m$ = {run.m[k]:.3f} m$^2$, $t$ = {run.t[k]:.2f} s",
+                fontsize=medium.small,
+            )
+            ax.set_aspect("equal")
+            ax.set_xlim(-reach * 1.05, reach * 1.05)
+            ax.set_ylim(-reach * 1.05, reach * 1.05)
+            ax.set_xticks([])
+            ax.set_yticks([])
     return stem
 
 

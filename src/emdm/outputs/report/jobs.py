@@ -332,6 +332,8 @@ def _story_figures(stage: Path) -> list[str]:
             )
         )
     )
+    # the pitch's picture of what m measures, on Task 2's C-EMDM (it passes m = 0)
+    out.append(str(pf.ellipse_figure(t2[Name.C_EMDM], stage / SLIDE_FIGURES / "ellipses")))
     for task, runs in (("task1", t1), ("task2", t2)):
         out.append(
             str(

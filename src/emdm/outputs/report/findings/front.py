@@ -8,28 +8,21 @@ from ..document import Section
 from ..trace import Cite, Ref, Sentence, sentence
 from .base import (
     M_SYM,
-    StoryBase,
 )
+from .claims import Claims, listed
 
 
-class Front(StoryBase):
+class Front(Claims):
     # ------------------------------------------------------------------ abstract, intro
     def abstract(self) -> Sentence:
-        t1, t2 = "task1", "task2"
+        t2 = "task2"
         out = sentence(
             "We pose velocity control of planar arms as one quadratic program per step that tracks "
             "a proportional controller's end-effector velocity, minimises joint-velocity effort "
             "and maximises the manipulability rate (EMDM), and compare it with inverse velocity "
-            "kinematics (IVKC). On a redundant three-link arm EMDM tracks as IVKC does and raises "
-            "the mean manipulability by ",
-            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
-            " without and ",
-            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-            " with joint limits, for ",
-            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
-            " and ",
-            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
-            " effort. ",
+            "kinematics (IVKC). On a redundant three-link arm EMDM tracks as IVKC does and ",
+            *self.dexterity_gain(),
+            ". ",
         )
         if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
             out += sentence(
@@ -37,24 +30,14 @@ class Front(StoryBase):
                 self.ev(t2, Name.C_IVKC, "stall", "error", fmt=".2f", unit="m"),
                 " from the goal",
             )
-            e4 = self.evid("t2-c-ivkc-slack-policy", "runs", Name.C_IVKC)
-            if e4.get("reached"):
-                out += sentence(
-                    " (with a slack instead it arrives in ",
-                    self.evid_goal("t2-c-ivkc-slack-policy", Name.C_IVKC),
-                    ")",
-                )
+            if self.ivkc_with_slack():
+                out += sentence(" (") + self.ivkc_with_slack() + sentence(")")
             out += sentence(
                 "; C-EMDM's slack leaves the blocked straight line and arrives in ",
                 self.ttg(t2, Name.C_EMDM),
             )
-            e6 = self.evid("t2-c-emdm-no-manip", "runs", Name.C_EMDM)
-            if e6.get("reached") and e6["time_to_goal"] < self.mv(t2, Name.C_EMDM, "time_to_goal"):
-                out += sentence(
-                    "; without the dexterity term it arrives sooner (",
-                    self.evid_goal("t2-c-emdm-no-manip", Name.C_EMDM),
-                    ")",
-                )
+            if self.emdm_without_term():
+                out += sentence("; ") + self.emdm_without_term()
             out += sentence(". ")
         f = "data/task2-lab-C-EMDM/solvers.json"
         if self.d.exists(f):
@@ -129,35 +112,21 @@ class Front(StoryBase):
 
     def conclusion(self) -> Section:
         sec = Section("conclusion", "Conclusion")
-        t1 = "task1"
         p = sentence(
-            "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: the same "
-            "tracking, ",
-            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
-            " and ",
-            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-            " mean manipulability for ",
-            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
-            " and ",
-            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
-            " effort. On the non-redundant arm the slack, not the dexterity term, decides: it lets "
+            "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: it "
+            "tracks as IVKC does and ",
+            *self.dexterity_gain(),
+            ". On the non-redundant arm the slack, not the dexterity term, decides: it lets "
             "C-EMDM leave a straight line that the joint limits block, where task scaling (our "
             "departure from the brief, kept as the closest to its task equation) stalls C-IVKC. ",
         )
-        better = [m for m, b in self._policy_terms() if b]
-        adjectives = {
-            "time_to_goal": "faster",
-            "total_effort": "cheaper",
-            "mean_manipulability": "more dexterous",
-        }
-        e4 = self.evid("t2-c-ivkc-slack-policy", "runs", Name.C_IVKC)
-        if better:
-            named = [adjectives[m] for m in better]
+        gains = self.slack_gains()
+        if gains:
             p += sentence(
                 "Scaling buys only that line: with a slack C-EMDM is ",
-                ", ".join(named[:-1]) + (" and " if len(named) > 1 else "") + named[-1],
+                listed(gains),
                 " (E2)",
-                " and C-IVKC arrives (E4)" if e4.get("reached") else "",
+                " and C-IVKC arrives (E4)" if self.ivkc_with_slack() else "",
                 "; in these tasks, where the path does not matter, a slack was the better choice. ",
             )
         p += sentence(

@@ -18,10 +18,10 @@ from .base import (
     M_SYM,
     T_EQ,
     W_S,
-    StoryBase,
     eq,
     q,
 )
+from .claims import Claims, cap
 from .records import traced
 
 M_TWO_LINK = Math(
@@ -31,7 +31,7 @@ M_TWO_LINK = Math(
 """A two-link arm's manipulability."""
 
 
-class Task2(StoryBase):
+class Task2(Claims):
     # ------------------------------------------------------------------ Task 2
     def task2_c(self) -> Section:
         t = "task2"
@@ -51,13 +51,8 @@ class Task2(StoryBase):
         )
         if reached_e and not reached_i:
             answer += sentence(": one can leave the straight line to the goal, the other cannot")
-            e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
-            if e4.get("reached"):  # the like-for-like comparison, beside the headline
-                answer += sentence(
-                    f". With a slack like {emdm}'s instead of task scaling (E4), {ivkc} "
-                    "arrives as well, in ",
-                    self.evid_goal("t2-c-ivkc-slack-policy", ivkc),
-                )
+            if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
+                answer += sentence(". ") + cap(self.ivkc_with_slack())
             answer += sentence(".")
         else:
             answer += sentence(".")
@@ -249,10 +244,7 @@ class Task2(StoryBase):
         if e6.get("reached") and reached_e:
             if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
                 higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
-                p += sentence(
-                    f"Without the dexterity term {emdm} still arrives, and sooner (E6, ",
-                    self.evid_goal("t2-c-emdm-no-manip", emdm),
-                    ")",
+                p += cap(self.emdm_without_term()) + sentence(
                     *(
                         (
                             ", with a higher mean ",
@@ -423,19 +415,15 @@ class Task2(StoryBase):
                         self.ev(t, c, "limits", "excess_by_joint", j, fmt=".2f", unit="rad"),
                     )
             answer += sentence(") into the elbow-up configuration the constrained pair cannot use")
-        answer += sentence(
-            f"; against {ivkc}, {emdm}'s total effort differs by ",
-            self.pct(t, emdm, ivkc, "total_effort"),
-            " and its mean ",
-            M_SYM,
-            " by ",
-            self.pct(t, emdm, ivkc, "mean_manipulability"),
-            ", as the slack absorbs up to ",
-            *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
-            " of the desired velocity (",
-            Ref("tab", "outcomes"),
-            *((", ", Ref("fig", shown), "(c)") if self.has_figure(shown) else ()),
-            ").",
+        answer += (
+            sentence("; ")
+            + self.uc_slack_saving()
+            + sentence(
+                " (",
+                Ref("tab", "outcomes"),
+                *((", ", Ref("fig", shown), "(c)") if self.has_figure(shown) else ()),
+                ").",
+            )
         )
         sec.answer = answer
         self.answers.append(("Task 2.2: implement and compare UC-EMDM and UC-IVKC", answer))

@@ -1,0 +1,94 @@
+"""The claims the paper, the pitch and the page all make, each written once.
+
+A claim the abstract, a section, the conclusion and a slide repeat is a method here: they call it
+and put it into their own sentence, so its words and numbers cannot drift apart between them
+(``tests/test_report.py`` finds each one in the paper and in the pitch).
+"""
+
+from __future__ import annotations
+
+from ....core.controllers import Name
+from ..trace import Sentence, Text, sentence
+from .base import M_SYM, StoryBase
+from .records import EvidenceKey
+
+
+def cap(parts: Sentence) -> Sentence:
+    """The claim at the start of a sentence: its first letter a capital."""
+    if not parts or not isinstance(parts[0], Text):
+        return parts
+    first = parts[0].text
+    return [Text(first[:1].upper() + first[1:]), *parts[1:]]
+
+
+def listed(words: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return ", ".join(words[:-1]) + (" and " if len(words) > 1 else "") + words[-1]
+
+
+class Claims(StoryBase):
+    def dexterity_gain(self) -> Sentence:
+        """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers)."""
+        t1 = "task1"
+        return sentence(
+            "raises the mean manipulability by ",
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
+            " without and ",
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+            " with joint limits, for ",
+            self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
+            " and ",
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
+            " effort",
+        )
+
+    def ivkc_with_slack(self) -> Sentence:
+        """E4, the like-for-like Task 2 comparison: C-IVKC given a slack instead of scaling
+        (empty when that run did not arrive)."""
+        key: EvidenceKey = "t2-c-ivkc-slack-policy"
+        if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
+            return []
+        return sentence(
+            "with a slack instead of task scaling C-IVKC arrives in ",
+            self.evid_goal(key, Name.C_IVKC),
+            " (E4)",
+        )
+
+    def emdm_without_term(self) -> Sentence:
+        """E6: Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner)."""
+        key: EvidenceKey = "t2-c-emdm-no-manip"
+        run = self.evid(key, "runs", Name.C_EMDM)
+        if not run.get("reached") or run["time_to_goal"] >= self.mv(
+            "task2", Name.C_EMDM, "time_to_goal"
+        ):
+            return []
+        return sentence(
+            "without the dexterity term C-EMDM arrives sooner, in ",
+            self.evid_goal(key, Name.C_EMDM),
+            " (E6)",
+        )
+
+    def slack_gains(self) -> list[str]:
+        """What Task 1's C-EMDM gains with a slack instead of task scaling (E2): ``faster``,
+        ``cheaper``, ``more dexterous``, those that hold."""
+        adjectives = {
+            "time_to_goal": "faster",
+            "total_effort": "cheaper",
+            "mean_manipulability": "more dexterous",
+        }
+        return [adjectives[m] for m, better in self._policy_terms() if better]
+
+    def uc_slack_saving(self) -> Sentence:
+        """Task 2.2: what UC-EMDM's slack does against UC-IVKC."""
+        t, ivkc, emdm = "task2", Name.UC_IVKC, Name.UC_EMDM
+        return sentence(
+            "UC-EMDM's slack absorbs up to ",
+            self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
+            " of the desired velocity, for ",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            " effort and ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            " mean ",
+            M_SYM,
+            " against UC-IVKC",
+        )
