@@ -410,6 +410,7 @@ def workspace_figure(
         ax.set_ylabel(r"$y$ (m)")
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         handles += [
+            Patch(color="#BBBBBB", alpha=0.25, label="reachable"),
             Line2D([], [], color="grey", linestyle=":", label="straight line"),
             Patch(
                 facecolor="none",

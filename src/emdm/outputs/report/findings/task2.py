@@ -44,6 +44,11 @@ class Task2(Claims):
             f"; {ivkc} ",
             *self.outcome(t, ivkc),
             " (",
+            *(
+                (Ref("fig", "workspace"), ", ")
+                if self.d.value(f"data/{t}/events.json", "geometry")
+                else ()
+            ),
             Ref("fig", "t2-c"),
             ", ",
             Ref("tab", "outcomes"),
