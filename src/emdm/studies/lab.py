@@ -111,6 +111,7 @@ class SolverStudy:
             "failures": len(self.solves) - len(found),
             "median_time": float(np.median(times)),
             "p95_time": float(np.percentile(times, 95)),
+            "max_time": float(np.max(times)),
             "median_iterations": float(np.median([s.iterations for s in self.solves])),
             "median_evaluations": float(np.median([s.evaluations for s in self.solves])),
             "max_gap": float(gaps.max()),

@@ -173,11 +173,11 @@ class StoryBase:
         stall = self.evv(task, ctrl, "stall")
         if stall:
             return sentence(
-                "never reaches the goal: it stalls after ",
-                self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
-                " at ",
+                "never reaches the goal: it stalls, its distance to the goal staying at ",
                 self.ev(task, ctrl, "stall", "error", fmt=".3f", unit="m"),
-                f" from it, where its distance stays within {STALL_BAND * 1e3:g} mm",
+                f" (±{STALL_BAND * 1e3:g} mm) from ",
+                self.ev(task, ctrl, "stall", "t", fmt=".2f", unit="s"),
+                " on",
             )
         return sentence(
             "does not reach the goal within ",

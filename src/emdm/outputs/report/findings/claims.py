@@ -42,19 +42,19 @@ class Claims(StoryBase):
             " effort",
         )
 
-    def ivkc_with_slack(self) -> Sentence:
+    def ivkc_with_slack(self, label: bool = True) -> Sentence:
         """E4, the like-for-like Task 2 comparison: C-IVKC given a slack instead of scaling
-        (empty when that run did not arrive)."""
+        (empty when that run did not arrive; ``label``: name the evidence run)."""
         key: EvidenceKey = "t2-c-ivkc-slack-policy"
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
         return sentence(
             "with a slack instead of task scaling C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
-            " (E4)",
+            " (E4)" if label else "",
         )
 
-    def emdm_without_term(self) -> Sentence:
+    def emdm_without_term(self, label: bool = True) -> Sentence:
         """E6: Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner)."""
         key: EvidenceKey = "t2-c-emdm-no-manip"
         run = self.evid(key, "runs", Name.C_EMDM)
@@ -65,7 +65,7 @@ class Claims(StoryBase):
         return sentence(
             "without the dexterity term C-EMDM arrives sooner, in ",
             self.evid_goal(key, Name.C_EMDM),
-            " (E6)",
+            " (E6)" if label else "",
         )
 
     def slack_gains(self) -> list[str]:

@@ -31,13 +31,13 @@ class Front(Claims):
                 " from the goal",
             )
             if self.ivkc_with_slack():
-                out += sentence(" (") + self.ivkc_with_slack() + sentence(")")
+                out += sentence(" (") + self.ivkc_with_slack(label=False) + sentence(")")
             out += sentence(
                 "; C-EMDM's slack leaves the blocked straight line and arrives in ",
                 self.ttg(t2, Name.C_EMDM),
             )
             if self.emdm_without_term():
-                out += sentence("; ") + self.emdm_without_term()
+                out += sentence("; ") + self.emdm_without_term(label=False)
             out += sentence(". ")
         f = "data/task2-lab-C-EMDM/solvers.json"
         if self.d.exists(f):

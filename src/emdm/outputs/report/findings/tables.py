@@ -106,6 +106,7 @@ class Tables(StoryBase):
         items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
             ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
             ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
+            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
             ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
             (
                 "E5",

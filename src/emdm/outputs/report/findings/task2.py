@@ -518,8 +518,8 @@ class Task2(Claims):
                 M_SYM,
                 " is not differentiable, ",
                 Math("J_m", "<i>J</i><sub>m</sub>"),
-                " is the steepest one-sided ascent. The active-set method does not notice (a "
-                "median of ",
+                " is the steepest one-sided ascent. The active-set method's iterations stay few "
+                "whatever the conditioning (a median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
