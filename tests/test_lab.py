@@ -251,3 +251,17 @@ def test_solvers_command_rejects_unknown_solver(tmp_path, capsys):
     assert main(["solvers", "--solvers", "active-set,nope", "--out", str(tmp_path / "x")]) == 2
     assert "unknown solver 'nope'" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_a_sample_of_steps_keeps_the_least_dexterous_one():
+    """An even spacing of Task 2's 329 steps would miss its singular passage; the lab's sample
+    always holds it, with the first, the first scaled and the last step."""
+    from emdm.studies.lab import representative_steps, sample_steps
+
+    run = emdm.simulate(emdm.load_scenario("task2"), "C-EMDM")
+    worst = int(np.argmin(run.m[: run.steps]))
+    even = {round(i) for i in np.linspace(0, run.steps - 1, 40)}
+    assert worst not in even  # the case this guards
+    chosen = sample_steps(run, 40)
+    assert worst in chosen and set(representative_steps(run).values()) <= set(chosen)
+    assert sample_steps(run, None) == list(range(run.steps))

@@ -55,6 +55,9 @@ DEFAULT_LAB_SOLVERS = (
 )
 """The default comparison: custom, exact off-the-shelf, gradient-based and gradient-free."""
 
+SLOW_CALL = 0.02
+"""A call slower than this (s) is timed once: its time is already far above timer noise."""
+
 FEATURES = ("cond_reduced", "w_slack", "cond_J", "m", "alpha", "active")
 """Per-step features recorded with every re-solve (see :func:`step_features`)."""
 
@@ -177,15 +180,20 @@ class LabResult:
     studies: dict[str, SolverStudy]
     optimum: dict[int, tuple[Vector, float]]
     features: dict[int, dict[str, float]] = field(default_factory=dict)
+    repeats: int = 1
+    """Each call is timed as the median of up to this many (one above :data:`SLOW_CALL`)."""
 
 
 def sample_steps(run: Run, sample: int | None) -> list[int]:
-    """All steps, or ``sample`` evenly spaced ones that always include the representative steps."""
+    """All steps, or ``sample`` evenly spaced ones that always include the representative steps
+    and the least dexterous one (the smallest ``m``: the worst-conditioned program, which an
+    even spacing could miss)."""
     steps = list(range(run.steps))
     if sample is None or sample >= len(steps):
         return steps
     chosen = {round(i) for i in np.linspace(0, run.steps - 1, sample)}
     chosen |= set(representative_steps(run).values())
+    chosen.add(int(np.argmin(run.m[: run.steps])))
     return sorted(chosen)
 
 
@@ -231,7 +239,7 @@ def _timed(
         except Exception as exc:  # a raising solver is a measured failure
             result = SolverResult(None, f"error: {type(exc).__name__}: {exc}", 0, 0.0)
         times.append(time.perf_counter() - start)
-        if times[-1] > 0.02:  # slow solvers: one measurement is already far above timer noise
+        if times[-1] > SLOW_CALL:  # one measurement is already far above timer noise
             break
     assert result is not None
     return result, float(np.median(times))
@@ -297,7 +305,9 @@ def run_lab(
     for spec, (solves, histories, run, error) in zip(specs, parts, strict=True):
         studies[spec.name] = SolverStudy(spec, solves, histories, run, error)
     features = {k: step_features(reference, k, qp) for k, qp in programs.items()}
-    return LabResult(scenario, ctrl, reference, steps, reps, studies, optimum, features)
+    return LabResult(
+        scenario, ctrl, reference, steps, reps, studies, optimum, features, repeats=repeats
+    )
 
 
 def _study(
@@ -363,6 +373,7 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
         "installed": available_solvers(),
         # the gradient-free methods' exact l1 penalty: rho = penalty_weight (1 + max|P|)
         "penalty_weight": PENALTY,
+        "repeats": lab.repeats,
         "solvers": {name: study.summary() for name, study in lab.studies.items()},
         "challenges": challenges(lab),
     }
@@ -481,4 +492,5 @@ def merge_labs(parts: Sequence[LabResult]) -> LabResult:
         studies,
         first.optimum,
         first.features,
+        repeats=first.repeats,
     )

@@ -284,6 +284,11 @@ class Data:
         text = format_value(self.value(file, *path) * 1e3, fmt)
         return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, "ms", unit="ms")
 
+    def us(self, file: str, *path: str | int, fmt: str = ".2g") -> Num:
+        """A time in seconds at ``file#path``, written in microseconds."""
+        text = format_value(self.value(file, *path) * 1e6, fmt)
+        return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, "us", unit="µs")
+
     def count(self, file: str, *path: str | int) -> Num:
         """How many entries the list at ``file#path`` has."""
         text = str(len(self.value(file, *path)))
@@ -315,4 +320,6 @@ def expected_text(root: Path, src: str, fmt: str, op: str | None) -> str:
         return str(len(value(refs[0])))
     if op == "ms":
         return format_value(value(refs[0]) * 1e3, fmt)
+    if op == "us":
+        return format_value(value(refs[0]) * 1e6, fmt)
     return format_value(value(refs[0]), fmt)

@@ -91,13 +91,7 @@ class Task1(StoryBase):
                 ". ",
             )
         p += sentence(
-            "That motion raises ",
-            M_SYM,
-            " to ",
-            self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
-            f" ({ivkc}: ",
-            self.mt(t, ivkc, "final_manipulability", ".3f", "m²"),
-            ") and is paid for early: ",
+            "Both pay early: ",
             self.ev(t, ivkc, "effort", "share_first_second", fmt=".0%"),
             f" ({ivkc}) and ",
             self.ev(t, emdm, "effort", "share_first_second", fmt=".0%"),
