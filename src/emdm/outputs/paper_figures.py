@@ -868,6 +868,14 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
     return stem
 
 
+def _plain_tex(x: float) -> str:
+    """``0.100``, or ``3.4\times10^{-5}`` for a value below 10^-3 (mathtext)."""
+    if x == 0 or abs(x) >= 1e-3:
+        return f"{x:.3f}"
+    mant, exp = f"{x:.1e}".split("e")
+    return rf"{mant}\times10^{{{int(exp)}}}"
+
+
 def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
     """What manipulability measures, on a run's own arm: at its start and at its most and
     least dexterous states, the arm and the tip velocities unit joint speeds reach (the ellipse
@@ -901,7 +909,8 @@ def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
                 markerfacecolor="white",
             )
             ax.set_title(
-                f"{title}\n" + rf"$m$ = {run.m[k]:.3f} m$^2$, $t$ = {run.t[k]:.2f} s",
+                f"{title}\n"
+                + rf"$m$ = {_plain_tex(float(run.m[k]))} m$^2$, $t$ = {run.t[k]:.2f} s",
                 fontsize=medium.small,
             )
             ax.set_aspect("equal")

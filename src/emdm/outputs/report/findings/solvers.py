@@ -123,8 +123,8 @@ class Solvers(StoryBase):
                     answer += sentence(
                         ", and ",
                         " and ".join(slow),
-                        " exceed" if len(slow) > 1 else " exceeds",
-                        " the period at the 95th percentile",
+                        " overrun" if len(slow) > 1 else " overruns",
+                        " the period on at least one program in 20",
                     )
                 answer += sentence(".")
             else:

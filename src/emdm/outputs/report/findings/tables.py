@@ -106,7 +106,8 @@ class Tables(StoryBase):
         items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
             ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
             ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
-            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
+            # E2 runs the pair: its second row carries no label of its own
+            ("", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
             ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
             (
                 "E5",
@@ -187,7 +188,7 @@ class Tables(StoryBase):
                     *cells,
                 ]
             )
-            if label == "E2" and (e3 := self.e3_row()):
+            if (key, ctrl) == ("t1-c-slack-policy", Name.C_IVKC) and (e3 := self.e3_row()):
                 table.rows.append(e3)
         self.tables["evidence"] = table
         for s in sections:
