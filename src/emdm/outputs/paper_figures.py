@@ -891,11 +891,15 @@ def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
     scale = 0.35 * reach / biggest if biggest > 0 else 1.0
     st = _style(run, medium)
     height = 2.1 if medium is SLIDE else 1.5
+    ells = [
+        ellipse_points(arm.jacobian(run.q[k]), arm.joint_positions(run.q[k])[-1], scale)
+        for k in picks
+    ]
+    half = 1.05 * max(reach, *(float(np.abs(e).max()) for e in ells))  # no ellipse clipped
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(1, 3)
-        for ax, k, title in zip(axes, picks, titles, strict=True):
+        for ax, k, title, ell in zip(axes, picks, titles, ells, strict=True):
             pts = arm.joint_positions(run.q[k])
-            ell = ellipse_points(arm.jacobian(run.q[k]), pts[-1], scale)
             ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
             ax.fill(ell[:, 0], ell[:, 1], color=st["color"], alpha=0.35, linewidth=0)
             ax.plot(ell[:, 0], ell[:, 1], color=st["color"], linewidth=medium.line * 0.6)
@@ -909,13 +913,12 @@ def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
                 markerfacecolor="white",
             )
             ax.set_title(
-                f"{title}\n"
-                + rf"$m$ = {_plain_tex(float(run.m[k]))} m$^2$, $t$ = {run.t[k]:.2f} s",
+                f"{title}\n" + rf"$m={_plain_tex(float(run.m[k]))}$ m$^2$, $t$ = {run.t[k]:.2f} s",
                 fontsize=medium.small,
             )
             ax.set_aspect("equal")
-            ax.set_xlim(-reach * 1.05, reach * 1.05)
-            ax.set_ylim(-reach * 1.05, reach * 1.05)
+            ax.set_xlim(-half, half)
+            ax.set_ylim(-half, half)
             ax.set_xticks([])
             ax.set_yticks([])
     return stem

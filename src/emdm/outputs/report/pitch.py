@@ -45,6 +45,10 @@ class Pitch:
             ),
             sentence("within joint-velocity limits and position dampers"),
             sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
+            sentence(
+                "Why: a dexterous arm can still move its tip in every direction, ready for the "
+                "next task; a redundant arm has a joint to spare for that"
+            ),
         ]
         out.titles["task1"] = sentence(
             "Task 1 (three links): ",
@@ -98,10 +102,10 @@ class Pitch:
             )
         out.bullets["task2"] = t2c
         ev: list[Sentence] = []
-        if s.ivkc_with_slack():
-            ev.append(cap(s.ivkc_with_slack()))
+        if s.ivkc_with_slack():  # (the evidence labels are the paper's, not the talk's)
+            ev.append(cap(s.ivkc_with_slack(label=False)))
         if s.emdm_without_term():
-            ev.append(cap(s.emdm_without_term()))
+            ev.append(cap(s.emdm_without_term(label=False)))
         e7 = s.evid("t2-c-emdm-tight-slack", "runs", Name.C_EMDM)
         if not e7.get("reached", True):
             ev.append(
