@@ -397,14 +397,13 @@ def test_each_shared_claim_is_written_once_and_said_by_the_paper_and_the_pitch(q
     story = Story(Data(quick_report))
     paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
     pitch = (quick_report / "paper" / "pitch.tex").read_text(encoding="utf-8")
-    claims = {
-        "dexterity_gain": story.dexterity_gain(),
-        "ivkc_with_slack": story.ivkc_with_slack(),
-        "uc_slack_saving": story.uc_slack_saving(),
+    claims = {  # (as the paper says it, as the talk says it: without the evidence label)
+        "dexterity_gain": (story.dexterity_gain(), story.dexterity_gain()),
+        "ivkc_with_slack": (story.ivkc_with_slack(), story.ivkc_with_slack(label=False)),
+        "uc_slack_saving": (story.uc_slack_saving(), story.uc_slack_saving()),
     }
-    for name, claim in claims.items():
-        assert claim, name
-        text = render_latex(claim)
-        assert paper.count(text) + paper.count(render_latex(cap(claim))) >= 1, name
-        assert text in pitch or render_latex(cap(claim)) in pitch, name
+    for name, (written, said) in claims.items():
+        assert written and said, name
+        assert any(render_latex(c) in paper for c in (written, cap(written))), name
+        assert any(render_latex(c) in pitch for c in (said, cap(said))), name
     assert render_latex(story.dexterity_gain()) in paper.split(r"\end{abstract}")[0]
