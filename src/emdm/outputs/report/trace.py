@@ -276,23 +276,19 @@ class Data:
 
     def num(self, file: str, *path: str | int, fmt: str = ".4g", unit: str = "") -> Num:
         """The value at ``file#path``, formatted with ``fmt``."""
-        text = format_value(self.value(file, *path), fmt)
-        return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, unit=unit)
+        return traced(self.value(file, *path), file, path, fmt, unit)
 
     def ms(self, file: str, *path: str | int, fmt: str = ".3g") -> Num:
         """A time in seconds at ``file#path``, written in milliseconds."""
-        text = format_value(self.value(file, *path) * 1e3, fmt)
-        return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, "ms", unit="ms")
+        return traced(self.value(file, *path), file, path, fmt, "ms", op="ms")
 
     def us(self, file: str, *path: str | int, fmt: str = ".2g") -> Num:
         """A time in seconds at ``file#path``, written in microseconds."""
-        text = format_value(self.value(file, *path) * 1e6, fmt)
-        return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, "us", unit="µs")
+        return traced(self.value(file, *path), file, path, fmt, "µs", op="us")
 
     def count(self, file: str, *path: str | int) -> Num:
         """How many entries the list at ``file#path`` has."""
-        text = str(len(self.value(file, *path)))
-        return Num(text, f"{file}#{'/'.join(map(str, path))}", "d", "len")
+        return traced(self.value(file, *path), file, path, "d", op="len")
 
     def pct(self, a: tuple[str | int, ...], b: tuple[str | int, ...], fmt: str = "+.0f") -> Num:
         """``100 (a / b - 1)`` as a signed percentage, tracing both operands."""
@@ -300,6 +296,27 @@ class Data:
         text = format(100.0 * (va / vb - 1.0), fmt) + "%"
         src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
         return Num(text, src, fmt, "pct")
+
+
+SCALE = {"ms": 1e3, "us": 1e6}
+"""The operations that write a value in seconds in another unit, and their factor."""
+
+
+def traced(
+    value: Any,
+    file: str,
+    path: tuple[str | int, ...],
+    fmt: str,
+    unit: str = "",
+    op: str | None = None,
+) -> Num:
+    """The value read at ``file#path`` as a traced number: formatted with ``fmt`` after ``op``
+    (``ms``/``us``: seconds scaled, ``len``: the length of a list; see :func:`expected_text`)."""
+    if op == "len":
+        text = str(len(value))
+    else:
+        text = format_value(value * SCALE[op] if op in SCALE else value, fmt)
+    return Num(text, f"{file}#{'/'.join(map(str, path))}", fmt, op, unit=unit)
 
 
 def expected_text(root: Path, src: str, fmt: str, op: str | None) -> str:
@@ -318,8 +335,6 @@ def expected_text(root: Path, src: str, fmt: str, op: str | None) -> str:
         return format(100.0 * (a / b - 1.0), fmt) + "%"
     if op == "len":
         return str(len(value(refs[0])))
-    if op == "ms":
-        return format_value(value(refs[0]) * 1e3, fmt)
-    if op == "us":
-        return format_value(value(refs[0]) * 1e6, fmt)
+    if op in SCALE:
+        return format_value(value(refs[0]) * SCALE[op], fmt)
     return format_value(value(refs[0]), fmt)

@@ -19,8 +19,8 @@ from ....core.tolerances import STALL_BAND
 from ...paper_figures import GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
-from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence
-from .records import EventKey, EvidenceKey, MetricKey, PairKey, Records, traced
+from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
+from .records import EventKey, EvidenceKey, MetricKey, PairKey, Records
 
 FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the paper's tracking-gap axis is floored at (its caption says it)."""

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, Union
 
 from ....errors import EmdmError
-from ..trace import Data, Num, format_value
+from ..trace import Data
 
 
 class RecordError(EmdmError):
@@ -263,8 +263,3 @@ class Records:
             for key in typing.get_args(EvidenceKey):
                 evidence[key] = load_record(EvidenceRun, data, f, "runs", key)
         return cls(outcomes, events, pairs, evidence)
-
-
-def traced(value: Any, file: str, path: tuple[str | int, ...], fmt: str, unit: str = "") -> Num:
-    """A record's value as a traced number (its source is where the record was read)."""
-    return Num(format_value(value, fmt), f"{file}#{'/'.join(map(str, path))}", fmt, unit=unit)

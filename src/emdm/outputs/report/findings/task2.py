@@ -5,7 +5,7 @@ from __future__ import annotations
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Num, Ref, Sentence, sentence
+from ..trace import Math, Num, Ref, Sentence, sentence, traced
 from .base import (
     ALPHA,
     C_S,
@@ -19,7 +19,6 @@ from .base import (
     q,
 )
 from .claims import Claims, cap
-from .records import traced
 
 M_TWO_LINK = Math(
     r"m=l_1l_2|\sin q_2|",
