@@ -155,6 +155,7 @@ def test_lab_measures_gaps_against_the_exact_optimum(small_lab):
     for name, row in summary.items():
         for key in (
             "family",
+            "loop",
             "median_time",
             "p95_time",
             "median_iterations",

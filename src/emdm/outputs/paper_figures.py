@@ -167,6 +167,10 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
+UC_DASH = {"IVKC": (0, (1, 1.2)), "EMDM": (0, (4, 1.2, 1, 1.2))}
+"""The unconstrained pair's dashes where all four controllers share axes (dotted, dash-dotted),
+against the constrained pair's solid and dashed lines."""
+
 GAP_FLOOR = 1e-6
 """Where :func:`pair_figure`'s log axis of the tracking gap is floored (m/s): a task imposed
 exactly misses by rounding only (about 1e-16), drawn on the floor."""
@@ -221,9 +225,11 @@ def pair_figure(
         def drawn(run: Run) -> dict[str, Any]:
             st = _style(run, medium)
             if mixed and not run.controller.name.startswith("C-"):
-                # beside the constrained pair, the unconstrained one thinner (in its own lighter
-                # hue, drawn opaque): the two oranges and the two blues must not be read as one
-                st = {**st, "linewidth": 0.75 * st["linewidth"]}
+                # beside the constrained pair, the unconstrained one in its own lighter hue and
+                # its own dash (dotted IVKC, dash-dotted EMDM): the two oranges and the two blues
+                # are one shade apart, which print and grey scale do not keep
+                ivkc = run.controller.name.endswith("IVKC")
+                st = {**st, "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"]}
             return st
 
         for run in runs:
@@ -735,7 +741,7 @@ def convergence_figure(
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
     against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
     by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.2 if medium is PAPER else 2.7
+    height = 1.25 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     dashes = ("-", "--", ":", "-.")
     marks = ("o", "s", "^", "D", "v", "P")
@@ -761,19 +767,23 @@ def convergence_figure(
                 label=name,
             )
         ax.set_xlabel("objective evaluations", labelpad=1)
-        ax.set_ylabel(r"best $|f-f^*|$ + viol.", labelpad=1)
+        ax.set_ylabel(
+            r"best $|f-f^*|$ + viol." if medium is not PAPER else r"$|f-f^*|$ + viol.", labelpad=1
+        )
         # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this height
         ax.yaxis.set_major_locator(
             matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)])
         )
         ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
-        ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
+        if medium is not PAPER:  # the paper's caption names the program
+            ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
         ax.legend(
             loc="center left",
             bbox_to_anchor=(1.01, 0.5),
             fontsize=medium.tiny,
             frameon=False,
             handlelength=2.2,
+            labelspacing=0.25 if medium is PAPER else 0.5,
         )
     return stem
 

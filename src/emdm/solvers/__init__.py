@@ -14,6 +14,7 @@ from .base import (
     ChainResult,
     Family,
     KKTReport,
+    Loop,
     SolveFunction,
     SolverResult,
     SolverSpec,
@@ -54,6 +55,7 @@ register(
         Family.EXACT,
         solve_interior_point,
         "primal-dual interior point, Mehrotra predictor-corrector (custom)",
+        loop=Loop.PYTHON,
     )
 )
 register(
@@ -62,6 +64,7 @@ register(
         Family.GRADIENT,
         solve_admm,
         "ADMM operator splitting, first order (custom; OSQP's scheme)",
+        loop=Loop.PYTHON,
     )
 )
 register_backends()
@@ -71,6 +74,7 @@ register(
         Family.GRADIENT,
         solve_slsqp,
         "scipy SLSQP, exact gradients and constraint Jacobian",
+        loop=Loop.PYTHON,  # scipy's Python driver calls the compiled step once per iteration
     )
 )
 register(
@@ -79,6 +83,7 @@ register(
         Family.GRADIENT,
         solve_trust_constr,
         "scipy trust-constr, exact gradient and Hessian",
+        loop=Loop.PYTHON,
     )
 )
 
@@ -96,7 +101,9 @@ for _method, _text in (
     ("cobyla", "scipy COBYLA (linear models) on the reduced program, native constraints"),
     ("differential-evolution", "scipy differential evolution, native constraints, seeded"),
 ):
-    register(SolverSpec(_method, Family.GRADIENT_FREE, gradient_free(_method), _text))
+    register(
+        SolverSpec(_method, Family.GRADIENT_FREE, gradient_free(_method), _text, loop=Loop.PYTHON)
+    )
 register(
     SolverSpec(
         "cma-es",
@@ -105,6 +112,7 @@ register(
         "CMA-ES (the cma package), bounds and l1 penalty, seeded",
         extra="lab",
         is_available=_cma_installed,
+        loop=Loop.PYTHON,
     )
 )
 
@@ -116,6 +124,7 @@ __all__ = [
     "ChainResult",
     "Family",
     "KKTReport",
+    "Loop",
     "SolveFunction",
     "SolverResult",
     "SolverSpec",

@@ -135,6 +135,16 @@ class Family(StrEnum):
     GRADIENT_FREE = "gradient-free"
 
 
+class Loop(StrEnum):
+    """Where a solver's loop runs: wholly in compiled code, or with Python in it (a Python
+    driver around compiled steps, as scipy's SLSQP, numpy calls, or the objective called back
+    from Python at each evaluation). Solve times compare these implementations as well as the
+    methods; evaluation and iteration counts compare the methods alone."""
+
+    COMPILED = "compiled"
+    PYTHON = "Python"
+
+
 class SolveFunction(Protocol):
     """A solver: the program in, a :class:`SolverResult` out; ``history=True`` asks for a
     per-iteration trace. Gradient-free solvers also take ``budget`` (function evaluations)."""
@@ -144,7 +154,8 @@ class SolveFunction(Protocol):
 
 @dataclass(frozen=True)
 class SolverSpec:
-    """A registered solver: its name, family (exact, gradient, gradient-free) and how to get it."""
+    """A registered solver: its name, family (exact, gradient, gradient-free), where its
+    iterations run (:class:`Loop`) and how to get it."""
 
     name: str
     family: Family
@@ -152,6 +163,7 @@ class SolverSpec:
     description: str
     extra: str | None = None
     is_available: Callable[[], bool] = field(default=lambda: True)
+    loop: Loop = Loop.COMPILED
 
 
 _REGISTRY: dict[str, SolverSpec] = {}

@@ -110,6 +110,7 @@ class SolverStudy:
         out: dict[str, Any] = {
             "family": self.spec.family,
             "description": self.spec.description,
+            "loop": self.spec.loop,
             "resolved_steps": len(self.solves),
             "failures": len(self.solves) - len(found),
             "median_time": float(np.median(times)),

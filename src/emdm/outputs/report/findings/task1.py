@@ -134,7 +134,11 @@ class Task1(StoryBase):
             f") and within its speed limit; {emdm} ",
             *self.outcome(t, emdm),
             f" and {ivkc} ",
-            *self.outcome(t, ivkc),
+            *(
+                sentence("in ", self.ttg(t, ivkc))
+                if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
+                else self.outcome(t, ivkc)
+            ),
         )
         scaled = self.evv(t, emdm, "scaling")
         if scaled:
@@ -162,10 +166,8 @@ class Task1(StoryBase):
                 " steps (until ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                ") because the bounds leave no choice: at the largest feasible ",
-                ALPHA,
-                " the admissible set is a single point (two joints at their bounds leave one "
-                "unknown for two task equations), so the objective has nothing to choose. ",
+                "): two joints at their bounds leave one unknown for two task equations, so "
+                "the objective has nothing to choose (",
             )
             scaled_steps = self.pair(t, "C", "coincide_scaled_steps")
             determined = self.pair(t, "C", "coincide_determined_steps")
@@ -177,8 +179,9 @@ class Task1(StoryBase):
                 p += sentence(
                     "; on the other ",
                     _words(same - scaled_steps),
-                    ", joints at their bounds again fix the command",
+                    " the bounds alone fix the command",
                 )
+            p += sentence(")")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(
@@ -190,28 +193,16 @@ class Task1(StoryBase):
             p += sentence(".")
             sec.paragraphs.append(p)
             sec.paragraphs.append(self.policy_weighed())
-        pinned = self.evv(t, emdm, "pinned")
+        # the bounds each joint runs along are drawn in Fig. 3 (d)-(e): the text gives what
+        # they change
         p = sentence()
-        if pinned:
-            p += sentence("Over the run, ")
-            shown = min(len(pinned), 2)
-            for i, e in enumerate(pinned[:shown]):
-                p += sentence(
-                    "joint ",
-                    self.ev(t, emdm, "pinned", i, "joint", fmt="d"),
-                    f"{f' of {emdm}' if i == 0 else ''} runs along its {e['side']} {e['kind']} "
-                    "bound from ",
-                    self.ev(t, emdm, "pinned", i, "t0", fmt=".2f"),
-                    " to ",
-                    self.ev(t, emdm, "pinned", i, "t1", fmt=".2f", unit="s"),
-                    ", " if i < shown - 1 else ". ",
-                )
-        p += sentence(
-            "Against the UC pair, capped speeds change the effort by ",
-            self.pct(t, ivkc, Name.UC_IVKC, "total_effort"),
-            " (IVKC) and ",
-            self.pct(t, emdm, Name.UC_EMDM, "total_effort"),
-            " (EMDM)",
+        p += sentence("Against the UC pair, capped speeds change the effort by ")
+        cut_i = self.pct(t, ivkc, Name.UC_IVKC, "total_effort")
+        cut_e = self.pct(t, emdm, Name.UC_EMDM, "total_effort")
+        p += (
+            sentence(cut_i, " for both controllers")
+            if cut_i.text == cut_e.text
+            else sentence(cut_i, " (IVKC) and ", cut_e, " (EMDM)")
         )
         qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, Name.UC_EMDM, "final_q")
         if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
@@ -324,9 +315,7 @@ class Task1(StoryBase):
                     RATIO,
                     " from ",
                     self.d.num(c, "steps", i, "saturated_from_ratio", fmt=".3g"),
-                    " on gives the same optimum, a vertex of the joint bounds, so more weight on ",
-                    MRATE,
-                    " buys nothing. ",
+                    " on gives the same optimum, a vertex of the joint bounds. ",
                 )
         # the weight grid: failures
         grid_file = "data/task1-pareto-UC-EMDM/weight_grid.json"
@@ -413,8 +402,8 @@ class Task1(StoryBase):
             )
         )
         p = sentence(
-            "Started from the previous step's working set where that is still optimal, else "
-            "from an exact feasible point, it takes a median of ",
+            "Warm-started from the previous working set (else from an exact feasible point), it "
+            "takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
@@ -438,8 +427,7 @@ class Task1(StoryBase):
                 ", the feasible point being the optimum",
             )
         p += sentence(
-            ". Those scaled steps are Task 1's numerical challenge: their admissible set is a "
-            "single, degenerate vertex",
+            ". Those scaled steps, a single degenerate vertex, are Task 1's numerical challenge",
         )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
@@ -466,7 +454,7 @@ class Task1(StoryBase):
                 self.d.num(lab, "solvers", "quadprog", "failures", fmt="d"),
                 " of the ",
                 self.d.num(lab, "solvers", "quadprog", "resolved_steps", fmt="d"),
-                " C-EMDM programs the solver lab re-solves",
+                " re-solved C-EMDM programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp["failures"]:
                 p += sentence(", all scaled ones")
@@ -475,7 +463,7 @@ class Task1(StoryBase):
             COND_J,
             " peaks at ",
             self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
-            " along the whole runs and the programs have no slack.",
+            " and the programs have no slack.",
         )
         sec.paragraphs.append(p)
         return sec

@@ -158,10 +158,8 @@ class Task2(Claims):
                     self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
                     " to the end",
                 )
-            p += sentence(
-                ", it freezes ",
-                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
-                " from the goal after ",
+            p += sentence(  # its distance to the goal then is in the answer above
+                ", it freezes after ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
                 " of progress (",
                 T_EQ,
@@ -330,8 +328,7 @@ class Task2(Claims):
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
-                "Task 2, the four controllers (constrained dark, unconstrained light; IVKC "
-                "solid, EMDM dashed), panels as in ",
+                "Task 2, the four controllers (dashes in the legend), panels as in ",
                 Ref("fig", "t1-uc"),
                 " but ",
             ) + self.panels(gap=True, only_c=True)
@@ -415,7 +412,7 @@ class Task2(Claims):
         e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             p += sentence(
-                "E8: with ",
+                "E8 (",
                 *eq(
                     C_S,
                     self.d.num(
@@ -427,17 +424,21 @@ class Task2(Claims):
                         fmt=".0e",
                     ),
                 ),
-                " the slack vanishes and ",
+                "): the slack peaks at ",
+                self.evidn(
+                    "t2-uc-emdm-stiff-slack", "runs", emdm, "max_abs_slack", fmt=".0e", unit="m/s"
+                ),
+                " and ",
                 emdm,
                 " behaves like ",
                 ivkc,
-                " (goal in ",
+                " (",
                 self.evid_goal("t2-uc-emdm-stiff-slack", emdm),
-                ", effort ",
+                ", ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
                 ),
-                "): the slack is what saves effort, by giving up ",
+                "): the slack saves effort by giving up ",
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
                 " while ",
                 ERR,
