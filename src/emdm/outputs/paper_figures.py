@@ -728,6 +728,86 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
     return stem
 
 
+def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
+    """The pitch's solver slide: one axis, the median time per program of each solver (rows by
+    family, the control period dashed), and in a column beside the axes, in words, whether its
+    answer is the optimum: ``exact`` (gap and bound violation at most 1e-9), ``within 10^-k``,
+    ``off by g``, and ``out of bounds`` (violation above 1e-6); hollow where the gap or the
+    violation is above 1e-6. The paper's :func:`solver_figure` plots the gaps on an axis."""
+    rows = lab["solvers"]
+    order = [
+        k
+        for f in ("exact", "gradient", "gradient-free")
+        for k, r in rows.items()
+        if r["family"] == f
+    ]
+    markers = {"exact": "s", "gradient": "o", "gradient-free": "^"}
+    medium = SLIDE
+    with _figure(stem, medium, 3.8, 3.0) as fig:  # beside the slide's bullets (0.64 of its width)
+        # the verdicts in an axes of their own, so that the layout keeps room for them
+        ax, words = fig.subplots(
+            1, 2, sharey=True, gridspec_kw={"width_ratios": (1.5, 1.15), "wspace": 0}
+        )
+        words.axis("off")
+        y = np.arange(len(order))[::-1]
+        times = [rows[k]["median_time"] * 1e3 for k in order]
+        for yi, name, t in zip(y, order, times, strict=True):
+            r = rows[name]
+            gap, violation = abs(r["max_abs_gap"]), r["max_violation"]
+            usable = gap <= 1e-6 and violation <= 1e-6  # an answer a controller can use
+            colour = FAMILY_COLOR.get(r["family"], "grey")
+            ax.plot(
+                [t],
+                [yi],
+                marker=markers.get(r["family"], "o"),
+                color=colour,
+                markerfacecolor=colour if usable else "white",
+                markersize=7,
+                linestyle="none",
+            )
+            if gap <= 1e-9:
+                word = "exact"
+            elif gap <= 1e-4:
+                word = rf"within $10^{{{math.ceil(math.log10(gap))}}}$"
+            else:
+                word = f"off by {gap:.2g}"
+            if violation > 1e-6:
+                word += ", out of bounds"
+            words.text(-0.1, yi, word, va="center", fontsize=medium.tiny)
+        # the one long name shortened: the axes keep the slide's width
+        ax.set_yticks(y, [k.replace("differential-", "diff. ") for k in order])
+        ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(
+            matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")  # 0.01, 1, 100: plain
+        )
+        ax.axvline(dt * 1e3, color="black", linestyle="--", linewidth=1.0)
+        ax.text(
+            dt * 1e3,
+            len(order) - 0.4,
+            f"period {dt * 1e3:g} ms",
+            fontsize=medium.tiny,
+            ha="center",
+            va="bottom",
+        )
+        ax.set_xlabel("median time per program (ms)")
+        ax.set_xlim(min(times) / 3, 3 * max(max(times), dt * 1e3))
+        ax.set_ylim(-0.6, len(order) - 0.4)
+        ax.grid(axis="y", visible=False)
+        fig.legend(
+            handles=[
+                Line2D([], [], marker=markers[f], color=FAMILY_COLOR[f], linestyle="none", label=f)
+                for f in ("exact", "gradient", "gradient-free")
+                if any(rows[k]["family"] == f for k in order)
+            ],
+            loc="outside lower center",
+            ncols=3,
+            fontsize=medium.tiny,
+            frameon=False,
+            handletextpad=0.2,
+        )
+    return stem
+
+
 SHADES = (0.0, -0.45, 0.4, -0.25, 0.6, 0.2)
 """How far each solver of a family moves from the family's colour (towards white when > 0)."""
 
@@ -741,7 +821,7 @@ def convergence_figure(
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
     against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
     by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.25 if medium is PAPER else 2.7
+    height = 1.2 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     dashes = ("-", "--", ":", "-.")
     marks = ("o", "s", "^", "D", "v", "P")

@@ -382,7 +382,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     )
     lab = load("data/task2-lab-C-EMDM/solvers.json")
     out.append(str(pf.solver_figure(lab, dt_task2, stage / PAPER_FIGURES / "solvers")))
-    out.append(str(pf.solver_figure(lab, dt_task2, stage / SLIDE_FIGURES / "solvers", pf.SLIDE)))
+    out.append(str(pf.solver_verdict_figure(lab, dt_task2, stage / SLIDE_FIGURES / "solvers")))
     run = simulate(load_scenario("task2"), Name.C_EMDM)
     rows = {
         name: _read_rows(stage / "data" / "task2-lab-C-EMDM" / "solvers" / f"{name}.csv")

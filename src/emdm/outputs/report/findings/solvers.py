@@ -214,10 +214,9 @@ class Solvers(StoryBase):
             python = [k for k, r in rows.items() if r["loop"] != "compiled"]
             if compiled and python:
                 p += sentence(
-                    "Times compare implementations too (",
+                    "Times compare implementations too: only ",
                     listed(compiled),
-                    " run wholly in compiled code, every other solver has Python in its loop); "
-                    "evaluation counts compare methods. ",
+                    " run without Python in their loop. ",
                 )
         sec.paragraphs.append(p)  # the recommendation closes the paper (conclusion)
         return sec
