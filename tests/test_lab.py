@@ -266,3 +266,31 @@ def test_a_sample_of_steps_keeps_the_least_dexterous_one():
     chosen = sample_steps(run, 40)
     assert worst in chosen and set(representative_steps(run).values()) <= set(chosen)
     assert sample_steps(run, None) == list(range(run.steps))
+
+
+def test_the_lab_record_is_the_typed_record_the_report_reads(small_lab, tmp_path):
+    """Issue 24, item 6: the report reads a solver lab through typed records (LabRecord,
+    SolverRow) whose fields the lab writes; a renamed field stops the story in one line."""
+    import dataclasses
+    import typing
+
+    from emdm.outputs.report.findings import records as r
+    from emdm.outputs.report.trace import Data
+
+    def names(cls):
+        return {f.name for f in dataclasses.fields(cls)}
+
+    assert set(typing.get_args(r.SolverKey)) == names(r.SolverRow)
+    assert set(typing.get_args(r.LabKey)) == names(r.LabRecord) - {"solvers"}
+    record = {**lab_json(small_lab), "notes": {}}
+    folder = tmp_path / "data" / "task2-lab-C-EMDM"
+    folder.mkdir(parents=True)
+    (folder / "solvers.json").write_text(json.dumps(record), encoding="utf-8")
+    lab = r.load_record(r.LabRecord, Data(tmp_path), "data/task2-lab-C-EMDM/solvers.json")
+    assert set(lab.solvers) == set(small_lab.studies)
+    assert lab.solvers["slsqp"].loop == "Python" and lab.solvers["daqp"].loop == "compiled"
+    assert lab.solvers["nelder-mead"].median_evaluations > 10
+    del record["solvers"]["cobyla"]["max_abs_gap"]
+    (folder / "solvers.json").write_text(json.dumps(record), encoding="utf-8")
+    with pytest.raises(r.RecordError, match=r"solvers/cobyla: no field 'max_abs_gap'"):
+        r.load_record(r.LabRecord, Data(tmp_path), "data/task2-lab-C-EMDM/solvers.json")

@@ -125,10 +125,9 @@ class Pitch:
                 )
             )
         out.bullets["evidence"] = ev
-        f = "data/task2-lab-C-EMDM/solvers.json"
         verdict: list[Sentence] = []
-        if self.d.exists(f):
-            rows = self.d.value(f, "solvers")
+        rows = self.s.solvers("task2-lab-C-EMDM")
+        if rows:
             grad = Story.best(rows, "gradient")
             if grad:
                 verdict.append(  # evaluations first: they compare the methods
@@ -136,20 +135,20 @@ class Pitch:
                         "Gradient-based ",
                         grad,
                         ": the optimum in ",
-                        self.d.num(f, "solvers", grad, "median_evaluations", fmt=".4g"),
+                        self.s.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
                         " evaluations, ",
-                        self.d.ms(f, "solvers", grad, "median_time"),
+                        self.s.sn("task2-lab-C-EMDM", grad, "median_time", unit="ms"),
                     )
                 )
             # one bullet for the gradient-free family: the fastest exact one, and how many
             # of the others are inexact (the figure shows each)
-            free = [k for k, r in rows.items() if r["family"] == "gradient-free"]
+            free = [k for k, r in rows.items() if r.family == "gradient-free"]
             best_free = Story.best(rows, "gradient-free")
             # short by more than 1e-6: a gap of 3e-8 is an answer a controller can use
             inexact = [
                 k
                 for k in free
-                if not (abs(rows[k]["max_abs_gap"]) <= 1e-6 and rows[k]["max_violation"] <= 1e-6)
+                if not (abs(rows[k].max_abs_gap) <= 1e-6 and rows[k].max_violation <= 1e-6)
             ]
             if best_free:
                 verdict.append(
@@ -159,9 +158,9 @@ class Pitch:
                         else "Fastest exact gradient-free: ",
                         best_free,
                         ", ",
-                        self.d.num(f, "solvers", best_free, "median_evaluations", fmt=".4g"),
+                        self.s.sn("task2-lab-C-EMDM", best_free, "median_evaluations", ".4g"),
                         " evaluations, ",
-                        self.d.ms(f, "solvers", best_free, "median_time"),
+                        self.s.sn("task2-lab-C-EMDM", best_free, "median_time", unit="ms"),
                     )
                 )
             if inexact:

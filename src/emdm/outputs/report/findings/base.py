@@ -20,7 +20,16 @@ from ...paper_figures import GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
-from .records import EventKey, EvidenceKey, MetricKey, PairKey, Records
+from .records import (
+    EventKey,
+    EvidenceKey,
+    LabName,
+    MetricKey,
+    PairKey,
+    Records,
+    SolverKey,
+    SolverRow,
+)
 
 FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the paper's tracking-gap axis is floored at (its caption says it)."""
@@ -131,6 +140,21 @@ class StoryBase:
         value = self.evid(key, *path)
         return traced(value, "data/evidence.json", ("runs", key, *path), fmt, unit)
 
+    def solvers(self, lab: LabName) -> dict[str, SolverRow]:
+        """A solver lab's rows by solver (empty when the report ran no such lab)."""
+        found = self.rec.labs.get(lab)
+        return found.solvers if found else {}
+
+    def sn(
+        self, lab: LabName, solver: str, key: SolverKey, fmt: str = ".4g", unit: str = ""
+    ) -> Num:
+        """A solver's field in a lab, traced; ``unit="ms"`` writes a time in milliseconds."""
+        value = getattr(self.rec.labs[lab].solvers[solver], key)
+        op = "ms" if unit == "ms" else None
+        if op and fmt == ".4g":
+            fmt = ".3g"
+        return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
+
     def evid_goal(self, key: EvidenceKey, ctrl: str) -> Num:
         """The time to goal of ``ctrl`` in the evidence run ``key``."""
         return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
@@ -213,33 +237,22 @@ class StoryBase:
         return max(later)[1]
 
     @staticmethod
-    def exact(rows: dict[str, Any], family: str) -> list[str]:
+    def exact(rows: dict[str, SolverRow], family: str) -> list[str]:
         """The solvers of ``family`` whose answers are exact (gap and violation tiny)."""
         return [
             k
             for k, r in rows.items()
-            if r["family"] == family
-            and r["failures"] == 0
-            and abs(r["max_abs_gap"]) <= 1e-9
-            and r["max_violation"] <= 1e-9
+            if r.family == family
+            and r.failures == 0
+            and abs(r.max_abs_gap) <= 1e-9
+            and r.max_violation <= 1e-9
         ]
 
     @staticmethod
-    def best(rows: dict[str, Any], family: str) -> str | None:
+    def best(rows: dict[str, SolverRow], family: str) -> str | None:
         """The fastest of :meth:`exact`'s solvers of ``family``."""
         exact = StoryBase.exact(rows, family)
-        return min(exact, key=lambda k: rows[k]["median_time"]) if exact else None
-
-    @staticmethod
-    def free_verdict(rows: dict[str, Any], period: float = 0.05) -> bool:
-        """True when no gradient-free method is both exact and faster than the control period."""
-        return not any(
-            r["family"] == "gradient-free"
-            and abs(r["max_abs_gap"]) <= 1e-9
-            and r["max_violation"] <= 1e-9
-            and r["median_time"] < period
-            for r in rows.values()
-        )
+        return min(exact, key=lambda k: rows[k].median_time) if exact else None
 
     def _policy_terms(self) -> list[tuple[MetricKey, bool]]:
         """Task 1's C-EMDM under the slack policy (E2) against scaling, per outcome: (metric,

@@ -40,8 +40,8 @@ class Front(Claims):
                 out += sentence("; ") + self.emdm_without_term(label=False)
             out += sentence(". ")
         f = "data/task2-lab-C-EMDM/solvers.json"
-        if self.d.exists(f):
-            rows = self.d.value(f, "solvers")
+        rows = self.solvers("task2-lab-C-EMDM")
+        if rows:
             grad = self.best(rows, "gradient")
             free = self.best(rows, "gradient-free")
             if grad:
@@ -51,9 +51,9 @@ class Front(Claims):
                     " of Task 2's programs (evenly spaced, with the least dexterous) gradient-based ",
                     grad,
                     " reaches each exact optimum in a median ",
-                    self.d.num(f, "solvers", grad, "median_evaluations", fmt=".4g"),
+                    self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
                     " objective evaluations (",
-                    self.d.ms(f, "solvers", grad, "median_time"),
+                    self.sn("task2-lab-C-EMDM", grad, "median_time", unit="ms"),
                     ")",
                 )
                 if free:
@@ -63,9 +63,9 @@ class Front(Claims):
                         else "; the fastest exact gradient-free method, ",
                         free,
                         ", needs ",
-                        self.d.num(f, "solvers", free, "median_evaluations", fmt=".4g"),
+                        self.sn("task2-lab-C-EMDM", free, "median_evaluations", ".4g"),
                         " (",
-                        self.d.ms(f, "solvers", free, "median_time"),
+                        self.sn("task2-lab-C-EMDM", free, "median_time", unit="ms"),
                         ").",
                     )
                 else:

@@ -8,7 +8,8 @@ field or holds a value of the wrong type, in one line naming the file and the ke
 sentence is written, not while the paper renders.
 
 The story's accessors take the field names as literal types (:data:`MetricKey`,
-:data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`), so mypy refuses a misspelt key;
+:data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`, :data:`SolverKey`, :data:`LabName`), so
+mypy refuses a misspelt key;
 ``tests/test_report.py`` checks that these literals are the dataclasses' fields and that the
 producers (:func:`emdm.sim.metrics.metrics`, :func:`..explain.run_events`,
 :func:`..explain.pair_events`, :data:`..config.EVIDENCE`) write every one of them, so a renamed
@@ -181,6 +182,85 @@ class EvidenceRun:
     """With two controllers: how the pair relates (:class:`PairEvents`' fields)."""
 
 
+LabName = Literal["task1-lab-UC-EMDM", "task1-lab-C-EMDM", "task2-lab-C-EMDM"]
+"""The solver labs the report runs (folders of ``data/``)."""
+
+SolverKey = Literal[
+    "family",
+    "loop",
+    "description",
+    "resolved_steps",
+    "failures",
+    "median_time",
+    "p95_time",
+    "max_time",
+    "median_iterations",
+    "median_evaluations",
+    "max_gap",
+    "max_abs_gap",
+    "max_violation",
+    "optimal_claims",
+    "reached",
+    "time_to_goal",
+]
+"""The fields of :class:`SolverRow`."""
+
+
+@dataclass(frozen=True)
+class SolverRow:
+    """One solver of a solver lab: ``data/LAB/solvers.json#solvers/NAME``
+    (:meth:`emdm.studies.lab.SolverStudy.summary`)."""
+
+    family: str
+    loop: str
+    description: str
+    resolved_steps: int
+    failures: int
+    median_time: float
+    p95_time: float
+    max_time: float
+    median_iterations: float
+    median_evaluations: float
+    max_gap: float
+    max_abs_gap: float
+    max_violation: float
+    optimal_claims: int
+    reached: bool | None = None
+    """Alone in the closed loop: whether the run reached the goal (absent: not run)."""
+    time_to_goal: float | None = None
+
+
+LabKey = Literal[
+    "scenario",
+    "controller",
+    "reference_solver",
+    "resolved_steps",
+    "representative_steps",
+    "penalty_weight",
+    "repeats",
+    "challenges",
+    "notes",
+]
+"""The fields of :class:`LabRecord` (its ``solvers`` are :class:`SolverRow`)."""
+
+
+@dataclass(frozen=True)
+class LabRecord:
+    """A solver lab: ``data/LAB/solvers.json`` (:func:`emdm.studies.lab.lab_json`, with the
+    report's ``notes``)."""
+
+    scenario: str
+    controller: str
+    reference_solver: str
+    resolved_steps: list[Any]
+    representative_steps: dict[str, Any]
+    penalty_weight: float
+    repeats: int
+    challenges: dict[str, Any]
+    notes: dict[str, Any]
+    solvers: dict[str, SolverRow]
+
+
 def _accepts(hint: Any, value: Any) -> bool:
     """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
     origin = typing.get_origin(hint)
@@ -216,6 +296,13 @@ def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
     hints = typing.get_type_hints(cls)
     values = {}
     for f in dataclasses.fields(cls):
+        if typing.get_args(hints[f.name])[-1:] == (SolverRow,):  # a lab's rows: typed in turn
+            if not isinstance(node.get(f.name), dict):
+                raise RecordError(f"{where}: no field {f.name!r} (the report reads it)")
+            values[f.name] = {
+                k: load_record(SolverRow, data, file, *path, f.name, k) for k in node[f.name]
+            }
+            continue
         if f.name not in node and f.default is not dataclasses.MISSING:
             continue  # an optional field
         if f.name not in node:
@@ -236,6 +323,8 @@ class Records:
     events: dict[str, dict[str, RunEvents]]
     pairs: dict[str, dict[str, PairEvents]]
     evidence: dict[str, EvidenceRun]
+    labs: dict[str, LabRecord]
+    """The solver labs the report ran, by folder (``task2-lab-C-EMDM``)."""
 
     @classmethod
     def load(cls, data: Data, tasks: tuple[str, ...] = ("task1", "task2")) -> Records:
@@ -262,4 +351,9 @@ class Records:
         if data.exists(f):
             for key in typing.get_args(EvidenceKey):
                 evidence[key] = load_record(EvidenceRun, data, f, "runs", key)
-        return cls(outcomes, events, pairs, evidence)
+        labs = {
+            lab: load_record(LabRecord, data, f"data/{lab}/solvers.json")
+            for lab in typing.get_args(LabName)
+            if data.exists(f"data/{lab}/solvers.json")
+        }
+        return cls(outcomes, events, pairs, evidence, labs)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from ....studies.lab import SLOW_CALL
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, sentence
@@ -14,6 +12,7 @@ from .base import (
     eq,
 )
 from .claims import listed
+from .records import LabName, SolverRow
 
 
 class Solvers(StoryBase):
@@ -22,16 +21,15 @@ class Solvers(StoryBase):
         sec = Section(
             "t2-solvers", "Task 2.1: gradient-based against gradient-free", level=2, brief="2.1"
         )
-        if not self.d.exists(f):
+        lab: LabName = "task2-lab-C-EMDM"
+        rows = self.solvers(lab)
+        if not rows:
             return sec
-        rows = self.d.value(f, "solvers")
         dt = self.d.value("data/task2/metrics.json", "scenario", "motion", "dt")
         grad = self.best(rows, "gradient")
-        free = [k for k, r in rows.items() if r["family"] == "gradient-free"]
+        free = [k for k, r in rows.items() if r.family == "gradient-free"]
         exact_free = [
-            k
-            for k in free
-            if abs(rows[k]["max_abs_gap"]) <= 1e-9 and rows[k]["max_violation"] <= 1e-9
+            k for k in free if abs(rows[k].max_abs_gap) <= 1e-9 and rows[k].max_violation <= 1e-9
         ]
         inexact_free = [k for k in free if k not in exact_free]
         answer: Sentence = []
@@ -44,13 +42,13 @@ class Solvers(StoryBase):
                 grad,
                 " wins on both counts: it",
                 " reaches the exact optimum (largest gap ",
-                self.d.num(f, "solvers", grad, "max_abs_gap", fmt=".0e"),
+                self.sn(lab, grad, "max_abs_gap", ".0e"),
                 ") after a median ",
-                self.d.num(f, "solvers", grad, "median_evaluations", fmt=".4g"),
+                self.sn(lab, grad, "median_evaluations", ".4g"),
                 " objective evaluations (",
-                self.d.num(f, "solvers", grad, "median_iterations", fmt=".4g"),
+                self.sn(lab, grad, "median_iterations", ".4g"),
                 " iterations, ",
-                self.d.ms(f, "solvers", grad, "median_time"),
+                self.sn(lab, grad, "median_time", unit="ms"),
                 "), while ",
             )
         if exact_free:
@@ -61,21 +59,21 @@ class Solvers(StoryBase):
             for i, k in enumerate(exact_free):
                 answer += sentence(
                     *((k, " ") if len(exact_free) > 1 else (k, ", needs a median of ")),
-                    self.d.num(f, "solvers", k, "median_evaluations", fmt=".4g"),
+                    self.sn(lab, k, "median_evaluations", ".4g"),
                     " evaluations and ",
-                    self.d.ms(f, "solvers", k, "median_time"),
+                    self.sn(lab, k, "median_time", unit="ms"),
                     " (95th percentile ",
-                    self.d.ms(f, "solvers", k, "p95_time"),
+                    self.sn(lab, k, "p95_time", unit="ms"),
                     *(
-                        (", worst ", self.d.ms(f, "solvers", k, "max_time"))
-                        if "max_time" in rows[k]
+                        (", worst ", self.sn(lab, k, "max_time", unit="ms"))
+                        if rows[k].max_time == rows[k].max_time  # not NaN
                         else ()
                     ),
                     ")",
                     "; " if i < len(exact_free) - 1 else "",
                 )
-            over = [k for k in exact_free if rows[k]["p95_time"] > dt]
-            typical = [k for k in exact_free if rows[k]["median_time"] > dt]
+            over = [k for k in exact_free if rows[k].p95_time > dt]
+            typical = [k for k in exact_free if rows[k].median_time > dt]
             one = len(exact_free) == 1
             answer += sentence(
                 "; against the control period of ",
@@ -94,7 +92,7 @@ class Solvers(StoryBase):
                     else "its 95th percentile is within it"
                     + (
                         " but not its worst solve"
-                        if one and rows[exact_free[0]].get("max_time", 0.0) > dt
+                        if one and rows[exact_free[0]].max_time > dt
                         else ""
                     )
                     if grad
@@ -102,17 +100,17 @@ class Solvers(StoryBase):
                 ),
             )
             if inexact_free:
-                gaps = [abs(rows[k]["max_abs_gap"]) for k in inexact_free]
-                lo = min(inexact_free, key=lambda k: abs(rows[k]["max_abs_gap"]))
-                hi = max(inexact_free, key=lambda k: abs(rows[k]["max_abs_gap"]))
+                gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]
+                lo = min(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
+                hi = max(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
                 answer += (
                     sentence(
                         "; the others end between ",
-                        self.d.num(f, "solvers", lo, "max_abs_gap", fmt=".2g"),
+                        self.sn(lab, lo, "max_abs_gap", ".2g"),
                         " (",
                         lo,
                         ") and ",
-                        self.d.num(f, "solvers", hi, "max_abs_gap", fmt=".2g"),
+                        self.sn(lab, hi, "max_abs_gap", ".2g"),
                         " (",
                         hi,
                         ") from the optimum",
@@ -120,7 +118,7 @@ class Solvers(StoryBase):
                     if max(gaps) > min(gaps)
                     else sentence("; the others are inexact")
                 )
-                slow = [k for k in inexact_free if rows[k]["p95_time"] > dt]
+                slow = [k for k in inexact_free if rows[k].p95_time > dt]
                 if slow:  # real time: which cannot keep the control period
                     answer += sentence(
                         ", and ",
@@ -137,7 +135,7 @@ class Solvers(StoryBase):
                 answer += sentence(
                     k,
                     ": gap ",
-                    self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g"),
+                    self.sn(lab, k, "max_abs_gap", ".2g"),
                     ", " if i < len(inexact_free) - 1 else "",
                 )
             answer += sentence(").")
@@ -150,7 +148,7 @@ class Solvers(StoryBase):
             )
         )
         sec.tables.append("solvers")
-        self.solver_table(f, rows)
+        self.solver_table(lab, rows)
         sec.figures.append(
             self.figure(
                 "solvers",
@@ -176,24 +174,24 @@ class Solvers(StoryBase):
         if self.has_figure("convergence"):
             sec.figures.append(conv)
         p = sentence("Quality (", Ref("tab", "solvers"), "): ")
-        violators = [k for k in inexact_free if rows[k]["max_violation"] > 1e-6]
+        violators = [k for k in inexact_free if rows[k].max_violation > 1e-6]
         if violators:  # the gaps are in the answer; every solver's own figures in Table III
-            bad = max(violators, key=lambda k: rows[k]["max_violation"])
+            bad = max(violators, key=lambda k: rows[k].max_violation)
             p += sentence(
                 f"{bad} also violates the bounds by up to ",
-                self.d.num(f, "solvers", bad, "max_violation", fmt=".2g"),
+                self.sn(lab, bad, "max_violation", ".2g"),
                 "; ",
             )
         p += sentence(
             "in closed loop ",
         )
-        ref_t = rows.get("active-set", {}).get("time_to_goal")
+        ref_t = rows["active-set"].time_to_goal if "active-set" in rows else None
         slower = [
             k
             for k in free
-            if rows[k].get("reached")
+            if rows[k].reached
             and ref_t is not None
-            and rows[k]["time_to_goal"] > ref_t + 1e-9
+            and (rows[k].time_to_goal or 0.0) > ref_t + 1e-9
         ]
         if slower:
             p += sentence(
@@ -203,25 +201,25 @@ class Solvers(StoryBase):
             )
         else:
             p += sentence("every solver reaches the goal at the same time. ")
-        if "repeats" in self.d.value(f):  # how the times were taken: Table III's caption
+        p += sentence(  # how the lab's times were taken: Table III's caption
+            "In the loop the warm-started compiled active set takes ",
+            self.d.us("data/task2/metrics.json", "controllers", "C-EMDM", "median_solve_time"),
+            " per step. ",
+        )
+        # which times compare implementations as well as methods
+        compiled = [k for k, r in rows.items() if r.loop == "compiled"]
+        python = [k for k, r in rows.items() if r.loop != "compiled"]
+        if compiled and python:
             p += sentence(
-                "In the loop the warm-started compiled active set takes ",
-                self.d.us("data/task2/metrics.json", "controllers", "C-EMDM", "median_solve_time"),
-                " per step. ",
+                "Times compare implementations too: only ",
+                listed(compiled),
+                " run without Python in their loop. ",
             )
-        if all("loop" in r for r in rows.values()):  # which times compare implementations
-            compiled = [k for k, r in rows.items() if r["loop"] == "compiled"]
-            python = [k for k, r in rows.items() if r["loop"] != "compiled"]
-            if compiled and python:
-                p += sentence(
-                    "Times compare implementations too: only ",
-                    listed(compiled),
-                    " run without Python in their loop. ",
-                )
         sec.paragraphs.append(p)  # the recommendation closes the paper (conclusion)
         return sec
 
-    def solver_table(self, f: str, rows: dict[str, Any]) -> None:
+    def solver_table(self, lab: LabName, rows: dict[str, SolverRow]) -> None:
+        f = f"data/{lab}/solvers.json"
         table = Table(
             "solvers",
             sentence(
@@ -230,15 +228,9 @@ class Solvers(StoryBase):
                 " programs of its ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " steps (medians; ms: per program the median of ",
-                *(
-                    (
-                        "up to ",
-                        self.d.num(f, "repeats", fmt="d"),
-                        f" calls from Python, 1 above {SLOW_CALL * 1e3:g} ms, ",
-                    )
-                    if "repeats" in self.d.value(f)
-                    else ("calls from Python, ",)
-                ),
+                "up to ",
+                self.d.num(f, "repeats", fmt="d"),
+                f" calls from Python, 1 above {SLOW_CALL * 1e3:g} ms, ",
                 "solved from scratch; largest gap and bound violation, 0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
                 "; it./ev.: iterations/evaluations, --: none; goal: alone in the loop).",
@@ -260,40 +252,34 @@ class Solvers(StoryBase):
             ("gradient", "gradient-based"),
             ("gradient-free", "gradient-free"),
         ):
-            names = [k for k, r in rows.items() if r["family"] == family]
+            names = [k for k, r in rows.items() if r.family == family]
             if not names:
                 continue
             table.rows.append([sentence(title)])
             for k in names:
                 r = rows[k]
                 goal = (
-                    sentence(self.d.num(f, "solvers", k, "time_to_goal", fmt=".2f"))
-                    if r.get("reached")
+                    sentence(self.sn(lab, k, "time_to_goal", ".2f"))
+                    if r.reached
                     else sentence("--")
                 )
                 table.rows.append(
                     [
                         sentence(k),
-                        sentence(bare(self.d.ms(f, "solvers", k, "median_time"))),
+                        sentence(bare(self.sn(lab, k, "median_time", unit="ms"))),
                         sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
-                            *(
-                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
-                                for key in ("median_iterations",)
-                            ),
+                            self.sn(lab, k, "median_iterations") if r.median_iterations else "--",
                             "/",
-                            *(
-                                self.d.num(f, "solvers", k, key, fmt=".4g") if r[key] else "--"
-                                for key in ("median_evaluations",)
-                            ),
+                            self.sn(lab, k, "median_evaluations") if r.median_evaluations else "--",
                         ),
                         sentence(  # two digits, as the text quotes them
-                            self.d.num(f, "solvers", k, "max_abs_gap", fmt=".2g")
-                            if abs(r["max_abs_gap"]) >= 1e-12
+                            self.sn(lab, k, "max_abs_gap", ".2g")
+                            if abs(r.max_abs_gap) >= 1e-12
                             else Text("0")
                         ),
                         sentence(
-                            self.d.num(f, "solvers", k, "max_violation", fmt=".2g")
-                            if r["max_violation"] >= 1e-12
+                            self.sn(lab, k, "max_violation", ".2g")
+                            if r.max_violation >= 1e-12
                             else Text("0")
                         ),
                         goal,

@@ -441,22 +441,21 @@ class Task1(StoryBase):
                 ),
                 " elsewhere",
             )
-        rows = self.d.value(lab, "solvers") if self.d.exists(lab) else {}
-        notes = (
-            self.d.value(lab, "notes") if self.d.exists(lab) and "notes" in self.d.load(lab) else {}
-        )
-        qp = rows.get("quadprog", {})
-        if qp.get("failures"):
+        rows = self.solvers("task1-lab-C-EMDM")
+        lab1 = self.rec.labs.get("task1-lab-C-EMDM")
+        notes = lab1.notes if lab1 else {}
+        qp = rows.get("quadprog")
+        if qp and qp.failures:
             p += sentence(
                 ", and quadprog declines "
                 if "median_iterations_scaled" in ch.get("admm", {})
                 else ". The quadprog solver declines ",
-                self.d.num(lab, "solvers", "quadprog", "failures", fmt="d"),
+                self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of the ",
-                self.d.num(lab, "solvers", "quadprog", "resolved_steps", fmt="d"),
+                self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
                 " re-solved C-EMDM programs",
             )
-            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp["failures"]:
+            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 p += sentence(", all scaled ones")
         p += sentence(
             ". Otherwise Task 1 is benign: ",

@@ -504,7 +504,7 @@ class Task2(Claims):
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
                 " iterations warm-started, ",
-                self.d.num(f, "solvers", "active-set", "median_iterations", fmt=".4g"),
+                self.sn("task2-lab-C-EMDM", "active-set", "median_iterations", ".4g"),
                 " cold in ",
                 Ref("tab", "solvers"),
                 "; no fallback)" if self.mv(t, emdm, "fallback_steps") == 0 else ")",
