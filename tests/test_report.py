@@ -353,6 +353,8 @@ def test_the_story_reads_typed_records_that_the_producers_write():
     assert set(typing.get_args(r.EventKey)) == names(r.RunEvents)
     assert set(typing.get_args(r.PairKey)) == names(r.PairEvents)
     assert set(typing.get_args(r.EvidenceKey)) == {ev.key for ev in EVIDENCE}
+    assert set(typing.get_args(r.FrontKey)) == names(r.FrontStep)
+    assert set(typing.get_args(r.GridKey)) == names(r.GridRun)
     sc = emdm.load_scenario("task2", {"motion.max_time": 2.0})
     a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
     assert names(r.Outcomes) <= set(emdm.metrics(a))
@@ -373,6 +375,9 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     assert records.outcomes["task1"]["C-EMDM"].reached is True
     assert records.pairs["task2"]["C"].common_until_t > 0
     assert records.evidence["t2-c-ivkc-slack-policy"].runs["C-IVKC"]["reached"] is True
+    # the solver labs and Task 1's Pareto records are typed too (fronts at k = 0 first)
+    assert records.fronts["UC-EMDM"][0].k == 0 and records.fronts["C-EMDM"][0].degenerate
+    assert records.grids["UC-EMDM"] and records.labs["task2-lab-C-EMDM"].solvers
     metrics_file = root / "data" / "task2" / "metrics.json"
     data = json.loads(metrics_file.read_text(encoding="utf-8"))
     entry = data["controllers"]["C-IVKC"]

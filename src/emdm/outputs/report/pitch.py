@@ -8,6 +8,7 @@ from typing import Any
 from ...core.controllers import Name
 from .document import Document
 from .findings import ALPHA, DT, ERR, M_SYM, MRATE, RATIO, Story
+from .findings.base import T_EQ
 from .findings.claims import cap, listed
 from .trace import Data, Math, Sentence, Text, sentence
 
@@ -210,14 +211,16 @@ class Pitch:
     def dearer_later(self, uc: str) -> tuple[Any, ...]:
         """``, up to +X % at k = K`` when a later front's nominal optimum costs more (the paper's
         Pareto answer says so too: :meth:`Story.dearest_later`)."""
-        i = self.s.dearest_later(uc)
+        i = self.s.dearest_later("UC-EMDM")
         if i is None:
             return ()
-        return (  # a step the slide's fronts may not show: said as a time of the run
-            ", ",
+        return (  # a step the slide's fronts do not show: said as a time of the run
+            ", up to ",
             self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
-            " at ",
-            self.d.num(uc, "steps", i, "t", fmt=".1f", unit="s"),
+            " later (",
+            T_EQ,
+            self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
+            ", not shown)",
         )
 
     def policy(self) -> list[Sentence]:
@@ -270,8 +273,8 @@ class Pitch:
 
     def pareto(self) -> list[Sentence]:
         """The trade-off slide: what the weight ratio buys at the start and over whole runs."""
-        uc = "data/task1-pareto-UC-EMDM/fronts.json"
-        if not self.d.exists(uc):
+        uc = "data/task1-pareto-UC-EMDM/fronts.json"  # (the percentages trace both operands)
+        if "UC-EMDM" not in self.s.rec.fronts:
             return []
         out = [
             sentence(
@@ -280,16 +283,16 @@ class Pitch:
                 " from 0 to its largest value: ",
                 MRATE,
                 " from ",
-                self.d.num(uc, "steps", 0, "M_min", fmt=".3g"),
+                self.s.frontn("UC-EMDM", 0, "M_min", ".3g"),
                 " to ",
-                self.d.num(uc, "steps", 0, "M_max", fmt=".3g", unit="m²/s"),
+                self.s.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
                 ", effort from ",
-                self.d.num(uc, "steps", 0, "E_min", fmt=".3g"),
+                self.s.frontn("UC-EMDM", 0, "E_min", ".3g"),
                 " to ",
-                self.d.num(uc, "steps", 0, "E_max", fmt=".3g", unit="rad²/s²"),
+                self.s.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
             )
         ]
-        if self.d.value(uc, "steps", 0, "zero_E") > 0:
+        if self.s.front("UC-EMDM", 0, "zero_E") > 0:
             out.append(
                 sentence(
                     "Nominal ratio: ",
@@ -300,29 +303,29 @@ class Pitch:
                     *self.dearer_later(uc),
                 )
             )
-        grid = "data/task1-pareto-UC-EMDM/weight_grid.json"
-        failed = [i for i, r in enumerate(self.d.value(grid, "runs")) if not r.get("reached")]
+        runs = self.s.rec.grids.get("UC-EMDM", [])
+        failed = [i for i, r in enumerate(runs) if not r.reached]
         if failed:
             out.append(
                 sentence(
                     "Too much weight on dexterity: at ",
                     RATIO,
                     " = ",
-                    self.d.num(grid, "runs", failed[0], "w_manip", fmt=".4g"),
+                    self.s.gridn("UC-EMDM", failed[0], "w_manip", fmt=".4g"),
                     Text("/"),
-                    self.d.num(grid, "runs", failed[0], "w_effort", fmt=".2g"),
+                    self.s.gridn("UC-EMDM", failed[0], "w_effort", fmt=".2g"),
                     " the run misses the goal",
                     *(
                         (
                             ", a failure of the time step: with ",
                             DT,
                             " = ",
-                            self.d.num(
-                                grid, "runs", failed[0], "finer_dt", "dt", fmt=".2f", unit="s"
+                            self.s.gridn(
+                                "UC-EMDM", failed[0], "finer_dt", "dt", fmt=".2f", unit="s"
                             ),
                             " it arrives",
                         )
-                        if self.d.value(grid, "runs", failed[0]).get("finer_dt", {}).get("reached")
+                        if (runs[failed[0]].finer_dt or {}).get("reached")
                         else ()
                     ),
                 )

@@ -23,6 +23,8 @@ from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
 from .records import (
     EventKey,
     EvidenceKey,
+    FrontKey,
+    GridKey,
     LabName,
     MetricKey,
     PairKey,
@@ -155,6 +157,22 @@ class StoryBase:
             fmt = ".3g"
         return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
 
+    def front(self, ctrl: str, i: int, key: FrontKey) -> Any:
+        """A field of Task 1's Pareto front at its ``i``-th studied step (``ctrl``'s)."""
+        return getattr(self.rec.fronts[ctrl][i], key)
+
+    def frontn(self, ctrl: str, i: int, key: FrontKey, fmt: str, unit: str = "") -> Num:
+        file = f"data/task1-pareto-{ctrl}/fronts.json"
+        return traced(self.front(ctrl, i, key), file, ("steps", i, key), fmt, unit)
+
+    def grid(self, ctrl: str, i: int, key: GridKey, *path: str) -> Any:
+        """A field of the ``i``-th run of Task 1's weight grid (``ctrl``'s)."""
+        return _dig(getattr(self.rec.grids[ctrl][i], key), path)
+
+    def gridn(self, ctrl: str, i: int, key: GridKey, *path: str, fmt: str, unit: str = "") -> Num:
+        file = f"data/task1-pareto-{ctrl}/weight_grid.json"
+        return traced(self.grid(ctrl, i, key, *path), file, ("runs", i, key, *path), fmt, unit)
+
     def evid_goal(self, key: EvidenceKey, ctrl: str) -> Num:
         """The time to goal of ``ctrl`` in the evidence run ``key``."""
         return self.evidn(key, "runs", ctrl, "time_to_goal", fmt=".2f", unit="s")
@@ -222,17 +240,18 @@ class StoryBase:
     def has_figure(self, key: str) -> bool:
         return key in self.figures
 
-    def dearest_later(self, uc: str) -> int | None:
+    def dearest_later(self, ctrl: str = "UC-EMDM") -> int | None:
         """The later Pareto step whose nominal optimum costs most over its effort-minimal one,
         when that is more than at k = 0 (else None): the nominal weights' price grows."""
-        steps = self.d.value(uc, "steps")
-        e0, en = steps[0].get("zero_E"), steps[0].get("nominal_E")
+        steps = self.rec.fronts.get(ctrl, [])
+        if not steps or not steps[0].zero_E:
+            return None
         later = [
-            (info["nominal_E"] / info["zero_E"], i)
+            (info.nominal_E / info.zero_E, i)
             for i, info in enumerate(steps)
-            if i > 0 and info.get("zero_E") and info.get("nominal_E") is not None
+            if i > 0 and info.zero_E
         ]
-        if not later or not e0 or en is None or max(later)[0] <= en / e0:
+        if not later or max(later)[0] <= steps[0].nominal_E / steps[0].zero_E:
             return None
         return max(later)[1]
 

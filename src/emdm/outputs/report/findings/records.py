@@ -8,8 +8,8 @@ field or holds a value of the wrong type, in one line naming the file and the ke
 sentence is written, not while the paper renders.
 
 The story's accessors take the field names as literal types (:data:`MetricKey`,
-:data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`, :data:`SolverKey`, :data:`LabName`), so
-mypy refuses a misspelt key;
+:data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`, :data:`SolverKey`, :data:`LabName`,
+:data:`FrontKey`, :data:`GridKey`), so mypy refuses a misspelt key;
 ``tests/test_report.py`` checks that these literals are the dataclasses' fields and that the
 producers (:func:`emdm.sim.metrics.metrics`, :func:`..explain.run_events`,
 :func:`..explain.pair_events`, :data:`..config.EVIDENCE`) write every one of them, so a renamed
@@ -261,6 +261,95 @@ class LabRecord:
     solvers: dict[str, SolverRow]
 
 
+FrontKey = Literal[
+    "k",
+    "t",
+    "points",
+    "distinct",
+    "nondominated",
+    "degenerate",
+    "alpha",
+    "saturated_from_ratio",
+    "saturated_points",
+    "E_min",
+    "E_max",
+    "M_min",
+    "M_max",
+    "nominal_index",
+    "nominal_E",
+    "nominal_M",
+    "zero_E",
+    "zero_M",
+    "nominal_M_share",
+    "nominal_E_log_pct",
+]
+"""The fields of :class:`FrontStep`."""
+
+
+@dataclass(frozen=True)
+class FrontStep:
+    """One step's Pareto front: ``data/task1-pareto-CTRL/fronts.json#steps/I``
+    (:func:`..explain.front_events`, with the nominal weights' point added by the report)."""
+
+    k: int
+    t: float
+    points: int
+    distinct: int
+    nondominated: int
+    degenerate: bool
+    alpha: float
+    saturated_from_ratio: float | None
+    saturated_points: int
+    E_min: float
+    E_max: float
+    M_min: float
+    M_max: float
+    nominal_index: int
+    nominal_E: float
+    nominal_M: float
+    zero_E: float
+    zero_M: float
+    nominal_M_share: float | None
+    nominal_E_log_pct: float | None
+
+
+GridKey = Literal[
+    "w_effort",
+    "w_manip",
+    "reached",
+    "time_to_goal",
+    "total_effort",
+    "mean_manipulability",
+    "min_manipulability",
+    "final_manipulability",
+    "scaled_steps",
+    "final_error",
+    "max_abs_qd",
+    "finer_dt",
+]
+"""The fields of :class:`GridRun`."""
+
+
+@dataclass(frozen=True)
+class GridRun:
+    """One whole run of the weight grid: ``data/task1-pareto-CTRL/weight_grid.json#runs/I``;
+    a run that misses the goal also has its final error, its largest joint speed and its rerun
+    at a five times smaller step (``finer_dt``)."""
+
+    w_effort: float
+    w_manip: float
+    reached: bool
+    time_to_goal: float | None
+    total_effort: float
+    mean_manipulability: float
+    min_manipulability: float
+    final_manipulability: float
+    scaled_steps: int
+    final_error: float | None = None
+    max_abs_qd: float | None = None
+    finer_dt: dict[str, Any] | None = None
+
+
 def _accepts(hint: Any, value: Any) -> bool:
     """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
     origin = typing.get_origin(hint)
@@ -325,6 +414,10 @@ class Records:
     evidence: dict[str, EvidenceRun]
     labs: dict[str, LabRecord]
     """The solver labs the report ran, by folder (``task2-lab-C-EMDM``)."""
+    fronts: dict[str, list[FrontStep]]
+    """Task 1's Pareto fronts at the steps studied, by controller."""
+    grids: dict[str, list[GridRun]]
+    """Task 1's weight grid of whole runs, by controller."""
 
     @classmethod
     def load(cls, data: Data, tasks: tuple[str, ...] = ("task1", "task2")) -> Records:
@@ -356,4 +449,21 @@ class Records:
             for lab in typing.get_args(LabName)
             if data.exists(f"data/{lab}/solvers.json")
         }
-        return cls(outcomes, events, pairs, evidence, labs)
+        fronts: dict[str, list[FrontStep]] = {}
+        grids: dict[str, list[GridRun]] = {}
+        for ctrl in ("UC-EMDM", "C-EMDM"):
+            f, g = (
+                f"data/task1-pareto-{ctrl}/fronts.json",
+                f"data/task1-pareto-{ctrl}/weight_grid.json",
+            )
+            if data.exists(f):
+                fronts[ctrl] = [
+                    load_record(FrontStep, data, f, "steps", i)
+                    for i in range(len(data.value(f, "steps")))
+                ]
+            if data.exists(g):
+                grids[ctrl] = [
+                    load_record(GridRun, data, g, "runs", i)
+                    for i in range(len(data.value(g, "runs")))
+                ]
+        return cls(outcomes, events, pairs, evidence, labs, fronts, grids)

@@ -14,7 +14,7 @@ from .base import (
     bare,
     eq,
 )
-from .records import EvidenceKey, MetricKey
+from .records import EvidenceKey, GridKey, MetricKey
 
 
 class Tables(StoryBase):
@@ -65,32 +65,30 @@ class Tables(StoryBase):
     def e3_row(self) -> list[Sentence] | None:
         """Table II's E3: the first weight setting of the grid that misses the goal, re-run with
         a five times smaller time step, against itself at the nominal step (Section III-B)."""
-        grid = "data/task1-pareto-UC-EMDM/weight_grid.json"
-        if not self.d.exists(grid):
-            return None
-        runs = self.d.value(grid, "runs")
-        missed = [i for i, r in enumerate(runs) if not r.get("reached")]
-        if not missed or "total_effort" not in runs[missed[0]].get("finer_dt", {}):
+        runs = self.rec.grids.get("UC-EMDM", [])
+        missed = [i for i, r in enumerate(runs) if not r.reached]
+        if not missed or "total_effort" not in (runs[missed[0]].finer_dt or {}):
             return None
         i = missed[0]
-        finer = runs[i]["finer_dt"]
+        finer = runs[i].finer_dt or {}
         cells = [
             sentence(
-                self.d.num(grid, "runs", i, "finer_dt", "time_to_goal", fmt=".2f")
+                self.gridn(Name.UC_EMDM, i, "finer_dt", "time_to_goal", fmt=".2f")
                 if finer["reached"]
                 else "stall",
                 " (stall)",
             )
         ]
-        for metric, fmt, nominal in (
+        metrics: tuple[tuple[GridKey, str, str], ...] = (
             ("mean_manipulability", ".3f", ".3f"),
             ("total_effort", ".1f", ".0f"),  # one column: 20.1 (11749)
-        ):
+        )
+        for metric, fmt, nominal in metrics:
             cells.append(
                 sentence(
-                    self.d.num(grid, "runs", i, "finer_dt", metric, fmt=fmt),
+                    self.gridn(Name.UC_EMDM, i, "finer_dt", metric, fmt=fmt),
                     " (",
-                    self.d.num(grid, "runs", i, metric, fmt=nominal),
+                    self.gridn(Name.UC_EMDM, i, metric, fmt=nominal),
                     ")",
                 )
             )
@@ -98,7 +96,7 @@ class Tables(StoryBase):
         # the time step (over five)
         slower = self.d.value("data/task1/metrics.json", "scenario", "motion", "dt") / finer["dt"]
         change = sentence(
-            DT, f"/{slower:.0f}, ", *eq(W_M, self.d.num(grid, "runs", i, "w_manip", fmt=".4g"))
+            DT, f"/{slower:.0f}, ", *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g"))
         )
         return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
 

@@ -219,8 +219,8 @@ class Task1(StoryBase):
 
     def pareto(self) -> Section:
         sec = Section("t1-pareto", "Task 1: Pareto fronts and weights", level=2, brief="1.1-1.2")
-        uc, c = "data/task1-pareto-UC-EMDM/fronts.json", "data/task1-pareto-C-EMDM/fronts.json"
-        if not self.d.exists(uc):
+        uc = "data/task1-pareto-UC-EMDM/fronts.json"  # (the percentages trace both operands)
+        if "UC-EMDM" not in self.rec.fronts:
             return sec
         cap = sentence(
             "Pareto fronts between effort ",
@@ -251,87 +251,85 @@ class Task1(StoryBase):
             " from 0 to ",
             self.d.num("data/task1-pareto-UC-EMDM/pareto.json", "ratios", -1, fmt=".0e"),
             " moves UC-EMDM's optimum from ",
-            *eq(MRATE, self.d.num(uc, "steps", 0, "M_min", fmt=".3g")),
+            *eq(MRATE, self.frontn("UC-EMDM", 0, "M_min", ".3g")),
             " to ",
-            self.d.num(uc, "steps", 0, "M_max", fmt=".3g", unit="m²/s"),
+            self.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
             " at an effort growing from ",
-            self.d.num(uc, "steps", 0, "E_min", fmt=".3g"),
+            self.frontn("UC-EMDM", 0, "E_min", ".3g"),
             " to ",
-            self.d.num(uc, "steps", 0, "E_max", fmt=".3g", unit="rad²/s²"),
+            self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
             "; ",
         )
         shares = [
-            (info["nominal_E_log_pct"], i)
-            for i, info in enumerate(self.d.value(uc, "steps"))
-            if info.get("nominal_E_log_pct") is not None
+            (info.nominal_E_log_pct, i)
+            for i, info in enumerate(self.rec.fronts["UC-EMDM"])
+            if info.nominal_E_log_pct is not None
         ]
         if shares:
             answer += sentence(
                 "on every UC-EMDM front the nominal ratio lies in the lowest ",
-                self.d.num(uc, "steps", max(shares)[1], "nominal_E_log_pct", fmt=".0f"),
+                self.frontn("UC-EMDM", max(shares)[1], "nominal_E_log_pct", ".0f"),
                 "% of the effort range (log scale), costing ",
             )
         else:
             answer += sentence("the nominal ratio costs ")
-        e0 = self.d.value(uc, "steps", 0, "zero_E")
-        en = self.d.value(uc, "steps", 0, "nominal_E")
+        e0 = self.front("UC-EMDM", 0, "zero_E")
+        en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(
             self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
             if e0 > 0
             else Text("little"),
             " effort over the effort-minimal optimum (ratio 0) at k = 0" if en >= e0 else " effort",
         )
-        i = self.dearest_later(uc)
+        i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
             answer += sentence(
                 " but up to ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
                 " at k = ",
-                self.d.num(uc, "steps", i, "k", fmt="d"),
+                self.frontn("UC-EMDM", i, "k", "d"),
             )
         answer += sentence(".")
         sec.answer = answer
         self.answers.append(("Task 1: Pareto front between E and M at t = 0, T/3, 2T/3, T", answer))
         # degenerate and saturated fronts of C-EMDM
         p: Sentence = []
-        if self.d.exists(c):
-            csteps = self.d.value(c, "steps")
+        if "C-EMDM" in self.rec.fronts:
+            csteps = self.rec.fronts["C-EMDM"]
             for i, info in enumerate(csteps):
-                if info["degenerate"]:
+                if info.degenerate:
                     p += sentence(
                         "C-EMDM's front at k = ",
-                        self.d.num(c, "steps", i, "k", fmt="d"),
+                        self.frontn("C-EMDM", i, "k", "d"),
                         " is a single point no weight can move (the task-scaled step, ",
-                        *eq(ALPHA, self.d.num(c, "steps", i, "alpha", fmt=".2f")),
+                        *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
                         "). ",
                     )
-            sat = [(i, s) for i, s in enumerate(csteps) if s["saturated_from_ratio"] is not None]
+            sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
                 i, _ = sat[0]
                 p += sentence(
                     "At k = ",
-                    self.d.num(c, "steps", i, "k", fmt="d"),
+                    self.frontn("C-EMDM", i, "k", "d"),
                     " the front saturates: every ",
                     RATIO,
                     " from ",
-                    self.d.num(c, "steps", i, "saturated_from_ratio", fmt=".3g"),
+                    self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
                     " on gives the same optimum, a vertex of the joint bounds. ",
                 )
         # the weight grid: failures
-        grid_file = "data/task1-pareto-UC-EMDM/weight_grid.json"
-        rows = self.d.value(grid_file, "runs")
-        for i, r in enumerate(rows):
-            if r.get("reached") or "finer_dt" not in r:
+        for i, r in enumerate(self.rec.grids.get("UC-EMDM", [])):
+            if r.reached or r.finer_dt is None:
                 continue
             p += sentence(
                 "At ",
-                *eq(RATIO, self.d.num(grid_file, "runs", i, "w_manip", fmt=".4g")),
+                *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
-                self.d.num(grid_file, "runs", i, "w_effort", fmt=".2g"),
+                self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
                 " UC-EMDM fails to reach the goal (final error ",
-                self.d.num(grid_file, "runs", i, "final_error", fmt=".3f", unit="m"),
+                self.gridn("UC-EMDM", i, "final_error", fmt=".3f", unit="m"),
                 "): its largest joint speed reaches ",
-                self.d.num(grid_file, "runs", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
+                self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                 ", and a step of ",
                 self.d.num(
                     "data/task1/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
@@ -340,21 +338,15 @@ class Task1(StoryBase):
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
                 " far behind. ",
             )
-            finer = r["finer_dt"]
+            finer = r.finer_dt
             if finer.get("reached"):
                 p += sentence(
                     "The same weights with ",
-                    *eq(
-                        DT, self.d.num(grid_file, "runs", i, "finer_dt", "dt", fmt=".2f", unit="s")
-                    ),
+                    *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " reach the goal in ",
-                    self.d.num(
-                        grid_file, "runs", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"
-                    ),
+                    self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
                     " (E3), at an effort of ",
-                    self.d.num(
-                        grid_file, "runs", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"
-                    ),
+                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
                     " against ",
                     self.mt("task1", Name.UC_EMDM, "total_effort", ".3g"),
                     " at the nominal weights: the miss comes from the step size, the cost from "
