@@ -230,6 +230,7 @@ def pair_figure(
                 # are one shade apart, which print and grey scale do not keep
                 ivkc = run.controller.name.endswith("IVKC")
                 st = {**st, "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"]}
+                st["linewidth"] = 1.3 * st["linewidth"]  # a dotted light line is faint
             return st
 
         for run in runs:
@@ -291,7 +292,9 @@ def pair_figure(
             # two ticks per strip (three collide at this height): the position limits, and the
             # velocity limits unless the commands go far beyond them (UC)
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
-            qd_tick = limit if top <= 1.5 * limit else float(f"{0.8 * top:.1g}")
+            # (beyond the limits, a tick at the peak itself: a rounder one below it read as the
+            # axis' end, the curve "cut off")
+            qd_tick = limit if top <= 1.5 * limit else float(f"{top:.2g}")
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 if j < n - 1:
@@ -422,7 +425,7 @@ def workspace_figure(
                 facecolor="none",
                 edgecolor="#D55E00",
                 hatch="////",
-                label=rf"$\|p\|<{inner:.2f}$ m",
+                label=rf"$\|p\|<{inner:.3f}$ m",
             ),
             Line2D([], [], color="black", marker="o", markersize=2.5, label="start, goal"),
             Line2D(
@@ -821,7 +824,7 @@ def convergence_figure(
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
     against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
     by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.2 if medium is PAPER else 2.7
+    height = 1.15 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     dashes = ("-", "--", ":", "-.")
     marks = ("o", "s", "^", "D", "v", "P")

@@ -145,12 +145,14 @@ class Pitch:
             # of the others are inexact (the figure shows each)
             free = [k for k, r in rows.items() if r.family == "gradient-free"]
             best_free = Story.best(rows, "gradient-free")
-            # short by more than 1e-6: a gap of 3e-8 is an answer a controller can use
-            inexact = [
-                k
-                for k in free
-                if not (abs(rows[k].max_abs_gap) <= 1e-6 and rows[k].max_violation <= 1e-6)
-            ]
+
+            # short by more than 1e-6 (the figure's hollow markers): a gap of 3e-8 is an answer
+            # a controller can use
+            def short(k: str) -> bool:
+                return not (abs(rows[k].max_abs_gap) <= 1e-6 and rows[k].max_violation <= 1e-6)
+
+            inexact = [k for k in free if short(k)]
+            inexact_grad = [k for k, r in rows.items() if r.family == "gradient" and short(k)]
             if best_free:
                 verdict.append(
                     sentence(
@@ -164,14 +166,33 @@ class Pitch:
                         self.s.sn("task2-lab-C-EMDM", best_free, "median_time", unit="ms"),
                     )
                 )
-            if inexact:
+            if inexact or inexact_grad:
                 verdict.append(
                     sentence(
-                        f"{len(inexact)} of {len(free)} gradient-free methods stop short of "
-                        "the optimum (hollow markers)",
+                        "Hollow: short of the optimum (",
+                        f"{len(inexact)} of {len(free)} gradient-free methods"
+                        + (f", and {listed(inexact_grad)}" if inexact_grad else ""),
+                        ")",
                     )
                 )
         out.bullets["solvers"] = verdict
+        best_qp = Story.best(rows, "exact") if rows else None
+        grad_best = Story.best(rows, "gradient") if rows else None
+        out.bullets["solvers-verdict"] = (
+            [
+                sentence(
+                    "of the brief's two families, gradient-based (",
+                    grad_best,
+                    "); best of all an exact QP method (",
+                    best_qp,
+                    ", ",
+                    self.s.sn("task2-lab-C-EMDM", best_qp, "median_time", unit="ms"),
+                    ")",
+                )
+            ]
+            if best_qp and grad_best
+            else []
+        )
         out.bullets["pareto"] = self.pareto()
         out.bullets["task2-uc"] = self.task2_uc()
         out.bullets["takeaways"] = [

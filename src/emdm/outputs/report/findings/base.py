@@ -301,7 +301,7 @@ class StoryBase:
             ),
         }
         p = sentence(
-            "Weighed against its evidence, scaling is not free: with a slack (E2, ",
+            "Scaling has a price: with a slack (E2, ",
             Ref("tab", "evidence"),
             ") C-EMDM ",
         )

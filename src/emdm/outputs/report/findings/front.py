@@ -48,7 +48,7 @@ class Front(Claims):
                 out += sentence(
                     "On ",
                     self.d.count(f, "resolved_steps"),
-                    " of Task 2's programs (evenly spaced, with the least dexterous) gradient-based ",
+                    " of Task 2's programs gradient-based ",
                     grad,
                     " reaches each exact optimum in a median ",
                     self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),

@@ -227,7 +227,7 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " programs of its ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " steps (medians; ms: per program the median of ",
+                " steps (evenly spaced, with the least dexterous; medians; ms: per program the median of ",
                 "up to ",
                 self.d.num(f, "repeats", fmt="d"),
                 f" calls from Python, 1 above {SLOW_CALL * 1e3:g} ms, ",

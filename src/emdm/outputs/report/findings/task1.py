@@ -13,7 +13,6 @@ from .base import (
     COND_J,
     DT,
     E_SYM,
-    ERR,
     M_SYM,
     MRATE,
     RATIO,
@@ -90,15 +89,7 @@ class Task1(StoryBase):
                 ),
                 ". ",
             )
-        p += sentence(
-            "Both pay early: ",
-            self.ev(t, ivkc, "effort", "share_first_second", fmt=".0%"),
-            f" ({ivkc}) and ",
-            self.ev(t, emdm, "effort", "share_first_second", fmt=".0%"),
-            f" ({emdm}) of the total effort fall in the first second, where ",
-            ERR,
-            " is largest. Neither controller sees the joint limits: ",
-        )
+        p += sentence("Neither controller sees the joint limits: ")
         for name in (ivkc, emdm):
             if self.evv(t, name, "limits", "max_excess") > 0:
                 p += sentence(
@@ -399,7 +390,7 @@ class Task1(StoryBase):
             self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
-            " iterations, each an exact equality-constrained solve",
+            " iterations",
         )
         lab = "data/task1-lab-C-EMDM/solvers.json"
         ch: dict[str, Any] = {}
