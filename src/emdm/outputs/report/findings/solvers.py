@@ -122,7 +122,7 @@ class Solvers(StoryBase):
                 if slow:  # real time: which cannot keep the control period
                     answer += sentence(
                         ", and ",
-                        " and ".join(slow),
+                        listed(slow),
                         " overrun" if len(slow) > 1 else " overruns",
                         " the period on at least one program in 20",
                     )
@@ -195,7 +195,7 @@ class Solvers(StoryBase):
         ]
         if slower:
             p += sentence(
-                " and ".join(slower),
+                listed(slower),
                 " reach" if len(slower) > 1 else " reaches",
                 " the goal later (last column). ",
             )
