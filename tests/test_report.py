@@ -355,11 +355,15 @@ def test_the_story_reads_typed_records_that_the_producers_write():
     assert set(typing.get_args(r.EvidenceKey)) == {ev.key for ev in EVIDENCE}
     assert set(typing.get_args(r.FrontKey)) == names(r.FrontStep)
     assert set(typing.get_args(r.GridKey)) == names(r.GridRun)
+    assert set(typing.get_args(r.GeometryKey)) == names(r.Geometry)
     sc = emdm.load_scenario("task2", {"motion.max_time": 2.0})
     a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
     assert names(r.Outcomes) <= set(emdm.metrics(a))
     assert names(r.RunEvents) <= set(explain.run_events(a))
     assert names(r.PairEvents) <= set(explain.pair_events(a, b))
+    geometry = explain.geometry(sc, a.p[0])
+    assert names(r.Geometry) <= set(geometry)
+    assert all(names(r.GoalSolution) <= set(s) for s in geometry["solutions"])
 
 
 def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report, tmp_path):
@@ -378,6 +382,8 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     # the solver labs and Task 1's Pareto records are typed too (fronts at k = 0 first)
     assert records.fronts["UC-EMDM"][0].k == 0 and records.fronts["C-EMDM"][0].degenerate
     assert records.grids["UC-EMDM"] and records.labs["task2-lab-C-EMDM"].solvers
+    assert "task1" not in records.geometry  # three links: no geometry record
+    assert sum(s.within_limits for s in records.geometry["task2"].solutions) == 1
     metrics_file = root / "data" / "task2" / "metrics.json"
     data = json.loads(metrics_file.read_text(encoding="utf-8"))
     entry = data["controllers"]["C-IVKC"]

@@ -24,6 +24,7 @@ from .records import (
     EventKey,
     EvidenceKey,
     FrontKey,
+    GeometryKey,
     GridKey,
     LabName,
     MetricKey,
@@ -157,6 +158,11 @@ class StoryBase:
             fmt = ".3g"
         return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
 
+    def geon(self, task: str, key: GeometryKey, *path: str | int, fmt: str, unit: str = "") -> Num:
+        """A field of a two-link task's geometry (``solutions``: index, then field), traced."""
+        value = _dig(dataclasses.asdict(self.rec.geometry[task])[key], path)
+        return traced(value, f"data/{task}/events.json", ("geometry", key, *path), fmt, unit)
+
     def front(self, ctrl: str, i: int, key: FrontKey) -> Any:
         """A field of Task 1's Pareto front at its ``i``-th studied step (``ctrl``'s)."""
         return getattr(self.rec.fronts[ctrl][i], key)
@@ -180,11 +186,11 @@ class StoryBase:
     def elbow_flip_forced(self, task: str) -> bool:
         """Whether every goal configuration within the limits has its elbow on the other side
         from the start (a two-link arm's ``m = l1 l2 |sin q2|`` must then pass through 0)."""
-        geo = self.d.value(f"data/{task}/events.json", "geometry")
-        if not geo:
+        geo = self.rec.geometry.get(task)
+        if geo is None:
             return False
-        inside = [s for s in geo["solutions"] if s["within_limits"]]
-        return bool(inside) and all(s["elbow"] != geo["start_elbow"] for s in inside)
+        inside = [s for s in geo.solutions if s.within_limits]
+        return bool(inside) and all(s.elbow != geo.start_elbow for s in inside)
 
     def pct(self, task: str, a: str, b: str, key: MetricKey) -> Num:
         f = f"data/{task}/metrics.json"

@@ -9,7 +9,7 @@ sentence is written, not while the paper renders.
 
 The story's accessors take the field names as literal types (:data:`MetricKey`,
 :data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`, :data:`SolverKey`, :data:`LabName`,
-:data:`FrontKey`, :data:`GridKey`), so mypy refuses a misspelt key;
+:data:`FrontKey`, :data:`GridKey`, :data:`GeometryKey`), so mypy refuses a misspelt key;
 ``tests/test_report.py`` checks that these literals are the dataclasses' fields and that the
 producers (:func:`emdm.sim.metrics.metrics`, :func:`..explain.run_events`,
 :func:`..explain.pair_events`, :data:`..config.EVIDENCE`) write every one of them, so a renamed
@@ -350,6 +350,47 @@ class GridRun:
     finer_dt: dict[str, Any] | None = None
 
 
+GeometryKey = Literal[
+    "start_elbow",
+    "solutions",
+    "max_fold",
+    "inner_reach",
+    "line_min_distance",
+    "line_blocked",
+    "line_enters_at",
+    "reach",
+]
+"""The fields of :class:`Geometry`."""
+
+
+@dataclass(frozen=True)
+class GoalSolution:
+    """One inverse-kinematics solution of a two-link arm's goal:
+    ``data/TASK/events.json#geometry/solutions/I``."""
+
+    elbow: str
+    q1: float
+    q2: float
+    within_limits: bool
+    outside_joint: int | None
+    outside_by: float
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """A two-link task's geometry: ``data/TASK/events.json#geometry``
+    (:func:`..explain.geometry`)."""
+
+    start_elbow: str
+    solutions: list[GoalSolution]
+    max_fold: float
+    inner_reach: float
+    line_min_distance: float
+    line_blocked: bool
+    line_enters_at: float | None
+    reach: float
+
+
 def _accepts(hint: Any, value: Any) -> bool:
     """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
     origin = typing.get_origin(hint)
@@ -385,12 +426,15 @@ def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
     hints = typing.get_type_hints(cls)
     values = {}
     for f in dataclasses.fields(cls):
-        if typing.get_args(hints[f.name])[-1:] == (SolverRow,):  # a lab's rows: typed in turn
-            if not isinstance(node.get(f.name), dict):
+        inner = typing.get_args(hints[f.name])[-1:]
+        if inner and isinstance(inner[0], type) and dataclasses.is_dataclass(inner[0]):
+            # records inside a record (a lab's rows, a geometry's solutions): typed in turn
+            kind = typing.get_origin(hints[f.name])
+            if not isinstance(node.get(f.name), kind):
                 raise RecordError(f"{where}: no field {f.name!r} (the report reads it)")
-            values[f.name] = {
-                k: load_record(SolverRow, data, file, *path, f.name, k) for k in node[f.name]
-            }
+            keys = node[f.name] if kind is dict else range(len(node[f.name]))
+            built = {k: load_record(inner[0], data, file, *path, f.name, k) for k in keys}
+            values[f.name] = built if kind is dict else list(built.values())
             continue
         if f.name not in node and f.default is not dataclasses.MISSING:
             continue  # an optional field
@@ -414,6 +458,8 @@ class Records:
     evidence: dict[str, EvidenceRun]
     labs: dict[str, LabRecord]
     """The solver labs the report ran, by folder (``task2-lab-C-EMDM``)."""
+    geometry: dict[str, Geometry]
+    """The two-link tasks' geometry, by task."""
     fronts: dict[str, list[FrontStep]]
     """Task 1's Pareto fronts at the steps studied, by controller."""
     grids: dict[str, list[GridRun]]
@@ -444,6 +490,12 @@ class Records:
         if data.exists(f):
             for key in typing.get_args(EvidenceKey):
                 evidence[key] = load_record(EvidenceRun, data, f, "runs", key)
+        geometry = {
+            task: load_record(Geometry, data, f"data/{task}/events.json", "geometry")
+            for task in tasks
+            if data.exists(f"data/{task}/events.json")
+            and data.value(f"data/{task}/events.json").get("geometry")
+        }
         labs = {
             lab: load_record(LabRecord, data, f"data/{lab}/solvers.json")
             for lab in typing.get_args(LabName)
@@ -466,4 +518,4 @@ class Records:
                     load_record(GridRun, data, g, "runs", i)
                     for i in range(len(data.value(g, "runs")))
                 ]
-        return cls(outcomes, events, pairs, evidence, labs, fronts, grids)
+        return cls(outcomes, events, pairs, evidence, labs, geometry, fronts, grids)

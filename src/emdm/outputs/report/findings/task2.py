@@ -64,9 +64,8 @@ class Task2(Claims):
                 answer,
             )
         )
-        geo = self.d.value(f"data/{t}/events.json", "geometry")
-        g = f"data/{t}/events.json"
-        if geo:
+        geo = self.rec.geometry.get(t)
+        if geo is not None:
             sec.figures.append(
                 self.figure(
                     "workspace",
@@ -81,55 +80,46 @@ class Task2(Claims):
                     ),
                 )
             )
-            sols = geo["solutions"]
-            inside = [i for i, s in enumerate(sols) if s["within_limits"]]
-            outside = [i for i, s in enumerate(sols) if not s["within_limits"]]
+            sols = geo.solutions
+            inside = [i for i, s in enumerate(sols) if s.within_limits]
+            outside = [i for i, s in enumerate(sols) if not s.within_limits]
             p: Sentence = []
             if inside and outside:
                 i, o = inside[0], outside[0]
+                joint = sols[o].outside_joint or 1
                 p += sentence(
                     "Within the joint limits the goal has one configuration, elbow ",
-                    sols[i]["elbow"],
+                    sols[i].elbow,
                     ", ",
                     Math("q", "<i>q</i>"),
                     " = (",
-                    self.d.num(g, "geometry", "solutions", i, "q1", fmt=".2f"),
+                    self.geon(t, "solutions", i, "q1", fmt=".2f"),
                     ", ",
-                    self.d.num(g, "geometry", "solutions", i, "q2", fmt=".2f"),
+                    self.geon(t, "solutions", i, "q2", fmt=".2f"),
                     ") rad; the elbow-",
-                    sols[o]["elbow"],
+                    sols[o].elbow,
                     " one",
-                    " (the side the arm starts on)"
-                    if geo.get("start_elbow") == sols[o]["elbow"]
-                    else "",
+                    " (the side the arm starts on)" if geo.start_elbow == sols[o].elbow else "",
                     " needs ",
-                    q(sols[o]["outside_joint"]),
+                    q(joint),
                     " = ",
-                    self.d.num(
-                        g,
-                        "geometry",
-                        "solutions",
-                        o,
-                        f"q{sols[o]['outside_joint']}",
-                        fmt=".2f",
-                        unit="rad",
-                    ),
+                    self.geon(t, "solutions", o, f"q{joint}", fmt=".2f", unit="rad"),
                     ", ",
-                    self.d.num(g, "geometry", "solutions", o, "outside_by", fmt=".2f", unit="rad"),
+                    self.geon(t, "solutions", o, "outside_by", fmt=".2f", unit="rad"),
                     " beyond its limit. ",
                 )
-            if geo["line_blocked"]:
+            if geo.line_blocked:
                 p += sentence(
                     "With ",
                     Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
                     " outside its stop zone (at most ",
-                    self.d.num(g, "geometry", "max_fold", fmt=".3f", unit="rad"),
+                    self.geon(t, "max_fold", fmt=".3f", unit="rad"),
                     ") the end effector cannot come closer than ",
-                    self.d.num(g, "geometry", "inner_reach", fmt=".3f", unit="m"),
+                    self.geon(t, "inner_reach", fmt=".3f", unit="m"),
                     " to the base, yet the straight line to the goal passes ",
-                    self.d.num(g, "geometry", "line_min_distance", fmt=".3f", unit="m"),
+                    self.geon(t, "line_min_distance", fmt=".3f", unit="m"),
                     " from it and enters that disc ",
-                    self.d.num(g, "geometry", "line_enters_at", fmt=".3f", unit="m"),
+                    self.geon(t, "line_enters_at", fmt=".3f", unit="m"),
                     " after the start (",
                     Ref("fig", "workspace"),
                     ").",
