@@ -356,6 +356,8 @@ def test_the_story_reads_typed_records_that_the_producers_write():
     assert set(typing.get_args(r.FrontKey)) == names(r.FrontStep)
     assert set(typing.get_args(r.GridKey)) == names(r.GridRun)
     assert set(typing.get_args(r.GeometryKey)) == names(r.Geometry)
+    assert set(typing.get_args(r.MmcKey)) == names(r.MmcRow)
+    assert set(typing.get_args(r.PaperKey)) == names(r.PaperRow)
     sc = emdm.load_scenario("task2", {"motion.max_time": 2.0})
     a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
     assert names(r.Outcomes) <= set(emdm.metrics(a))
@@ -384,6 +386,15 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     assert records.grids["UC-EMDM"] and records.labs["task2-lab-C-EMDM"].solvers
     assert "task1" not in records.geometry  # three links: no geometry record
     assert sum(s.within_limits for s in records.geometry["task2"].solutions) == 1
+    assert records.mmc is not None and records.mmc.paper is not None  # the benchmark, typed
+    assert set(records.mmc.paper.results["panda"]) >= {"RRMC", "MMC"}
+    mmc_file = root / "data" / "mmc.json"
+    mmc = json.loads(mmc_file.read_text(encoding="utf-8"))
+    mmc["paper"]["results"]["ur5"]["MMC"]["failure_rate"] = None
+    mmc_file.write_text(json.dumps(mmc), encoding="utf-8")
+    with pytest.raises(RecordError, match=r"paper/results/ur5/MMC/failure_rate: expected float"):
+        Records.load(Data(root))
+    mmc_file.write_text(json.dumps(json.loads((quick_report / "data" / "mmc.json").read_text())))
     metrics_file = root / "data" / "task2" / "metrics.json"
     data = json.loads(metrics_file.read_text(encoding="utf-8"))
     entry = data["controllers"]["C-IVKC"]

@@ -6,10 +6,11 @@ from typing import Any
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Num, Sentence, sentence
+from ..trace import Num, Sentence, sentence, traced
 from .base import (
     StoryBase,
 )
+from .records import MmcKey, MmcRecord, PaperKey, PaperProtocol
 
 
 class Beyond(StoryBase):
@@ -22,28 +23,30 @@ class Beyond(StoryBase):
             "Beyond the brief: spatial arms and the manipulability benchmark",
             html_only=True,
         )
-        if not self.d.exists(f):
+        mmc = self.rec.mmc
+        if mmc is None:
             return sec
 
-        def r(arm: str, ctrl: str, key: str, fmt: str, unit: str = "") -> Num:
-            return self.d.num(f, "results", arm, ctrl, key, fmt=fmt, unit=unit)
+        def rv(arm: str, ctrl: str, key: MmcKey) -> Any:
+            return getattr(mmc.results[arm][ctrl], key)
 
-        def rv(arm: str, ctrl: str, key: str) -> Any:
-            return self.d.value(f, "results", arm, ctrl, key)
+        def r(arm: str, ctrl: str, key: MmcKey, fmt: str, unit: str = "") -> Num:
+            return traced(rv(arm, ctrl, key), f, ("results", arm, ctrl, key), fmt, unit)
 
         def pub(arm: str, ctrl: str, index: int, fmt: str, unit: str = "") -> Num:
-            return self.d.num(f, "published", arm, ctrl, index, fmt=fmt, unit=unit)
+            value = mmc.published[arm][ctrl][index]
+            return traced(value, f, ("published", arm, ctrl, index), fmt, unit)
 
         def with_pub(
-            arm: str, ctrl: str, key: str, index: int, fmt: str, unit: str = ""
+            arm: str, ctrl: str, key: MmcKey, index: int, fmt: str, unit: str = ""
         ) -> Sentence:
             """Ours, then the published value in brackets where there is one."""
             ours = r(arm, ctrl, key, fmt, unit)
-            if ctrl not in self.d.value(f, "published", arm):
+            if ctrl not in mmc.published[arm]:
                 return sentence(ours)
             return sentence(ours, " (", pub(arm, ctrl, index, fmt, unit), ")")
 
-        arms = [a for a in ("panda", "ur5") if a in self.d.value(f, "results")]
+        arms: list[str] = [a for a in ("panda", "ur5") if a in mmc.results]
         least = all(
             rv(a, Name.MMC, "failure_rate")
             <= min(rv(a, c, "failure_rate") for c in (Name.RRMC, Name.PARK))
@@ -51,7 +54,7 @@ class Beyond(StoryBase):
         )
         answer = sentence(
             "On ",
-            self.d.num(f, "trials", fmt="d"),
+            traced(mmc.trials, f, ("trials",), "d"),
             " random pose tasks per arm, MMC (the slack program with joint bounds) fails ",
             "least on both arms" if least else "not always least",
             ": ",
@@ -169,7 +172,7 @@ class Beyond(StoryBase):
             html_only=True,
         )
         for a in arms:
-            for c in self.d.value(f, "results", a):
+            for c in mmc.results[a]:
                 table.rows.append(
                     [
                         sentence("Panda" if a == "panda" else "UR5"),
@@ -184,8 +187,8 @@ class Beyond(StoryBase):
                 )
         self.tables["mmc"] = table
         sec.tables.append("mmc")
-        if self.d.exists(f) and "paper" in self.d.value(f):
-            self._mmc_paper(sec, f, arms)
+        if mmc.paper is not None:
+            self._mmc_paper(sec, f, mmc, mmc.paper, arms)
         pp = "panda_preset"
         sec.figures.append(
             self.figure(
@@ -194,13 +197,33 @@ class Beyond(StoryBase):
                 sentence(
                     "The Panda preset task: the end-effector paths of RRMC, PARK, MMC and C-EMDM "
                     "in three projections. Mean manipulability: RRMC ",
-                    self.d.num(f, pp, Name.RRMC, "mean_manipulability", fmt=".4f"),
+                    traced(
+                        mmc.panda_preset[Name.RRMC]["mean_manipulability"],
+                        f,
+                        (pp, Name.RRMC, "mean_manipulability"),
+                        ".4f",
+                    ),
                     ", PARK ",
-                    self.d.num(f, pp, Name.PARK, "mean_manipulability", fmt=".4f"),
+                    traced(
+                        mmc.panda_preset[Name.PARK]["mean_manipulability"],
+                        f,
+                        (pp, Name.PARK, "mean_manipulability"),
+                        ".4f",
+                    ),
                     ", MMC ",
-                    self.d.num(f, pp, Name.MMC, "mean_manipulability", fmt=".4f"),
+                    traced(
+                        mmc.panda_preset[Name.MMC]["mean_manipulability"],
+                        f,
+                        (pp, Name.MMC, "mean_manipulability"),
+                        ".4f",
+                    ),
                     ", C-EMDM ",
-                    self.d.num(f, pp, Name.C_EMDM, "mean_manipulability", fmt=".4f"),
+                    traced(
+                        mmc.panda_preset[Name.C_EMDM]["mean_manipulability"],
+                        f,
+                        (pp, Name.C_EMDM, "mean_manipulability"),
+                        ".4f",
+                    ),
                     ".",
                 ),
                 wide=True,
@@ -209,36 +232,35 @@ class Beyond(StoryBase):
         )
         return sec
 
-    def _mmc_paper(self, sec: Section, f: str, arms: list[str]) -> None:
+    def _mmc_paper(
+        self, sec: Section, f: str, mmc: MmcRecord, paper: PaperProtocol, arms: list[str]
+    ) -> None:
         """The benchmark under the authors' protocol (``emdm mmc``), beside the published table,
         with intervals and paired differences."""
 
-        def r(arm: str, ctrl: str, *key: str | int, fmt: str, unit: str = "") -> Num:
-            return self.d.num(f, "paper", "results", arm, ctrl, *key, fmt=fmt, unit=unit)
+        def rv(arm: str, ctrl: str, key: PaperKey) -> Any:
+            return getattr(paper.results[arm][ctrl], key)
+
+        def r(arm: str, ctrl: str, key: PaperKey, *index: int, fmt: str, unit: str = "") -> Num:
+            value = rv(arm, ctrl, key)[index[0]] if index else rv(arm, ctrl, key)
+            return traced(value, f, ("paper", "results", arm, ctrl, key, *index), fmt, unit)
 
         def pub(arm: str, ctrl: str, index: int, fmt: str, unit: str = "") -> Sentence:
-            if ctrl not in self.d.value(f, "published", arm):
+            if ctrl not in mmc.published[arm]:
                 return sentence("")
-            return sentence(
-                " (", self.d.num(f, "published", arm, ctrl, index, fmt=fmt, unit=unit), ")"
-            )
+            value = mmc.published[arm][ctrl][index]
+            return sentence(" (", traced(value, f, ("published", arm, ctrl, index), fmt, unit), ")")
 
-        def ci(arm: str, ctrl: str, key: str, fmt: str) -> Sentence:
+        def ci(arm: str, ctrl: str, key: PaperKey, fmt: str) -> Sentence:
             return sentence(
                 "[", r(arm, ctrl, key, 0, fmt=fmt), ", ", r(arm, ctrl, key, 1, fmt=fmt), "]"
             )
 
         best = all(
-            self.d.value(f, "paper", "results", a, Name.MMC, "mean_manipulability")
-            >= max(
-                self.d.value(f, "paper", "results", a, c, "mean_manipulability")
-                for c in self.d.value(f, "paper", "results", a)
-            )
-            and self.d.value(f, "paper", "results", a, Name.MMC, "failure_rate")
-            <= min(
-                self.d.value(f, "paper", "results", a, c, "failure_rate")
-                for c in self.d.value(f, "paper", "results", a)
-            )
+            rv(a, Name.MMC, "mean_manipulability")
+            >= max(rv(a, c, "mean_manipulability") for c in paper.results[a])
+            and rv(a, Name.MMC, "failure_rate")
+            <= min(rv(a, c, "failure_rate") for c in paper.results[a])
             for a in arms
         )
         text = sentence(
@@ -246,7 +268,7 @@ class Beyond(StoryBase):
             "expUR.py for the UR5: starts and goals inside the limits shrunk by 0.27 of each range, "
             "the joint-limited UR5 of their script, p_servo arrival at 0.17, at most 100 steps of "
             "50 ms, a failure at a limit of the first n-2 joints; the command emdm mmc), on ",
-            self.d.num(f, "paper", "trials", fmt="d"),
+            traced(paper.trials, f, ("paper", "trials"), "d"),
             " tasks per arm, MMC has ",
             "the highest mean manipulability and the fewest failures on both arms, the "
             "published order"
@@ -259,11 +281,11 @@ class Beyond(StoryBase):
         outside = [
             a
             for a in arms
-            if Name.MMC in self.d.value(f, "published", a)
+            if Name.MMC in mmc.published[a]
             and not (
-                self.d.value(f, "paper", "results", a, Name.MMC, "mean_manipulability_ci")[0]
-                <= self.d.value(f, "published", a, Name.MMC)[0]
-                <= self.d.value(f, "paper", "results", a, Name.MMC, "mean_manipulability_ci")[1]
+                rv(a, Name.MMC, "mean_manipulability_ci")[0]
+                <= mmc.published[a][Name.MMC][0]
+                <= rv(a, Name.MMC, "mean_manipulability_ci")[1]
             )
         ]
         if outside:
@@ -300,7 +322,7 @@ class Beyond(StoryBase):
             html_only=True,
         )
         for a in arms:
-            for c in self.d.value(f, "paper", "results", a):
+            for c in paper.results[a]:
                 paired = (
                     sentence("0")
                     if c == Name.MMC

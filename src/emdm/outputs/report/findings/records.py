@@ -9,7 +9,8 @@ sentence is written, not while the paper renders.
 
 The story's accessors take the field names as literal types (:data:`MetricKey`,
 :data:`EventKey`, :data:`PairKey`, :data:`EvidenceKey`, :data:`SolverKey`, :data:`LabName`,
-:data:`FrontKey`, :data:`GridKey`, :data:`GeometryKey`), so mypy refuses a misspelt key;
+:data:`FrontKey`, :data:`GridKey`, :data:`GeometryKey`, :data:`MmcKey`, :data:`PaperKey`), so
+mypy refuses a misspelt key;
 ``tests/test_report.py`` checks that these literals are the dataclasses' fields and that the
 producers (:func:`emdm.sim.metrics.metrics`, :func:`..explain.run_events`,
 :func:`..explain.pair_events`, :data:`..config.EVIDENCE`) write every one of them, so a renamed
@@ -391,6 +392,111 @@ class Geometry:
     reach: float
 
 
+MmcKey = Literal[
+    "trials",
+    "mean_manipulability",
+    "mean_final_manipulability",
+    "failure_rate",
+    "not_reached",
+    "left_joint_limits",
+    "no_admissible_command",
+    "mean_manipulability_of_successes",
+    "median_time_to_goal_s",
+    "steps",
+    "seconds",
+    "published",
+]
+"""The fields of :class:`MmcRow`."""
+
+
+@dataclass(frozen=True)
+class MmcRow:
+    """One controller on one arm of the manipulability benchmark under emdm's protocol:
+    ``data/mmc.json#results/ARM/CTRL`` (``published``: the paper's mean, final manipulability
+    and failure rate, where it has the controller)."""
+
+    trials: int
+    mean_manipulability: float
+    mean_final_manipulability: float
+    failure_rate: float
+    not_reached: int
+    left_joint_limits: int
+    no_admissible_command: int
+    mean_manipulability_of_successes: float
+    median_time_to_goal_s: float
+    steps: int
+    seconds: float
+    published: list[Any] | None
+
+
+PaperKey = Literal[
+    "trials",
+    "mean_manipulability",
+    "mean_manipulability_ci",
+    "mean_final_manipulability",
+    "mean_final_manipulability_ci",
+    "mean_manipulability_minus_mmc",
+    "mean_manipulability_minus_mmc_ci",
+    "failure_rate",
+    "failure_rate_ci",
+    "arrived",
+    "failed",
+    "joint_limit",
+    "singular",
+    "missed",
+    "all_arrived_trials",
+    "subset",
+    "published",
+]
+"""The fields of :class:`PaperRow`."""
+
+
+@dataclass(frozen=True)
+class PaperRow:
+    """One controller on one arm under the authors' protocol (``emdm mmc --protocol paper``):
+    ``data/mmc.json#paper/results/ARM/CTRL``, with 95 % intervals (``*_ci``)."""
+
+    trials: int
+    mean_manipulability: float
+    mean_manipulability_ci: list[Any]
+    mean_final_manipulability: float
+    mean_final_manipulability_ci: list[Any]
+    mean_manipulability_minus_mmc: float
+    mean_manipulability_minus_mmc_ci: list[Any]
+    failure_rate: float
+    failure_rate_ci: list[Any]
+    arrived: int
+    failed: int
+    joint_limit: int
+    singular: int
+    missed: int
+    all_arrived_trials: int
+    subset: list[Any]
+    published: list[Any] | None
+
+
+@dataclass(frozen=True)
+class PaperProtocol:
+    """``data/mmc.json#paper``: the benchmark under the authors' protocol."""
+
+    protocol: str
+    trials: int
+    seed: int
+    results: dict[str, dict[str, PaperRow]]
+
+
+@dataclass(frozen=True)
+class MmcRecord:
+    """``data/mmc.json``: the manipulability benchmark on the spatial arms."""
+
+    trials: int
+    seed: int
+    results: dict[str, dict[str, MmcRow]]
+    published: dict[str, dict[str, list[Any]]]
+    panda_preset: dict[str, dict[str, Any]]
+    paper: PaperProtocol | None = None
+
+
 def _accepts(hint: Any, value: Any) -> bool:
     """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
     origin = typing.get_origin(hint)
@@ -414,6 +520,31 @@ def _name(hint: Any) -> str:
     return hint.__name__ if isinstance(hint, type) else str(hint).replace("typing.", "")
 
 
+def _holds_records(hint: Any) -> bool:
+    """Whether the type ``hint`` is a record (a dataclass) or holds records (dict, list)."""
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return True
+    return any(_holds_records(h) for h in typing.get_args(hint))
+
+
+def _build(hint: Any, data: Data, file: str, path: tuple[str | int, ...], node: Any) -> Any:
+    """``node`` (at ``file#path``) as the type ``hint``: records built and checked by
+    :func:`load_record`, dictionaries and lists of them element by element."""
+    where = f"{file}#{'/'.join(map(str, path))}"
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return load_record(hint, data, file, *path)
+    origin, args = typing.get_origin(hint), typing.get_args(hint)
+    if origin in (Union, types.UnionType):
+        if node is None and type(None) in args:
+            return None
+        return _build(next(a for a in args if a is not type(None)), data, file, path, node)
+    if origin is dict and isinstance(node, dict):
+        return {k: _build(args[1], data, file, (*path, k), v) for k, v in node.items()}
+    if origin is list and isinstance(node, list):
+        return [_build(args[0], data, file, (*path, i), v) for i, v in enumerate(node)]
+    raise RecordError(f"{where}: expected {_name(hint)}, found {node!r:.60}")
+
+
 def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
     """``cls`` built from the JSON object at ``file#path``, every field present and typed."""
     where = f"{file}#{'/'.join(map(str, path))}"
@@ -426,15 +557,9 @@ def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
     hints = typing.get_type_hints(cls)
     values = {}
     for f in dataclasses.fields(cls):
-        inner = typing.get_args(hints[f.name])[-1:]
-        if inner and isinstance(inner[0], type) and dataclasses.is_dataclass(inner[0]):
+        if _holds_records(hints[f.name]):
             # records inside a record (a lab's rows, a geometry's solutions): typed in turn
-            kind = typing.get_origin(hints[f.name])
-            if not isinstance(node.get(f.name), kind):
-                raise RecordError(f"{where}: no field {f.name!r} (the report reads it)")
-            keys = node[f.name] if kind is dict else range(len(node[f.name]))
-            built = {k: load_record(inner[0], data, file, *path, f.name, k) for k in keys}
-            values[f.name] = built if kind is dict else list(built.values())
+            values[f.name] = _build(hints[f.name], data, file, (*path, f.name), node[f.name])
             continue
         if f.name not in node and f.default is not dataclasses.MISSING:
             continue  # an optional field
@@ -460,6 +585,8 @@ class Records:
     """The solver labs the report ran, by folder (``task2-lab-C-EMDM``)."""
     geometry: dict[str, Geometry]
     """The two-link tasks' geometry, by task."""
+    mmc: MmcRecord | None
+    """The manipulability benchmark (absent: the report ran none)."""
     fronts: dict[str, list[FrontStep]]
     """Task 1's Pareto fronts at the steps studied, by controller."""
     grids: dict[str, list[GridRun]]
@@ -518,4 +645,7 @@ class Records:
                     load_record(GridRun, data, g, "runs", i)
                     for i in range(len(data.value(g, "runs")))
                 ]
-        return cls(outcomes, events, pairs, evidence, labs, geometry, fronts, grids)
+        mmc = (
+            load_record(MmcRecord, data, "data/mmc.json") if data.exists("data/mmc.json") else None
+        )
+        return cls(outcomes, events, pairs, evidence, labs, geometry, mmc, fronts, grids)
