@@ -406,6 +406,13 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     metrics_file.write_text(json.dumps(data), encoding="utf-8")
     with pytest.raises(RecordError, match=r"C-IVKC/mean_manipulability: expected float"):
         Story(Data(root))
+    # the scenario as its runs recorded it is read back by its own schema
+    assert records.scenarios["task1"].motion.dt > 0
+    entry["mean_manipulability"] = 0.1
+    data["scenario"]["motion"]["step"] = data["scenario"]["motion"].pop("dt")
+    metrics_file.write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(RecordError, match=r"task2/metrics.json#scenario: .*step"):
+        Records.load(Data(root))
 
 
 def test_each_shared_claim_is_written_once_and_said_by_the_paper_and_the_pitch(quick_report):

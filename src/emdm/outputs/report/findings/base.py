@@ -158,6 +158,15 @@ class StoryBase:
             fmt = ".3g"
         return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
 
+    def scn(self, task: str, *path: str | int, fmt: str, unit: str = "") -> Num:
+        """A parameter of a task's scenario (``"motion", "dt"``; ``"arm", "qd_max", 0``), read
+        from the typed :class:`~emdm.core.scenario.Scenario` and traced to its record."""
+        value: Any = self.rec.scenarios[task]
+        for step in path:
+            value = value[step] if isinstance(step, int) else getattr(value, step)
+        value = value.item() if hasattr(value, "item") else value
+        return traced(value, f"data/{task}/metrics.json", ("scenario", *path), fmt, unit)
+
     def geon(self, task: str, key: GeometryKey, *path: str | int, fmt: str, unit: str = "") -> Num:
         """A field of a two-link task's geometry (``solutions``: index, then field), traced."""
         value = _dig(dataclasses.asdict(self.rec.geometry[task])[key], path)

@@ -25,6 +25,7 @@ import typing
 from dataclasses import dataclass
 from typing import Any, Literal, Union
 
+from ....core.scenario import Scenario, scenario_from_dict
 from ....errors import EmdmError
 from ..trace import Data
 
@@ -577,6 +578,9 @@ def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
 class Records:
     """Every typed record of the brief's tasks, built once from the report's data."""
 
+    scenarios: dict[str, Scenario]
+    """Each task's scenario, as its runs recorded it (``metrics.json#scenario``), read back by
+    the scenario's own schema."""
     outcomes: dict[str, dict[str, Outcomes]]
     events: dict[str, dict[str, RunEvents]]
     pairs: dict[str, dict[str, PairEvents]]
@@ -594,6 +598,7 @@ class Records:
 
     @classmethod
     def load(cls, data: Data, tasks: tuple[str, ...] = ("task1", "task2")) -> Records:
+        scenarios: dict[str, Scenario] = {}
         outcomes: dict[str, dict[str, Outcomes]] = {}
         events: dict[str, dict[str, RunEvents]] = {}
         pairs: dict[str, dict[str, PairEvents]] = {}
@@ -601,6 +606,10 @@ class Records:
             m, e = f"data/{task}/metrics.json", f"data/{task}/events.json"
             if not data.exists(m):
                 continue
+            try:
+                scenarios[task] = scenario_from_dict(data.value(m, "scenario"))
+            except (EmdmError, KeyError, TypeError, ValueError) as exc:
+                raise RecordError(f"{m}#scenario: {exc}") from None
             outcomes[task] = {
                 c: load_record(Outcomes, data, m, "controllers", c)
                 for c in data.value(m, "controllers")
@@ -648,4 +657,4 @@ class Records:
         mmc = (
             load_record(MmcRecord, data, "data/mmc.json") if data.exists("data/mmc.json") else None
         )
-        return cls(outcomes, events, pairs, evidence, labs, geometry, mmc, fronts, grids)
+        return cls(scenarios, outcomes, events, pairs, evidence, labs, geometry, mmc, fronts, grids)

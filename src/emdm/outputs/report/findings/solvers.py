@@ -25,7 +25,7 @@ class Solvers(StoryBase):
         rows = self.solvers(lab)
         if not rows:
             return sec
-        dt = self.d.value("data/task2/metrics.json", "scenario", "motion", "dt")
+        dt = self.rec.scenarios["task2"].motion.dt
         grad = self.best(rows, "gradient")
         free = [k for k, r in rows.items() if r.family == "gradient-free"]
         exact_free = [
@@ -77,9 +77,7 @@ class Solvers(StoryBase):
             one = len(exact_free) == 1
             answer += sentence(
                 "; against the control period of ",
-                self.d.num(
-                    "data/task2/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
-                ),
+                self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
                 ", "
                 + (
                     ("its median already exceeds it" if one else "their medians already exceed it")

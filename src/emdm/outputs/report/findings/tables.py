@@ -101,7 +101,7 @@ class Tables(Claims):
             )
         # both changes from the nominal run: the weights (Section III-B's failing setting) and
         # the time step (over five)
-        slower = self.d.value("data/task1/metrics.json", "scenario", "motion", "dt") / finer["dt"]
+        slower = self.rec.scenarios["task1"].motion.dt / finer["dt"]
         change = sentence(
             DT, f"/{slower:.0f}, ", *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g"))
         )

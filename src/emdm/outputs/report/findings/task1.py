@@ -101,9 +101,7 @@ class Task1(StoryBase):
                 )
         p += sentence(
             "and both exceed the speed limit of ",
-            self.d.num(
-                f"data/{t}/metrics.json", "scenario", "arm", "qd_max", 0, fmt=".1f", unit="rad/s"
-            ),
+            self.scn(t, "arm", "qd_max", 0, fmt=".1f", unit="rad/s"),
             " (",
             Ref("tab", "outcomes"),
             ").",
@@ -322,9 +320,7 @@ class Task1(StoryBase):
                 "): its largest joint speed reaches ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                 ", and a step of ",
-                self.d.num(
-                    "data/task1/metrics.json", "scenario", "motion", "dt", fmt=".2f", unit="s"
-                ),
+                self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
                 " at that speed leaves the linearisation ",
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
                 " far behind. ",
