@@ -208,7 +208,7 @@ def pair_figure(
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.6 if n == 3 else 2.3) if medium is PAPER else 3.4
+    height = (2.5 if n == 3 else 2.3) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper)
@@ -275,15 +275,15 @@ def pair_figure(
             qd_axes[j].set_ylabel(rf"$\dot q_{j + 1}$", labelpad=1)
             for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
                 qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
-            # with constrained and unconstrained runs together, the axis is the constrained
-            # runs' (within the limits): the unconstrained peaks are clipped and their value said
-            scaled = [r for r in runs if r.controller.name.startswith("C-")]
-            seen = scaled if 0 < len(scaled) < len(runs) else list(runs)
-            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in seen)
+            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             span = max(top, limit) * 1.15
+            if mixed and top > 1.5 * limit:
+                # constrained and unconstrained runs together: linear within the limits (the
+                # constrained runs' detail), logarithmic beyond (the unconstrained peaks)
+                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=2.0)
+                span = top * 1.6
             qd_axes[j].set_ylim(-span, span)
-            # (the caption gives the clipped peaks: a label in the panel would cover a curve)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
@@ -297,6 +297,7 @@ def pair_figure(
             qd_tick = limit if top <= 1.5 * limit else float(f"{top:.2g}")
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
+                a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
         end = time_end(runs)

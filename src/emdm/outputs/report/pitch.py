@@ -185,9 +185,7 @@ class Pitch:
                     grad_best,
                     "); best of all an exact QP method (",
                     best_qp,
-                    ", ",
-                    self.s.sn("task2-lab-C-EMDM", best_qp, "median_time", unit="ms"),
-                    ")",
+                    ", whose times also gain from compiled code)",
                 )
             ]
             if best_qp and grad_best

@@ -140,8 +140,8 @@ class Tables(Claims):
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs: one change to a nominal run, and its outcomes as evidence "
-                "(nominal; E3's: its weights at the nominal ",
+                "Evidence runs: one change to a nominal run (E3: its time step, at a failing "
+                "weight setting), and its outcomes (nominal; E3's: its weights at the nominal ",
                 DT,
                 ", ",
                 Ref("sec", "t1-pareto"),

@@ -193,15 +193,6 @@ class Task1(StoryBase):
             if cut_i.text == cut_e.text
             else sentence(cut_i, " (IVKC) and ", cut_e, " (EMDM)")
         )
-        qa, qb = self.mv(t, emdm, "final_q"), self.mv(t, Name.UC_EMDM, "final_q")
-        if all(abs(a - b) < 1e-3 for a, b in zip(qa, qb, strict=True)):
-            p += sentence(
-                f", and {emdm} ends in the configuration UC-EMDM reaches (",
-                M_SYM,
-                " = ",
-                self.mt(t, emdm, "final_manipulability", ".3f", "m²"),
-                ")",
-            )
         p += sentence(".")
         sec.paragraphs.append(p)
         return sec
@@ -229,8 +220,21 @@ class Task1(StoryBase):
             self.d.num("data/task1-pareto-UC-EMDM/pareto.json", "ratios", 1, fmt=".0e"),
             " to ",
             self.d.num("data/task1-pareto-UC-EMDM/pareto.json", "ratios", -1, fmt=".0e"),
-            "; circle: the nominal 50); right: whole runs per weight setting.",
+            "; circle: the nominal 50); right: whole runs per weight setting",
         )
+        grid = self.rec.grids.get("UC-EMDM", [])
+        if grid:  # the whole-run sweep's range, and why it ends there
+            top = max(range(len(grid)), key=lambda i: grid[i].w_manip / grid[i].w_effort)
+            cap += sentence(
+                ", up to ",
+                RATIO,
+                " = ",
+                self.gridn("UC-EMDM", top, "w_manip", fmt=".4g"),
+                Text("/"),
+                self.gridn("UC-EMDM", top, "w_effort", fmt=".2g"),
+                "" if grid[top].reached else ", where UC-EMDM no longer reaches the goal",
+            )
+        cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(
             "The fronts (",
@@ -305,6 +309,19 @@ class Task1(StoryBase):
                     " from ",
                     self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
                     " on gives the same optimum, a vertex of the joint bounds. ",
+                )
+            late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
+            if late and late == list(range(late[0], len(csteps))):  # m falls, whatever w_M
+                p += sentence(
+                    "From k = ",
+                    self.frontn("C-EMDM", late[0], "k", "d"),
+                    " on every C-EMDM optimum has ",
+                    MRATE,
+                    " < 0 (at most ",
+                    self.frontn("C-EMDM", late[0], "M_max", ".1e", "m²/s"),
+                    "): late in the run, within the joint bounds, ",
+                    M_SYM,
+                    " falls whatever the weights. ",
                 )
         # the weight grid: failures
         for i, r in enumerate(self.rec.grids.get("UC-EMDM", [])):

@@ -323,7 +323,8 @@ class Task2(Claims):
                 " but ",
             ) + self.panels(gap=True, only_c=True)
             caption += sentence(
-                "; joint velocities on the constrained runs' scale (unconstrained peaks up to ",
+                "; joint velocities linear within the limits, logarithmic beyond (unconstrained "
+                "peaks up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
                 ")",
             )
