@@ -11,7 +11,8 @@ Two experiments per solver (brief Task 1 and 2; ``emdm solvers``):
    are medians over repeats after one warm-up solve, per step.
 
 Convergence histories (objective, residuals per iteration or per evaluation) are recorded at three
-representative steps: the first, the first scaled one (``alpha < 1``) when there is one, the last.
+representative steps: the first, the first scaled one (``alpha < 1``) when there is one, the last
+and the least dexterous.
 """
 
 from __future__ import annotations
@@ -68,6 +69,7 @@ class Representative(StrEnum):
     FIRST = "first"
     SCALED = "scaled"
     LAST = "last"
+    LEAST_DEXTEROUS = "least dexterous"
 
 
 @dataclass(frozen=True, eq=False)
@@ -193,8 +195,7 @@ def sample_steps(run: Run, sample: int | None) -> list[int]:
     if sample is None or sample >= len(steps):
         return steps
     chosen = {round(i) for i in np.linspace(0, run.steps - 1, sample)}
-    chosen |= set(representative_steps(run).values())
-    chosen.add(int(np.argmin(run.m[: run.steps])))
+    chosen |= set(representative_steps(run).values())  # the least dexterous one among them
     return sorted(chosen)
 
 
@@ -210,13 +211,15 @@ def worker_pool(workers: int) -> ProcessPoolExecutor:
 
 
 def representative_steps(run: Run) -> dict[Representative, int]:
-    """The first step, the first scaled step (if any) and the last step of a run."""
+    """The first step, the first scaled step (if any), the last step of a run and its least
+    dexterous one (the smallest ``m``: the worst-conditioned program)."""
     reps = {Representative.FIRST: 0}
     scaled = np.flatnonzero(run.alpha < 1.0)
     if scaled.size:
         first = int(scaled[0]) if scaled[0] != 0 else int(scaled[min(1, scaled.size - 1)])
         reps[Representative.SCALED] = first
     reps[Representative.LAST] = run.steps - 1
+    reps[Representative.LEAST_DEXTEROUS] = int(np.argmin(run.m[: run.steps]))
     return reps
 
 

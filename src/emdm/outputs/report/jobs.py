@@ -173,10 +173,16 @@ def _write_lab(
 
         with formats((".png",)):
             convergence_figure(lab, fig_dir)
-    if paper_stem is not None:  # the paper's: the first representative step, every solver
+    if paper_stem is not None:  # the paper's: the hardest program (else the first), every solver
+        from ...studies.lab import Representative
         from ..lab_plots import error_curve
 
-        label, k = next(iter(lab.representative.items()))
+        label = (
+            Representative.LEAST_DEXTEROUS
+            if Representative.LEAST_DEXTEROUS in lab.representative
+            else next(iter(lab.representative))
+        )
+        k = lab.representative[label]
         f_star = lab.optimum[k][1]
         curves = {
             name: (

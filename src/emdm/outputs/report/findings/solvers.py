@@ -173,12 +173,16 @@ class Solvers(StoryBase):
                 paper=False,
             )
         )
+        # the hardest program when the lab recorded it (jobs._write_lab draws it), else the first
+        hardest = "least dexterous" in self.rec.labs[lab].representative_steps
+        shown = "least dexterous" if hardest else "first"
         conv = self.figure(
             "convergence",
             "figures/convergence",
             sentence(
-                "Convergence on Task 2 C-EMDM's program at ",
-                *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", "first", fmt="d")),
+                "Convergence on Task 2 C-EMDM's ",
+                "least dexterous program, " if hardest else "program at ",
+                *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
                 " (green: gradient-based, orange: gradient-free; marker: last evaluation).",
             ),
         )
