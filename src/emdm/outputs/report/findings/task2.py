@@ -276,13 +276,6 @@ class Task2(Claims):
             ")",
         )
         if reached_e and not reached_i and self.evv(t, emdm, "singular", "near"):
-            p += sentence(
-                " because its route crosses ",
-                M_SYM,
-                " = 0 while ",
-                ivkc,
-                " stands still",
-            )
             # each mean is over its own run: the stall's 30 s weigh in, so the common window too
             common = self.pair(t, "C", "mean_m_common")
             src = ("pairs", "C", "mean_m_common")
@@ -290,25 +283,24 @@ class Task2(Claims):
                 traced(common[c], f"data/{t}/events.json", (*src, c), ".3f") for c in (emdm, ivkc)
             ]
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
-            p += sentence(" (", ivkc, "'s over its ", self.mt(t, ivkc, "final_time", ".0f", "s"))
             if [n.text for n in within] == [n.text for n in whole]:
                 p += sentence(
-                    "; the same over the first ",
+                    ", over each whole run and over their common first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                    " of both)",
+                    " alike",
                 )
             else:
                 p += sentence(
-                    "; over the first ",
+                    "; over their common first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                    " of both, ",
+                    ", ",
                     within[0],
                     " against ",
                     Num(within[1].text, within[1].src, within[1].fmt, unit="m²"),
-                    ")",
                 )
+            p += sentence(": its route crosses ", M_SYM, " = 0, while ", ivkc, " stands still")
         p += sentence(
-            "; its effort is ",
+            ". Its effort is ",
             self.mt(t, emdm, "total_effort", ".2f"),
             " against ",
             self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
