@@ -27,10 +27,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, cast, overload
 
-import numba
 from llvmlite import ir
 from numba import types
 from numba.core import caching
+from numba.core.registry import CPUDispatcher
 from numba.extending import intrinsic
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -95,23 +95,78 @@ BORROWING: list[Any] = []
 """The kernels compiled without reference counting (``@kernel(refcount=False)``)."""
 
 
+_unliteral: Callable[[Any], Any] = types.unliteral
+
+
+class Kernel(CPUDispatcher):
+    """numba's dispatcher, with two changes that cut the compile time of a first use.
+
+    A kernel called from another with a constant argument (``f(x, 0)``), or with a variable
+    numba has typed only in part so far (``f = 0`` before the ``f += 1`` of a loop), would be
+    compiled once for that literal value and again for its type: a kernel called from kernels
+    is compiled for the plain types only (no kernel needs a literal argument).
+
+    An internal kernel (``@kernel(internal=True)``) has no entry point for Python: numba
+    builds none (the CPython wrapper that unboxes every argument, about 10 % of the compile
+    time of a first use) and a call from Python raises ``TypeError`` instead of calling it.
+    """
+
+    def get_call_template(self, args: Any, kws: Any) -> Any:
+        plain_args = tuple(_unliteral(a) for a in args)
+        return super().get_call_template(plain_args, {k: _unliteral(v) for k, v in kws.items()})
+
+    def add_overload(self, cres: Any) -> None:
+        if self.targetoptions.get("no_cpython_wrapper"):
+            self.overloads[tuple(cres.signature.args)] = cres  # callable from kernels only
+        else:
+            super().add_overload(cres)
+
+    def _compile_for_args(self, *args: Any, **kws: Any) -> Any:
+        if self.targetoptions.get("no_cpython_wrapper"):
+            raise TypeError(f"{self.py_func.__qualname__} is a kernel called only from kernels")
+        return super()._compile_for_args(*args, **kws)  # type: ignore[misc]
+
+
+def _dispatcher(function: Callable[..., Any], options: dict[str, Any], cache: bool) -> Kernel:
+    """``numba.njit(cache=cache, **options)(function)``, as a :class:`Kernel`."""
+    compiled = Kernel(
+        py_func=function,
+        locals={},
+        targetoptions={"nopython": True, "boundscheck": None, **options},
+    )
+    if cache:
+        compiled.enable_caching()
+    return compiled
+
+
 @overload
 def kernel(function: F) -> F: ...
 @overload
-def kernel(*, refcount: bool = True, inline: bool = False) -> Callable[[F], F]: ...
-def kernel(function: F | None = None, *, refcount: bool = True, inline: bool = False) -> Any:
+def kernel(
+    *, refcount: bool = True, inline: bool = False, internal: bool = False
+) -> Callable[[F], F]: ...
+def kernel(
+    function: F | None = None,
+    *,
+    refcount: bool = True,
+    inline: bool = False,
+    internal: bool = False,
+) -> Any:
     """Compile ``function`` in nopython mode, cached on disk (the one decorator of every kernel).
 
     ``@kernel(inline=True)`` compiles the function into each kernel that calls it (numba's
     ``inline="always"``): for the small helpers that return views of a work buffer to kernels
     that borrow, which then count no reference for them either.
 
+    ``@kernel(internal=True)`` marks a kernel that only other kernels call: it is compiled
+    without an entry point for Python (:class:`Kernel`).
+
     ``@kernel(refcount=False)`` marks a kernel that only borrows arrays: it allocates none and
     returns none (nor a tuple holding one), so numba's reference counting is compiled out of it.
     That counting is an atomic increment and decrement, each a call, for every array a kernel is
     passed, work tuples included (a ``QPWork`` is 27 arrays): it was two thirds of the active
     set's warm solve (docs/architecture.md, "Kernels that borrow"). numba refuses to compile an
-    allocation without it, and ``tests/test_architecture.py`` checks that no such kernel returns
+    allocation without it, and ``tests/test_sim.py`` checks that no such kernel returns
     an array. The hot path's kernels are all of this kind; those that allocate (buffers, the
     ``*_of`` entry points, the rare paths that call ``np.linalg``) keep the counting.
 
@@ -120,14 +175,21 @@ def kernel(function: F | None = None, *, refcount: bool = True, inline: bool = F
     this process only, and one line on stderr says so (once) and how to keep the machine code.
     """
     if function is None:
-        return functools.partial(kernel, refcount=refcount, inline=inline)
+        return functools.partial(kernel, refcount=refcount, inline=inline, internal=internal)
     # numba hands a caller's flags down to the kernels it calls unless they set their own: a
-    # kernel that counts says so, so that it may allocate when a borrowing kernel calls it
-    options: dict[str, Any] = {"nogil": True, "error_model": "numpy", "_nrt": refcount}
+    # kernel that counts says so, so that it may allocate when a borrowing kernel calls it.
+    # No kernel is called through a C function pointer: numba's wrapper for that is not built
+    options: dict[str, Any] = {
+        "nogil": True,
+        "error_model": "numpy",
+        "_nrt": refcount,
+        "no_cfunc_wrapper": True,
+        "no_cpython_wrapper": internal,
+    }
     if inline:
         options["inline"] = "always"
     try:
-        compiled = numba.njit(cache=True, **options)(function)
+        compiled = _dispatcher(function, options, cache=True)
     except RuntimeError as exc:  # "cannot cache function ...: no locator available"
         if "cache" not in str(exc):
             raise
@@ -138,7 +200,7 @@ def kernel(function: F | None = None, *, refcount: bool = True, inline: bool = F
                 file=sys.stderr,
             )
         _uncached.append(function.__name__)
-        compiled = numba.njit(cache=False, **options)(function)
+        compiled = _dispatcher(function, options, cache=False)
     if not refcount:
         BORROWING.append(compiled)
     return cast(F, compiled)

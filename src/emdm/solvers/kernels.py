@@ -214,7 +214,7 @@ def _kkt_solve(
     return int(size)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _row_value(G: F64, i: int, x: F64) -> float:
     acc = 0.0
     for j in range(x.size):
@@ -222,7 +222,7 @@ def _row_value(G: F64, i: int, x: F64) -> float:
     return acc
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _independent(
     A: F64, G: F64, gwork: NDArray[np.int8], extra: int, free: NDArray[np.bool_], w: QPWork
 ) -> bool:
@@ -264,7 +264,7 @@ def _independent(
     return matrix_rank(M, rows, cols, RANK_TOL * big * rows) == rows
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _warm_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
@@ -383,12 +383,12 @@ def _warm_start(
     return bool(max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _row_active(G: F64, h: F64, i: int, x: F64) -> bool:
     return bool(h[i] - _row_value(G, i, x) <= ACTIVE_TOL * (1.0 + abs(h[i])))
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _cold_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
@@ -616,7 +616,7 @@ def _cold_start(
     return MAX_ITER_EXCEEDED, limit
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _holdable(
     A: F64,
     G: F64,
@@ -635,7 +635,7 @@ def _holdable(
     return bool(_independent(A, G, gwork, -1, free, w))
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _trace(P: F64, c: F64, x: F64, step: float, w: QPWork, row: int) -> None:
     """Row ``row`` of the lab's trace: objective at ``x``, the step's largest component, the
     working set's size (bounds and rows held)."""
