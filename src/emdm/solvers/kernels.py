@@ -54,7 +54,7 @@ MAX_ITER_EXCEEDED = 3
 """Code of :func:`active_set` when its iteration limit ran out."""
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, inline=True)
 def active_set(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> tuple[int, int]:
