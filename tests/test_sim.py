@@ -197,10 +197,10 @@ def test_internal_kernels_refuse_python_and_plain_builders_match_the_compiled_on
 
     from emdm.core import jit
     from emdm.sim.buffers import step_work
-    from emdm.solvers.kernels import _cold_start
+    from emdm.solvers.kernels import _row_value
 
     with pytest.raises(TypeError, match="called only from kernels"):
-        _cold_start(*([np.zeros(1)] * 11))
+        _row_value(np.zeros((1, 1)), 0, np.zeros(1))
     assert typeof(jit.plain(step_work)(3, 5, 2, 1, 1)) == typeof(step_work(3, 5, 2, 1, 1))
 
 

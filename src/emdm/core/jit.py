@@ -1,7 +1,7 @@
 """The compiler behind every per-step formula: numba, with an on-disk cache and a cycle counter.
 
 Every kernel is compiled with ``cache=True``: the first process on a machine compiles those its
-run needs (on two cores 25 s for a plain planar run, 41 s for any other, announced by
+run needs (on two cores 15 s for a plain planar run, 40 s for any other, announced by
 :func:`ensure_compiled` in one line, a helper process compiling a share of them into the same
 folder meanwhile) and writes the machine code to a cache folder, where every later process, and every
 Dask worker on the same machine, loads it in a fraction of a second. The folder is

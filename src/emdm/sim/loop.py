@@ -59,7 +59,7 @@ from ..core.terms.obstacle import SLOWEST
 from ..core.terms.program import SHAPED
 from ..core.tolerances import STALL_BAND, STALL_TIME
 from ..core.validation import Policy
-from ..core.zonotope import task_scale
+from ..core.zonotope import feasible_point, task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver
 from ..solvers.base import _solve_chain
@@ -198,7 +198,9 @@ def run_kernel(
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = active_set(w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res)
+            code, iterations = active_set(
+                w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res, full
+            )
             if full is not None and ng > 0 and code != INFEASIBLE:
                 code, iterations = settle_rows(w, near, ng, code, iterations)
             if full is not None and code == INFEASIBLE and ng > 0:  # the rows cut the task: the
@@ -210,7 +212,7 @@ def run_kernel(
                 for i in range(nt):
                     w.b[i] *= alpha
                 code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res, full
                 )
                 code, iterations = settle_rows(w, ng, ng, code, iterations)
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
@@ -219,7 +221,7 @@ def run_kernel(
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
                 code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res
+                    w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res, full
                 )
                 if ng > 0 and code != INFEASIBLE:
                     code, iterations = settle_rows(w, near, ng, code, iterations)
@@ -239,7 +241,7 @@ def run_kernel(
                         code, iterations = OK, 0
                 if code != OK:
                     code, iterations = active_set(
-                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res, full
                     )
                     if ng > 0:
                         code, iterations = settle_rows(w, ng, ng, code, iterations)
@@ -461,7 +463,10 @@ def simulate(
     n, nt = scenario.n, scenario.nt
     prog = ctrl.program_data(scenario)
     full = full_flag(scenario, prog)
-    ensure_compiled(_warm_up_plain if full is None else _warm_up, helper=_warm_up_share)
+    if full is None:
+        ensure_compiled(_warm_up_plain, helper=_warm_up_plain_share)
+    else:
+        ensure_compiled(_warm_up, helper=_warm_up_share)
     nx = n + nt if prog.slack else n
     arm, geo, motion = scenario.arm_data, scenario.geometry, motion_data(scenario)
     policy = scenario.controller.on_infeasible
@@ -715,17 +720,26 @@ def _warm_up_plain() -> None:
     _warm_up(planar=True)
 
 
-def _warm_up_share() -> None:
+def _warm_up_share(planar: bool = False) -> None:
     """The share of :func:`_warm_up` a helper process compiles while the first process compiles
-    the rest (:func:`~emdm.core.jit.ensure_compiled`): the feasible point (the simplex method and
-    the zonotope) and the certificate, the two subtrees of the active set's cold start, which the
-    first process gets to last. Their types are those of every kind of program."""
+    the rest (:func:`~emdm.core.jit.ensure_compiled`): the feasible point (the zonotope, and for
+    runs that are not plain planar the simplex method) and the certificate, the two subtrees of
+    the active set's cold start, which the first process gets to last (``planar``: for
+    :func:`_warm_up_plain`)."""
     from ..core.loading import load_scenario
 
     sc = load_scenario("task1", {"motion.max_time": 0.1})
     w = plain(step_work)(sc.n, sc.n, sc.nt, 0, 0)
-    compile_for(feasible_point_rows, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp.feas)
+    if planar:
+        compile_for(feasible_point, w.A, w.b, w.lb, w.ub, w.x, w.qp.feas)
+    else:
+        compile_for(feasible_point_rows, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp.feas)
     compile_for(certify, w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
+
+
+def _warm_up_plain_share() -> None:
+    """:func:`_warm_up_share` for :func:`_warm_up_plain`."""
+    _warm_up_share(planar=True)
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

@@ -104,7 +104,7 @@ def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> 
             for r in range(near, ng):
                 w.qp.work[n + r] = 0
             more, again = active_set(
-                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res
+                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res, True
             )
             return more, iterations + again
     return code, iterations
@@ -127,7 +127,7 @@ def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
     for i in range(near):
         w.h[i] += 1e-9 * (1.0 + abs(w.h[i])) * (1.0 + (i * 7919) % 97) / 97.0
     code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res, True
     )
     for i in range(near):
         w.h[i] = exact[i]
@@ -136,7 +136,7 @@ def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
         return MAX_ITER_EXCEEDED, iterations
     w.qp.warm[0] = True
     code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res, True
     )
     return code, iterations + more
 
