@@ -131,7 +131,7 @@ def test_warm_start_with_rows_follows_a_moving_program():
             base.lb, base.ub, base.n, G=base.G, h=base.h + 0.05 * np.sin(3 * drift),
         )  # fmt: skip
         x, out = np.empty(qp.n), np.empty(4)
-        code, iterations = kernels.active_set(*arrays(qp), x, w, out)
+        code, iterations = kernels.active_set(*arrays(qp), x, w, out, True)
         assert code == kernels.OK
         np.testing.assert_allclose(x, quadprog(qp).x, atol=1e-8)
         warm += iterations == 1

@@ -188,6 +188,45 @@ def test_compile_notice_is_one_line_and_only_when_slow(capsys, monkeypatch):
     assert capsys.readouterr().err == ""
 
 
+def test_internal_kernels_refuse_python_and_plain_builders_match_the_compiled_ones():
+    """A kernel compiled without an entry point for Python (``@kernel(internal=True)``) raises
+    TypeError when Python calls it (a call would otherwise jump to a null address); the Python
+    builders of :func:`~emdm.core.jit.plain` give arrays of the types the compiled ones give, so
+    a run warmed up on either loads the same machine code."""
+    from numba import typeof
+
+    from emdm.core import jit
+    from emdm.sim.buffers import step_work
+    from emdm.solvers.kernels import _row_value
+
+    with pytest.raises(TypeError, match="called only from kernels"):
+        _row_value(np.zeros((1, 1)), 0, np.zeros(1))
+    assert typeof(jit.plain(step_work)(3, 5, 2, 1, 1)) == typeof(step_work(3, 5, 2, 1, 1))
+
+
+def test_a_helper_process_shares_the_first_compile_and_ends_with_it(tmp_path, monkeypatch):
+    """:func:`~emdm.core.jit.ensure_compiled` with a helper: a second process runs the helper's
+    share while the warm-up runs, and no process outlives the warm-up, whether the helper
+    finished or not."""
+    import signal
+    import subprocess
+    import time
+
+    from emdm.core import jit
+
+    started: list[subprocess.Popen[bytes]] = []
+    real = jit._start_helper
+
+    def start(helper):  # type: ignore[no-untyped-def]
+        started.append(real(helper))
+        return started[-1]
+
+    monkeypatch.setattr(jit, "_start_helper", start)
+    monkeypatch.setattr(jit, "_empty_cache", lambda: True)
+    jit.ensure_compiled(lambda: time.sleep(0.5), helper=signal.pause)  # a helper that never ends
+    assert len(started) == 1 and started[0].poll() is not None  # stopped with the warm-up
+
+
 def test_kernel_failure_reaches_the_caller():
     from emdm.core import jit
 

@@ -47,7 +47,7 @@ POINT = 5
 (its tightening and reach of the point, written by :mod:`emdm.core.terms.obstacle`)."""
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def chain_points(geo: Geometry, p: F64, w: KinWork, sw: SpatialWork, pts: F64, axes: F64) -> None:
     """``pts`` and ``axes`` (see the module notes) from the kinematics just computed: the planar
     tip vectors ``w.rx, w.ry`` and tip ``p``, or a spatial arm's frames ``sw.frames`` and end
@@ -89,7 +89,7 @@ def chain_points_of(lengths: F64, geo: Geometry, q: F64, pts: F64, axes: F64) ->
     chain_points(geo, p, w, sw, pts, axes)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def segment_params(
     px: float,
     py: float,
@@ -146,7 +146,7 @@ def closest_points(P: F64, Q: F64, A: F64, B: F64, x: F64, y: F64) -> float:
     return math.sqrt((x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def link_gap(
     pts: F64, i: int, data: F64, o: int, t: float
 ) -> tuple[float, float, float, float, float, float, float]:
@@ -165,7 +165,7 @@ def link_gap(
     return math.sqrt(dx * dx + dy * dy + dz * dz), dx, dy, dz, cx, cy, cz
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def obstacle_at(data: F64, o: int, t: float, A: F64, B: F64) -> float:
     """Obstacle ``o``'s segment at time ``t`` (s) into ``A, B``; returns its radius (m)."""
     at = HEADER + o * STRIDE

@@ -104,7 +104,7 @@ def spatial_work(n: int) -> SpatialWork:
     )
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
     """Gaussian elimination with partial pivoting on ``K[:size, :size]``; ``rhs`` becomes the
     solution. False for a singular matrix."""
@@ -133,7 +133,7 @@ def solve_in_place(K: F64, rhs: F64, size: int) -> bool:
     return True
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def matrix_rank(M: F64, rows: int, cols: int, tol: float) -> int:
     """Rank of ``M[:rows, :cols]`` by Gaussian elimination with complete pivoting (in place), a
     pivot counting when above ``tol``: the one rank test of the feasibility kernels and of the
@@ -214,7 +214,7 @@ def kinematics(lengths: F64, q: F64, p: F64, J: F64, Jm: F64, w: KinWork) -> flo
     return m
 
 
-@kernel
+@kernel(internal=True)
 def _singular_ascent(G: F64, Jm: F64) -> None:
     """``Jm = s1 v1`` (the leading singular pair of ``G``, signed so that its largest component is
     positive): the planar gradient at an exact singularity. Apart from :func:`kinematics`, which
@@ -290,7 +290,7 @@ def rotation_matrix(rx: float, ry: float, rz: float, R: F64) -> None:
     R[2, 1] = b * ry * rz + a * rx
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def task_kinematics(
     lengths: F64,
     geo: Geometry,

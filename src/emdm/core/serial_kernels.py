@@ -24,7 +24,7 @@ ROWS_ALL, ROWS_TRANS, ROWS_ROT = 0, 1, 2
 or the angular (last three) rows."""
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _compose(A: F64, B: F64, out: F64) -> None:
     """``out = A B`` for homogeneous 4 x 4 transforms (``out`` must not alias ``A`` or ``B``)."""
     for i in range(3):
@@ -142,7 +142,7 @@ def serial_hessian(J: F64, prismatic: B8, H: F64) -> None:
             H[i, 3, k], H[i, 4, k], H[i, 5, k] = gx, gy, gz
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _gradient_by_qr(J: F64, prismatic: B8, first: int, count: int, Jm: F64, qr: F64) -> float:
     """``m`` and ``Jm_i = m trace((Ja Ja^T)^-1 Ja Ha_i^T)`` from a Householder factor
     ``Ja^T = Q R`` (``Q``: n x count, orthonormal columns): ``Ja Ja^T = R^T R``, so
@@ -211,7 +211,7 @@ def _part(B: F64, k: int, first: int, count: int, row: int) -> float:
     return B[k, a] if 0 <= a < count else 0.0
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _contract(J: F64, prismatic: B8, first: int, count: int, B: F64, m: float, Jm: F64) -> None:
     """``Jm_i = m sum_{a,k} B[k, a] H[i, first + a, k]`` without forming ``H``
     (:func:`serial_hessian`'s entries are cross products): with ``b_k``, ``c_k`` the linear and
@@ -286,7 +286,7 @@ def manipulability_gradient(J: F64, prismatic: B8, H: F64, rows: int, Jm: F64, q
     return _gradient_by_svd(J, H, first, count, Jm)
 
 
-@kernel
+@kernel(internal=True)
 def _gradient_by_svd(J: F64, H: F64, first: int, count: int, Jm: F64) -> float:
     """The SVD form of :func:`manipulability_gradient` (near a singularity; allocates)."""
     n = J.shape[1]

@@ -46,7 +46,7 @@ def _column(A: F64, b: F64, sigma: F64, j: int, i: int) -> float:
     return float(sigma[i]) if j - nx - 1 == i else 0.0
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _basis_matrix(A: F64, b: F64, w: LPViews, transpose: bool) -> None:
     nt = A.shape[0]
     for i in range(nt):
@@ -58,7 +58,7 @@ def _basis_matrix(A: F64, b: F64, w: LPViews, transpose: bool) -> None:
                 w.Bm[i, r] = v
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _simplex(A: F64, b: F64, w: LPViews) -> bool:
     """Minimise ``cost . v`` over ``vlo <= v <= vhi`` with ``A x - alpha b + diag(sigma) a = 0``,
     ``v = (x, alpha, a)``, from the basis ``w.basis`` (``status`` 0: basic, -1 / +1: at the
@@ -147,7 +147,7 @@ def _simplex(A: F64, b: F64, w: LPViews) -> bool:
     return False
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> tuple[int, float]:
     """``A x = alpha b``, ``lb <= x <= ub`` (every bound finite) by the simplex method: with
     ``scale``, the largest ``alpha`` in [0, 1]; without, ``alpha = 1``. Returns ``(code, alpha)``
@@ -208,7 +208,7 @@ def _lp(A: F64, b: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork) -> t
     return OK, alpha
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> int:
     """The program with its inequality rows marked in ``w.pick`` made equalities, in
     :func:`_aug_views`: variables ``(x, s, t)``, rows ``A x = alpha b`` and ``G_i x + s_i - h_i t
@@ -250,7 +250,7 @@ def _augment(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> i
     return ng
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _lp_rows(
     A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, scale: bool, x: F64, w: FeasWork
 ) -> tuple[int, float]:
@@ -283,7 +283,7 @@ def _lp_rows(
     return NEEDS_REFERENCE, 0.0
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _breaks(G: F64, h: F64, i: int, x: F64) -> bool:
     """True when ``x`` breaks ``G_i x <= h_i`` by more than rounding (``FEASIBILITY_TOL``
     relative to the row's size)."""
@@ -304,7 +304,7 @@ def rows_hold(G: F64, h: F64, x: F64) -> bool:
     return True
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def task_scale_rows(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, w: FeasWork) -> float:
     """:func:`task_scale` for programs of any row count and with inequality rows ``G x <= h``,
     by the simplex method (:func:`_lp_rows`); the answer's vertex is left in ``w.centre``. Kept apart
@@ -330,7 +330,7 @@ def task_scale_of(A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64) -> float:
     return task_scale_rows(A, b, G, h, lb, ub, feas_work(A.shape[1], A.shape[0], G.shape[0]))
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def feasible_point_rows(
     A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: FeasWork
 ) -> tuple[int, bool]:
@@ -356,7 +356,7 @@ def feasible_point_rows(
     return code, False
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _task_point(A: F64, b: F64, lb: F64, ub: F64, x: F64, w: FeasWork) -> tuple[int, bool]:
     """A feasible point of ``A x = b``, ``lb <= x <= ub`` (see :func:`feasible_point_rows`)."""
     nt, n = A.shape

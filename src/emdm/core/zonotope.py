@@ -54,7 +54,7 @@ class AugViews(NamedTuple):
     x: F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _lp_size(nx: int, nt: int) -> int:
     """Length of the simplex method's part of ``lpf`` for ``nx`` variables and ``nt`` rows."""
     nv = nx + 1 + nt
@@ -139,7 +139,7 @@ def _lp_views(w: FeasWork, nx: int, nt: int) -> LPViews:
     )
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _ray_interval(
     G: F64, lb: F64, ub: F64, y0x: float, y0y: float, dx: float, dy: float, w: FeasWork
 ) -> tuple[float, float, float, float, bool]:
@@ -199,7 +199,7 @@ def _ray_interval(
     return t_lo, t_hi, bwx, bwy, found
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _boundary_preimage(
     G: F64,
     lb: F64,
@@ -245,7 +245,7 @@ def _boundary_preimage(
     return count
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
     """Rank of the columns of ``A`` marked free (at most the row count ``nt``).
 
@@ -283,7 +283,7 @@ def free_rank(A: F64, free: NDArray[np.bool_], w: FeasWork) -> int:
     return matrix_rank(M, nt, cols, RANK_TOL * big * nt)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _mark_free(lb: F64, ub: F64, free: NDArray[np.bool_]) -> int:
     count = 0
     for j in range(lb.size):

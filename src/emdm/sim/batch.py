@@ -34,6 +34,8 @@ from .loop import (
     _arguments,
     _warm_up,
     _warm_up_plain,
+    _warm_up_plain_share,
+    _warm_up_share,
     full_flag,
     motion_data,
     run_kernel,
@@ -129,8 +131,8 @@ def precompile() -> None:
     them from the cache): once, before many processes start (``make test`` before its workers,
     an image build, a Dask cluster's set-up), so that each of them loads the kernels in under a
     second instead of compiling them again."""
-    ensure_compiled(_warm_up_plain)
-    ensure_compiled(_warm_up)
+    ensure_compiled(_warm_up_plain, helper=_warm_up_plain_share)
+    ensure_compiled(_warm_up, helper=_warm_up_share)
     ensure_compiled(_warm_up_batch_plain, what="the batch loop")
     ensure_compiled(_warm_up_batch, what="the batch loop")
 
@@ -253,7 +255,10 @@ def simulate_batch(
     g, q = _starts(scenario, goals, q0s)
     prog = ctrl.program_data(scenario)
     full = full_flag(scenario, prog)
-    ensure_compiled(_warm_up_plain if full is None else _warm_up)
+    if full is None:
+        ensure_compiled(_warm_up_plain, helper=_warm_up_plain_share)
+    else:
+        ensure_compiled(_warm_up, helper=_warm_up_share)
     ensure_compiled(_warm_up_batch_plain if full is None else _warm_up_batch, what="the batch loop")
     n = scenario.n
     runs = 0 if 0 in (g.shape[0], q.shape[0]) else max(g.shape[0], q.shape[0])

@@ -43,7 +43,7 @@ from ..core.controllers import (
     state_at,
 )
 from ..core.distance import chain_points, link_gaps
-from ..core.jit import ensure_compiled, kernel, plain, seconds_per_tick, ticks
+from ..core.jit import compile_for, ensure_compiled, kernel, plain, seconds_per_tick, ticks
 from ..core.kernels import (
     ArmData,
     Geometry,
@@ -52,14 +52,14 @@ from ..core.kernels import (
 )
 from ..core.problem import QP
 from ..core.scenario import Scenario
-from ..core.simplex import task_scale_rows
+from ..core.simplex import feasible_point_rows, task_scale_rows
 from ..core.terms import ProgramData, ProgramOut, StepInput, build_program
 from ..core.terms.base import TermKind
 from ..core.terms.obstacle import SLOWEST
 from ..core.terms.program import SHAPED
 from ..core.tolerances import STALL_BAND, STALL_TIME
 from ..core.validation import Policy
-from ..core.zonotope import task_scale
+from ..core.zonotope import feasible_point, task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver
 from ..solvers.base import _solve_chain
@@ -198,7 +198,9 @@ def run_kernel(
             for i in range(nt):
                 w.b[i] *= alpha
             start = ticks()
-            code, iterations = active_set(w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res)
+            code, iterations = active_set(
+                w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res, full
+            )
             if full is not None and ng > 0 and code != INFEASIBLE:
                 code, iterations = settle_rows(w, near, ng, code, iterations)
             if full is not None and code == INFEASIBLE and ng > 0:  # the rows cut the task: the
@@ -210,7 +212,7 @@ def run_kernel(
                 for i in range(nt):
                     w.b[i] *= alpha
                 code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                    w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res, full
                 )
                 code, iterations = settle_rows(w, ng, ng, code, iterations)
         else:  # the solve first (its warm start proves the task feasible); the scale's LP if not
@@ -219,7 +221,7 @@ def run_kernel(
             code, iterations = INFEASIBLE, 0
             if not scaled:  # after a scaled step the task is most likely scaled again
                 code, iterations = active_set(
-                    w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res
+                    w.P, w.c, w.A, w.b, Gn, hn, w.lb, w.ub, w.x, w.qp, w.res, full
                 )
                 if ng > 0 and code != INFEASIBLE:
                     code, iterations = settle_rows(w, near, ng, code, iterations)
@@ -239,7 +241,7 @@ def run_kernel(
                         code, iterations = OK, 0
                 if code != OK:
                     code, iterations = active_set(
-                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res
+                        w.P, w.c, w.A, w.b, G, h, w.lb, w.ub, w.x, w.qp, w.res, full
                     )
                     if ng > 0:
                         code, iterations = settle_rows(w, ng, ng, code, iterations)
@@ -400,7 +402,7 @@ def _work(n: int, nx: int, nt: int, ng: int = 0, no: int = 0) -> StepWork:
     result)."""
     cache: dict[tuple[int, ...], StepWork] = _local.__dict__.setdefault("work", {})
     if (n, nx, nt, ng, no) not in cache:
-        cache[n, nx, nt, ng, no] = step_work(n, nx, nt, ng, no)
+        cache[n, nx, nt, ng, no] = plain(step_work)(n, nx, nt, ng, no)
     return cache[n, nx, nt, ng, no]
 
 
@@ -461,7 +463,10 @@ def simulate(
     n, nt = scenario.n, scenario.nt
     prog = ctrl.program_data(scenario)
     full = full_flag(scenario, prog)
-    ensure_compiled(_warm_up_plain if full is None else _warm_up)
+    if full is None:
+        ensure_compiled(_warm_up_plain, helper=_warm_up_plain_share)
+    else:
+        ensure_compiled(_warm_up, helper=_warm_up_share)
     nx = n + nt if prog.slack else n
     arm, geo, motion = scenario.arm_data, scenario.geometry, motion_data(scenario)
     policy = scenario.controller.on_infeasible
@@ -690,29 +695,51 @@ WARM_UP_PRESETS = (*WARM_UP_PLANAR, "panda", "ur5")
 """One preset of each kind of task and program: planar (redundant, slack), pose (redundant, slack)."""
 
 
-def _warm_up(plain: bool = False) -> None:
+def _warm_up(planar: bool = False) -> None:
     """Compile (or load) every kernel of the loop: one short run of each kind of program, for
-    runs that are not plain planar (``plain``: for those that are, the planar presets only)."""
+    runs that are not plain planar (``planar``: for those that are, the planar presets only)."""
     from ..core.loading import load_scenario
 
     seconds_per_tick()
-    for task in WARM_UP_PLANAR if plain else WARM_UP_PRESETS:
+    for task in WARM_UP_PLANAR if planar else WARM_UP_PRESETS:
         sc = load_scenario(task, {"motion.max_time": 0.1})
         for name in (Name.UC_IVKC, Name.C_EMDM):
             ctrl = get_controller(name)
             prog = ctrl.program_data(sc)
             nx = sc.n + sc.nt if prog.slack else sc.n
-            rec = new_record(2, sc.n, sc.nt)
+            rec = plain(new_record)(2, sc.n, sc.nt)
             rec.q[0] = sc.motion.q0
-            work = step_work(sc.n, nx, sc.nt, 0, 0)
-            full = full_flag(sc, prog) if plain else True
+            work = plain(step_work)(sc.n, nx, sc.nt, 0, 0)
+            full = full_flag(sc, prog) if planar else True
             args = (sc.arm_data, sc.geometry, motion_data(sc), prog, True, True, rec, 0, work)
             run_kernel(*args, full)
 
 
 def _warm_up_plain() -> None:
     """:func:`_warm_up` for plain planar runs: the first use of a planar task compiles no more."""
-    _warm_up(plain=True)
+    _warm_up(planar=True)
+
+
+def _warm_up_share(planar: bool = False) -> None:
+    """The share of :func:`_warm_up` a helper process compiles while the first process compiles
+    the rest (:func:`~emdm.core.jit.ensure_compiled`): the feasible point (the zonotope, and for
+    runs that are not plain planar the simplex method) and the certificate, the two subtrees of
+    the active set's cold start, which the first process gets to last (``planar``: for
+    :func:`_warm_up_plain`)."""
+    from ..core.loading import load_scenario
+
+    sc = load_scenario("task1", {"motion.max_time": 0.1})
+    w = plain(step_work)(sc.n, sc.n, sc.nt, 0, 0)
+    if planar:
+        compile_for(feasible_point, w.A, w.b, w.lb, w.ub, w.x, w.qp.feas)
+    else:
+        compile_for(feasible_point_rows, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp.feas)
+    compile_for(certify, w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
+
+
+def _warm_up_plain_share() -> None:
+    """:func:`_warm_up_share` for :func:`_warm_up_plain`."""
+    _warm_up_share(planar=True)
 
 
 __all__ = ["NoSolution", "Run", "simulate"]

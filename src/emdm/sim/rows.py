@@ -30,7 +30,7 @@ def count_active_rows(G: F64, h: F64, x: F64) -> int:
     return count
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def partition_rows(G: F64, h: F64, ids: F64, lb: F64, ub: F64, ng: int) -> int:
     """Reorder the rows ``G[:ng] x <= h[:ng]`` so that those that may bind come first; returns
     how many. A row is left for later ("lazy") when it keeps at least half its right-hand side
@@ -58,7 +58,7 @@ def partition_rows(G: F64, h: F64, ids: F64, lb: F64, ub: F64, ng: int) -> int:
     return near
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def recall_rows(w: StepWork, ng: int) -> None:
     """Mark in the active set's working set the rows that the last answer held, found by their
     ids (``w.held``), wherever this step's program put them: rows come and go as links come
@@ -76,7 +76,7 @@ def recall_rows(w: StepWork, ng: int) -> None:
         w.qp.work[n + i] = flag
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def hold_rows(w: StepWork, ng: int) -> None:
     """Keep the ids of the rows in the working set of the answer (for :func:`recall_rows`)."""
     n = w.x.size
@@ -88,7 +88,7 @@ def hold_rows(w: StepWork, ng: int) -> None:
     w.rows[1] = held
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> tuple[int, int]:
     """After the active set on the rows ``G[:near]`` returned ``(code, iterations)``: unravel a
     cycle (:func:`_unravel`), and when the answer breaks one of the lazy rows ``G[near:ng]``,
@@ -104,13 +104,13 @@ def settle_rows(w: StepWork, near: int, ng: int, code: int, iterations: int) -> 
             for r in range(near, ng):
                 w.qp.work[n + r] = 0
             more, again = active_set(
-                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res
+                w.P, w.c, w.A, w.b, w.G[:ng], w.h[:ng], w.lb, w.ub, w.x, w.qp, w.res, True
             )
             return more, iterations + again
     return code, iterations
 
 
-@kernel
+@kernel(internal=True)
 def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
     """After the active set cycled on a degenerate vertex (more constraints active than
     variables, ties in its ratio tests): accept the point where it stopped if the certificate
@@ -127,7 +127,7 @@ def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
     for i in range(near):
         w.h[i] += 1e-9 * (1.0 + abs(w.h[i])) * (1.0 + (i * 7919) % 97) / 97.0
     code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res, True
     )
     for i in range(near):
         w.h[i] = exact[i]
@@ -136,12 +136,12 @@ def _unravel(w: StepWork, near: int, iterations: int) -> tuple[int, int]:
         return MAX_ITER_EXCEEDED, iterations
     w.qp.warm[0] = True
     code, more = active_set(
-        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res
+        w.P, w.c, w.A, w.b, w.G[:near], w.h[:near], w.lb, w.ub, w.x, w.qp, w.res, True
     )
     return code, iterations + more
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _row_excess(G: F64, h: F64, i: int, x: F64) -> float:
     acc = -h[i]
     for j in range(x.size):

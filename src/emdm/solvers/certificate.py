@@ -96,7 +96,7 @@ def qp_work(nx: int, nt: int, ng: int, trace_rows: int = 0) -> QPWork:
     )
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def kkt_residuals(
     P: F64,
     c: F64,
@@ -174,7 +174,7 @@ def kkt_residuals(
     out[3] = excess
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _least_squares(M: F64, passive: NDArray[np.bool_], d: F64, s: F64, B: F64) -> bool:
     """``s`` = least-squares coefficients of the passive columns of ``M`` for ``d`` (0 elsewhere),
     by Householder QR. False when the passive columns are numerically dependent."""
@@ -229,7 +229,7 @@ def _least_squares(M: F64, passive: NDArray[np.bool_], d: F64, s: F64, B: F64) -
     return True
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def best_multipliers(
     P: F64,
     c: F64,

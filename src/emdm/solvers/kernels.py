@@ -13,6 +13,7 @@ multipliers of its final working set, checked by the certificate of :mod:`emdm.s
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +22,7 @@ from ..core.jit import kernel
 from ..core.kernels import matrix_rank, solve_in_place
 from ..core.simplex import feasible_point_rows
 from ..core.tolerances import ACTIVE_TOL, BOUND_TOL, KKT_TOL, RANK_TOL
-from ..core.zonotope import INFEASIBLE, NEEDS_REFERENCE, OK, free_rank
+from ..core.zonotope import INFEASIBLE, NEEDS_REFERENCE, OK, feasible_point, free_rank
 from .certificate import (
     QPWork,
     best_multipliers,
@@ -54,11 +55,27 @@ MAX_ITER_EXCEEDED = 3
 """Code of :func:`active_set` when its iteration limit ran out."""
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, inline=True)
 def active_set(
-    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+    P: F64,
+    c: F64,
+    A: F64,
+    b: F64,
+    G: F64,
+    h: F64,
+    lb: F64,
+    ub: F64,
+    x: F64,
+    w: QPWork,
+    out: F64,
+    full: Any,
 ) -> tuple[int, int]:
     """Exact optimum of the program by the primal active-set method: ``(code, iterations)``.
+
+    ``full`` is ``None`` for the programs of a plain planar run (two task rows, no inequality
+    rows, no trace; :func:`emdm.sim.loop.run_kernel`'s argument of that name) and ``True`` for
+    any other: numba prunes the branches that test it, so the plain planar loop compiles no
+    simplex method and no row handling (the same answers: those branches do nothing there).
 
     On ``OK``, ``x`` is the optimum, ``w.lam`` (task rows, then inequality rows), ``w.mu`` its
     multipliers and ``out``
@@ -74,7 +91,7 @@ def active_set(
     """
     if w.warm[0] and _warm_start(P, c, A, b, G, h, lb, ub, x, w, out):
         return OK, 1
-    code, iterations = _cold_start(P, c, A, b, G, h, lb, ub, x, w, out)
+    code, iterations = _cold_start(P, c, A, b, G, h, lb, ub, x, w, out, full)
     w.warm[0] = code == OK and iterations > 0
     return code, iterations
 
@@ -214,7 +231,7 @@ def _kkt_solve(
     return int(size)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _row_value(G: F64, i: int, x: F64) -> float:
     acc = 0.0
     for j in range(x.size):
@@ -222,7 +239,7 @@ def _row_value(G: F64, i: int, x: F64) -> float:
     return acc
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _independent(
     A: F64, G: F64, gwork: NDArray[np.int8], extra: int, free: NDArray[np.bool_], w: QPWork
 ) -> bool:
@@ -264,7 +281,7 @@ def _independent(
     return matrix_rank(M, rows, cols, RANK_TOL * big * rows) == rows
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _warm_start(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
 ) -> bool:
@@ -383,14 +400,25 @@ def _warm_start(
     return bool(max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _row_active(G: F64, h: F64, i: int, x: F64) -> bool:
     return bool(h[i] - _row_value(G, i, x) <= ACTIVE_TOL * (1.0 + abs(h[i])))
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _cold_start(
-    P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, w: QPWork, out: F64
+    P: F64,
+    c: F64,
+    A: F64,
+    b: F64,
+    G: F64,
+    h: F64,
+    lb: F64,
+    ub: F64,
+    x: F64,
+    w: QPWork,
+    out: F64,
+    full: Any,
 ) -> tuple[int, int]:
     """The primal active-set method from an exact feasible point (see :func:`active_set`)."""
     free = w.feas.free
@@ -410,11 +438,15 @@ def _cold_start(
         w.mu,
         w.lam[nt:],
     )
-    code, unique = feasible_point_rows(A, b, G, h, lb, ub, x, w.feas)
+    if full is None:  # two task rows, no inequality row: feasible_point_rows' first case
+        code, unique = feasible_point(A, b, lb, ub, x, w.feas)
+    else:
+        code, unique = feasible_point_rows(A, b, G, h, lb, ub, x, w.feas)
     if code != OK:
         return code, 0
     if unique:  # the (scaled) task leaves one feasible point: it is the optimum
-        if w.trace.shape[0]:  # the trace's working set: the bounds the point sits on
+        # the trace's working set: the bounds the point sits on
+        if full is not None and w.trace.shape[0]:
             for j in range(n):
                 work[j] = -1 if x[j] == lb[j] else (1 if x[j] == ub[j] else 0)
             for i in range(ng):
@@ -442,17 +474,18 @@ def _cold_start(
             x[j] = ub[j]
         if at_lo or at_hi:
             free[j] = False
-            if (
-                (free_rank(A, free, w.feas) == nt)
-                if ng == 0
-                else _independent(A, G, gwork, -1, free, w)
-            ):
+            if full is None or ng == 0:
+                holds = free_rank(A, free, w.feas) == nt
+            else:
+                holds = _independent(A, G, gwork, -1, free, w)
+            if holds:
                 work[j] = -1 if at_lo else 1
             else:
                 free[j] = True
-    for i in range(ng):
-        if _row_active(G, h, i, x) and _independent(A, G, gwork, i, free, w):
-            gwork[i] = 1
+    if full is not None:
+        for i in range(ng):
+            if _row_active(G, h, i, x) and _independent(A, G, gwork, i, free, w):
+                gwork[i] = 1
     limit = w.limit[0] if w.limit[0] > 0 else 10 * (n + ng + 2) + 20
     zero_step = False
     for iteration in range(1, limit + 1):
@@ -507,7 +540,7 @@ def _cold_start(
             finite = finite and math.isfinite(nu[i])
         if not finite:
             return NEEDS_REFERENCE, iteration
-        if w.trace.shape[0]:
+        if full is not None and w.trace.shape[0]:
             _trace(P, c, x, pmax, w, iteration - 1)
         if pmax <= 1e-12 * (1.0 + xmax):
             gmax = 0.0
@@ -548,9 +581,10 @@ def _cold_start(
                     or (math.isfinite(ub[j]) and ub[j] - x[j] <= ACTIVE_TOL * (1.0 + abs(ub[j])))
                 ):
                     degenerate = True
-            for i in range(ng):
-                if gwork[i] == 0 and _row_active(G, h, i, x):
-                    degenerate = True
+            if full is not None:
+                for i in range(ng):
+                    if gwork[i] == 0 and _row_active(G, h, i, x):
+                        degenerate = True
             if degenerate:
                 certify(P, c, A, b, G, h, lb, ub, x, w, out)
                 if max(out[0], out[1], out[2]) <= KKT_TOL and out[3] <= BOUND_TOL:
@@ -587,7 +621,7 @@ def _cold_start(
                 0 <= block < n
                 and step <= 0.0
                 and abs(p[block]) <= 1e-9 * pmax
-                and not _holdable(A, G, gwork, work, block, free, w)
+                and not _holdable(A, G, gwork, work, block, free, w, full)
             ):
                 # rounding noise of the step on a bound that cannot join the working set (its
                 # column depends on the free ones): it would block every step from here on
@@ -606,9 +640,9 @@ def _cold_start(
         if 0 <= block < n:
             side = -1 if p[block] < 0 else 1
             x[block] = lb[block] if side < 0 else ub[block]
-            if _holdable(A, G, gwork, work, block, free, w):
+            if _holdable(A, G, gwork, work, block, free, w, full):
                 work[block] = side
-        elif block >= n:
+        elif full is not None and block >= n:
             for j in range(n):
                 free[j] = work[j] == 0
             if _independent(A, G, gwork, block - n, free, w):
@@ -616,7 +650,7 @@ def _cold_start(
     return MAX_ITER_EXCEEDED, limit
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _holdable(
     A: F64,
     G: F64,
@@ -625,17 +659,18 @@ def _holdable(
     j: int,
     free: NDArray[np.bool_],
     w: QPWork,
+    full: Any,
 ) -> bool:
     """Whether bound ``j`` can join the working set: the free columns left keep the task rows
     (and the rows held) independent. Overwrites ``free``."""
     for i in range(work.size - gwork.size):
         free[i] = work[i] == 0 and i != j
-    if G.shape[0] == 0:
+    if full is None or G.shape[0] == 0:
         return bool(free_rank(A, free, w.feas) == A.shape[0])
     return bool(_independent(A, G, gwork, -1, free, w))
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _trace(P: F64, c: F64, x: F64, step: float, w: QPWork, row: int) -> None:
     """Row ``row`` of the lab's trace: objective at ``x``, the step's largest component, the
     working set's size (bounds and rows held)."""
@@ -661,7 +696,8 @@ def active_set_of(
     P: F64, c: F64, A: F64, b: F64, G: F64, h: F64, lb: F64, ub: F64, x: F64, out: F64
 ) -> tuple[int, int]:
     """:func:`active_set` with its own buffers (the entry point for callers in Python)."""
-    return active_set(P, c, A, b, G, h, lb, ub, x, qp_work(x.size, A.shape[0], G.shape[0]), out)
+    w = qp_work(x.size, A.shape[0], G.shape[0])
+    return active_set(P, c, A, b, G, h, lb, ub, x, w, out, True)
 
 
 @kernel
@@ -683,5 +719,5 @@ def active_set_traced(
     of ``trace_rows`` iterations (NaN past the last): the solver lab's entry point."""
     w = qp_work(x.size, A.shape[0], G.shape[0], trace_rows)
     w.limit[0] = max_iter
-    code, iterations = active_set(P, c, A, b, G, h, lb, ub, x, w, out)
+    code, iterations = active_set(P, c, A, b, G, h, lb, ub, x, w, out, True)
     return code, iterations, w.trace

@@ -26,7 +26,7 @@ def gradient(q: F64, q_min: F64, q_max: F64, out: F64) -> None:
         out[j] = slope(q[j], q_min[j], q_max[j])
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(weight: float, data: F64, q: F64, c: F64) -> None:
     """``c[j] += weight grad(H)_j`` for every joint (``data = [q_min, q_max]``)."""
     n = q.size

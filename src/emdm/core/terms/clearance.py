@@ -16,7 +16,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel
+@kernel(internal=True)
 def write(weight: float, data: F64, t: float, pts: F64, axes: F64, c: F64) -> None:
     """``c[j] -= weight sum_pairs (influence - d) / (influence - stop)^2 (J_d)_j``."""
     influence, stop = data[0], data[1]

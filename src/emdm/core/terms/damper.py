@@ -27,7 +27,7 @@ def sides(
     return low, high
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(data: F64, q: F64, lb: F64, ub: F64) -> None:
     """``lb_j = max(lb_j, low_j)``, ``ub_j = min(ub_j, high_j)`` (:func:`sides`; ``data =
     [q_min, q_max, influence, stop, gain]``, per joint)."""

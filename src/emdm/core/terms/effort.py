@@ -9,7 +9,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(weight: float, n: int, P: F64) -> None:
     """``P[j, j] += weight`` for the ``n`` joints."""
     for j in range(n):

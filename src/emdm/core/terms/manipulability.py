@@ -9,7 +9,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(weight: float, Jm: F64, c: F64) -> None:
     """``c[j] += -weight Jm_j`` for every joint."""
     for j in range(Jm.size):

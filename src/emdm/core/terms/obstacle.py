@@ -38,7 +38,7 @@ freezing there). Where that leaves no admissible command, the step is built agai
 (standing still is then admissible, and exact)."""
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def _reach(pts: F64, axes: F64, lb: F64, ub: F64, dt: float) -> None:
     """Per point ``k``: ``pts[k, 3] = c_k`` (m/s), the tightening, and ``pts[k, 4]`` (m), how far
     the point can move in one step.
@@ -82,7 +82,7 @@ def _reach(pts: F64, axes: F64, lb: F64, ub: F64, dt: float) -> None:
         pts[k, 4] = dt * (first + 0.5 * dt * c)
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(
     data: F64,
     pts: F64,

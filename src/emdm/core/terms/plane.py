@@ -16,7 +16,7 @@ from ..scenario import Scenario
 from .base import F64, PLANE, ROW_ID
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(data: F64, p: F64, J: F64, G: F64, h: F64, ids: F64, rows: int) -> int:
     """One row of ``G x <= h`` at ``G[rows:]`` per plane within its influence distance; returns
     the new row count (the task slack's columns of a row are 0). A row's id is its plane's."""

@@ -11,7 +11,7 @@ from ..tolerances import ERROR_FLOOR
 from .base import F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(
     weight: float, data: F64, error_norm: float, n: int, P: F64, A: F64, lb: F64, ub: F64
 ) -> None:

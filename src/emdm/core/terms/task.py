@@ -9,7 +9,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(J: F64, v: F64, A: F64, b: F64) -> None:
     """``A[:, :n] = J``, ``b = v``."""
     for j in range(J.shape[1]):

@@ -8,7 +8,7 @@ from ..scenario import Scenario
 from .base import F64
 
 
-@kernel(refcount=False)
+@kernel(refcount=False, internal=True)
 def write(data: F64, n: int, lb: F64, ub: F64) -> None:
     """``lb_j = max(lb_j, qd_min_j)``, ``ub_j = min(ub_j, qd_max_j)`` for the ``n`` joints
     (``data = [qd_min, qd_max]``)."""
