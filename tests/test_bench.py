@@ -44,7 +44,8 @@ def test_bench_quick_reports_every_figure(tmp_path, capsys):
         "Panda vs robotics-toolbox-python at its fastest >= 50x",
         "Panda batch >= 2e5 steps/s",
         "20 inequality rows: extra cost <= 1 us/step",
-    }
+        "later process: kernels loaded from the cache <= 0.5 s",
+    }  # (the quick benchmark does not time a first use on an empty cache)
     rows = data["rows"]
     assert rows["rows_per_step"] == 20 and rows["us_per_step"] > 0
     assert rows["max_command_difference"] <= 1e-12  # loose rows change no command

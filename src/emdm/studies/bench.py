@@ -118,22 +118,31 @@ def _api_step(sc: Any, ctrl: Any, q: np.ndarray) -> dict[str, float]:
 
 
 def first_use(*, cold: bool) -> dict[str, float]:
-    """Seconds to the first ``emdm.simulate`` in a new process: with the compiled kernels loaded
-    from the on-disk cache, and (``cold``) compiled from scratch into an empty cache folder."""
+    """Seconds of a first use in a new process: ``cache_load_s``, the first ``emdm.simulate``
+    with the compiled kernels loaded from the on-disk cache; ``compile_s`` (``cold``), the whole
+    command ``emdm run task1`` (interpreter start and import included) on a fresh machine's empty
+    kernel cache, as a new user meets it (its second process compiling a share meanwhile)."""
     script = (
         "import time, emdm; s = emdm.load_scenario('task1'); t = time.perf_counter(); "
         "emdm.simulate(s, 'C-EMDM'); print(time.perf_counter() - t)"
     )
     out: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as empty:
-        cases = [("cache_load_s", dict(os.environ))]
         if cold:
-            cases.insert(0, ("compile_s", {**os.environ, "NUMBA_CACHE_DIR": empty}))
-        for key, env in cases:
-            done = subprocess.run(
-                [sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True
-            )
-            out[key] = float(done.stdout.strip().splitlines()[-1])
+            env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+            env["XDG_CACHE_HOME"] = empty  # an empty kernel cache where a new user's would be
+            command = [sys.executable, "-m", "emdm", "run", "task1", "--out", f"{empty}/run"]
+            start = time.perf_counter()
+            subprocess.run(command, env=env, capture_output=True, text=True, check=True)
+            out["compile_s"] = time.perf_counter() - start
+        done = subprocess.run(
+            [sys.executable, "-c", script],
+            env=dict(os.environ),
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        out["cache_load_s"] = float(done.stdout.strip().splitlines()[-1])
     return out
 
 
@@ -469,7 +478,13 @@ def run_bench(
             ),
             "Panda batch >= 2e5 steps/s": spatial["batch"]["steps_per_second"],
             "20 inequality rows: extra cost <= 1 us/step": rows["extra_us_per_step"],
-        },
+            "later process: kernels loaded from the cache <= 0.5 s": first["cache_load_s"],
+        }
+        | (
+            {"first use, emdm run task1 on an empty cache <= 15 s": first["compile_s"]}
+            if "compile_s" in first
+            else {}
+        ),
         "wall_time_s": time.perf_counter() - start,
     }
 
@@ -624,10 +639,14 @@ def bench_table(data: dict[str, Any]) -> str:
         f"Batch ({b['scenario']}): {b['runs']} runs, {b['steps']} steps in "
         f"{b['seconds']:.3f} s = {b['steps_per_second']:.3g} steps/s on "
         f"{data['machine']['cpus']} CPUs.",
-        "First `emdm.simulate` (task1, a plain planar run) in a new process: "
+        "First use: "
         + ", ".join(
-            f"{'compiling its kernels' if k == 'compile_s' else 'loading them from the cache'} "
-            f"{v:.1f} s"
+            (
+                "`emdm run task1` on an empty kernel cache (the whole command, compiling) "
+                if k == "compile_s"
+                else "the first `emdm.simulate` of a later process (loading them from the cache) "
+            )
+            + f"{v:.1f} s"
             for k, v in first.items()
         )
         + ".",
@@ -635,8 +654,8 @@ def bench_table(data: dict[str, Any]) -> str:
         "| target | measured |",
         "|---|---:|",
     ]
-    units = ("us/step", "x", "steps/s", "us/step", "x", "steps/s", "us/step")
-    for (name, value), unit in zip(data["targets"].items(), units, strict=True):
+    units = ("us/step", "x", "steps/s", "us/step", "x", "steps/s", "us/step", "s", "s")
+    for (name, value), unit in zip(data["targets"].items(), units, strict=False):
         lines.append(f"| {name} | {value:.3g} {unit} |")
     m = data["machine"]
     lines += [
