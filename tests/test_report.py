@@ -436,3 +436,27 @@ def test_each_shared_claim_is_written_once_and_said_by_the_paper_and_the_pitch(q
         assert any(render_latex(c) in paper for c in (written, cap(written))), name
         assert any(render_latex(c) in pitch for c in (said, cap(said))), name
     assert render_latex(story.dexterity_gain()) in paper.split(r"\end{abstract}")[0]
+
+
+def test_the_pareto_bound_on_late_fronts_is_the_largest_of_them(quick_report):
+    """Fifteenth reading: 'every C-EMDM optimum has M < 0 (at most X)' must give the largest
+    M of every late front, not the first one's."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    story = Story(Data(quick_report))
+    steps = story.rec.fronts["C-EMDM"]
+    late = [i for i, st in enumerate(steps) if i > 0 and st.M_max < 0]
+    paragraphs = [p for s in story.build().sections for p in s.paragraphs]
+    said = [
+        seg
+        for p in paragraphs
+        for seg in p
+        if getattr(seg, "src", "").endswith("/M_max") and "task1-pareto-C-EMDM" in seg.src
+    ]
+    if not late or late != list(range(late[0], len(steps))):
+        assert not said  # no such claim without it holding
+        return
+    assert len(said) == 1
+    top = max(steps[i].M_max for i in late)
+    assert float(said[0].text) == pytest.approx(top, rel=0.06)  # the bound, to its 2 digits

@@ -312,13 +312,14 @@ class Task1(StoryBase):
                 )
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
             if late and late == list(range(late[0], len(csteps))):  # m falls, whatever w_M
+                top = max(late, key=lambda i: csteps[i].M_max)  # the least negative of them all
                 p += sentence(
                     "From k = ",
                     self.frontn("C-EMDM", late[0], "k", "d"),
                     " on every C-EMDM optimum has ",
                     MRATE,
                     " < 0 (at most ",
-                    self.frontn("C-EMDM", late[0], "M_max", ".1e", "m²/s"),
+                    self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
                     "): late in the run, within the joint bounds, ",
                     M_SYM,
                     " falls whatever the weights. ",
