@@ -238,17 +238,18 @@ class Solvers(StoryBase):
         table = Table(
             "solvers",
             sentence(
-                "Task 2 C-EMDM solvers on the same ",
+                "Every solver on the same ",
                 self.d.count(f, "resolved_steps"),
-                " programs of its ",
+                " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " steps (evenly spaced, with the least dexterous; medians; ms: per program the median of ",
-                "up to ",
+                " programs (evenly spaced, with the least dexterous). ms: median time per program "
+                "(each the median of up to ",
                 self.d.num(f, "repeats", fmt="d"),
-                f" calls from Python, 1 above {SLOW_CALL * 1e3:g} ms, ",
-                "solved from scratch; largest gap and bound violation, 0: below ",
+                f" calls from Python, 1 above {SLOW_CALL * 1e3:g} ms, from scratch). it./ev.: "
+                "median iterations/evaluations (--: none). gap, viol.: the largest gap to the "
+                "optimum and bound violation (0: below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "; it./ev.: iterations/evaluations, --: none; goal: alone in the loop).",
+                "). goal: time to goal with the solver alone in the loop.",
             ),
             [
                 sentence("solver"),

@@ -54,6 +54,9 @@ class Task2(Claims):
             answer += sentence(": one can leave the straight line to the goal, the other cannot")
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
+                e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
+                if e4 < self.mv(t, emdm, "time_to_goal"):  # the stall is the policy's: say so
+                    answer += sentence(f", sooner than {emdm}: the stall is task scaling's")
             answer += sentence(".")
         else:
             answer += sentence(".")
