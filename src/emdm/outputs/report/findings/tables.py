@@ -140,11 +140,12 @@ class Tables(Claims):
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs: one change to a nominal run (E3: its time step, at a failing "
-                "weight setting), and its outcomes (nominal; E3's: its weights at the nominal ",
-                DT,
-                ", ",
+                "Evidence runs. Each changes one thing in a nominal run (E3: the time step of "
+                "the failing weight setting of ",
                 Ref("sec", "t1-pareto"),
+                "); its outcomes, with the nominal run's in brackets (E3: those weights at the "
+                "nominal ",
+                DT,
                 "); stall: goal not reached.",
             ),
             [
