@@ -189,7 +189,11 @@ class Beyond(StoryBase):
         sec.tables.append("mmc")
         if mmc.paper is not None:
             self._mmc_paper(sec, f, mmc, mmc.paper, arms)
-        pp = "panda_preset"
+
+        def preset_m(ctrl: str) -> Num:  # the Panda preset run's mean manipulability
+            value = mmc.panda_preset[ctrl]["mean_manipulability"]
+            return traced(value, f, ("panda_preset", ctrl, "mean_manipulability"), ".4f")
+
         sec.figures.append(
             self.figure(
                 "panda-baselines",
@@ -197,33 +201,13 @@ class Beyond(StoryBase):
                 sentence(
                     "The Panda preset task: the end-effector paths of RRMC, PARK, MMC and C-EMDM "
                     "in three projections. Mean manipulability: RRMC ",
-                    traced(
-                        mmc.panda_preset[Name.RRMC]["mean_manipulability"],
-                        f,
-                        (pp, Name.RRMC, "mean_manipulability"),
-                        ".4f",
-                    ),
+                    preset_m(Name.RRMC),
                     ", PARK ",
-                    traced(
-                        mmc.panda_preset[Name.PARK]["mean_manipulability"],
-                        f,
-                        (pp, Name.PARK, "mean_manipulability"),
-                        ".4f",
-                    ),
+                    preset_m(Name.PARK),
                     ", MMC ",
-                    traced(
-                        mmc.panda_preset[Name.MMC]["mean_manipulability"],
-                        f,
-                        (pp, Name.MMC, "mean_manipulability"),
-                        ".4f",
-                    ),
+                    preset_m(Name.MMC),
                     ", C-EMDM ",
-                    traced(
-                        mmc.panda_preset[Name.C_EMDM]["mean_manipulability"],
-                        f,
-                        (pp, Name.C_EMDM, "mean_manipulability"),
-                        ".4f",
-                    ),
+                    preset_m(Name.C_EMDM),
                     ".",
                 ),
                 wide=True,
