@@ -274,3 +274,15 @@ def test_range_space_step_solves_the_kkt_system(rng):
         assert np.abs(x - want).max() <= 1e-8 * np.abs(want).max(), trial
         checked[diagonal] += 1
     assert checked[True] > 100 and checked[False] > 50
+
+
+def test_backends_found_installed_exactly_when_qpsolvers_lists_them():
+    """emdm finds a backend's module without importing qpsolvers; the answer must be the one
+    qpsolvers itself gives after importing every backend."""
+    import qpsolvers
+
+    from emdm.solvers.qpsolvers_backend import BACKENDS, MODULES, _installed
+
+    assert set(MODULES) == set(BACKENDS)
+    for name in BACKENDS:
+        assert _installed(name) == (name in qpsolvers.available_solvers), name

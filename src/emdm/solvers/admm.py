@@ -21,7 +21,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import scipy.linalg
 
 from ..core.problem import QP
 from .active_set import independent_rows
@@ -37,6 +36,8 @@ def solve_admm(
     history: bool = False,
 ) -> SolverResult:
     """Solve ``qp`` by ADMM; ``status`` is ``"optimal"`` on convergence, else ``"max_iter"``."""
+    import scipy.linalg  # loaded on first use: the control loop never needs it
+
     start = time.perf_counter()
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)

@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import Bounds, LinearConstraint, differential_evolution, linprog, minimize
 
 from ..core.arm import Matrix, Vector
 from ..core.problem import QP
@@ -62,6 +61,8 @@ class Reduced:
 
     def box(self, default: float = 10.0) -> tuple[Vector, Vector]:
         """The tightest box around the feasible set of ``t`` (one small LP per side), or +-default."""
+        from scipy.optimize import linprog  # loaded on first use: the control loop never needs it
+
         lo, hi = np.full(self.dim, -default), np.full(self.dim, default)
         if not self.h.size:
             return lo, hi
@@ -144,6 +145,8 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
     """A solver function running the gradient-free ``method`` on the reduced program."""
 
     def solve(qp: QP, *, budget: int = DEFAULT_BUDGET, history: bool = False) -> SolverResult:
+        from scipy.optimize import Bounds, LinearConstraint, differential_evolution, minimize
+
         start = time.perf_counter()
         if infeasible(qp):
             return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
@@ -238,6 +241,8 @@ def solve_trust_constr(qp: QP, *, max_iter: int = 500, history: bool = False) ->
 
 
 def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> SolverResult:
+    from scipy.optimize import Bounds, LinearConstraint, minimize
+
     start = time.perf_counter()
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
