@@ -227,6 +227,39 @@ def test_a_helper_process_shares_the_first_compile_and_ends_with_it(tmp_path, mo
     assert len(started) == 1 and started[0].poll() is not None  # stopped with the warm-up
 
 
+def _plus_one(x: float) -> float:
+    return x + 1.0
+
+
+def test_a_helper_skips_the_kernel_another_process_is_compiling():
+    """The helper's share goes on to its next kernel when the first process holds a kernel's
+    lock (it is compiling it), and compiles a kernel nobody holds."""
+    import subprocess
+    import sys
+
+    from emdm.core import jit
+
+    compiled = jit.kernel(_plus_one)
+    path = jit._lock_path(compiled)
+    assert path is not None
+    hold = (
+        "import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT); "
+        "fcntl.flock(fd, fcntl.LOCK_EX); print('held', flush=True); time.sleep(60)"
+    )
+    other = subprocess.Popen([sys.executable, "-c", hold, path], stdout=subprocess.PIPE, text=True)
+    try:
+        assert other.stdout is not None and other.stdout.readline().strip() == "held"
+        assert jit._busy(compiled)
+        jit.compile_for(compiled, 1.0, unless_busy=True)
+        assert not compiled.overloads  # skipped
+    finally:
+        other.kill()
+        other.wait()
+    assert not jit._busy(compiled)
+    jit.compile_for(compiled, 1.0, unless_busy=True)
+    assert len(compiled.overloads) == 1 and compiled(2.0) == 3.0
+
+
 def test_kernel_failure_reaches_the_caller():
     from emdm.core import jit
 

@@ -404,13 +404,10 @@ def _shared_lock(compiled: Any) -> Iterator[None]:
     calls (a kernel is compiled before the kernels that call it are done), so two processes
     cannot wait for each other; the system releases a lock when its process ends. No lock (and
     no wait) where the platform has no ``flock`` or the folder is not writable."""
-    folder = getattr(compiled._cache, "cache_path", None)
-    if fcntl is None or folder is None:
+    path = _lock_path(compiled)
+    if path is None:
         yield
         return
-    path = os.path.join(
-        folder, f"{compiled.py_func.__module__}.{compiled.py_func.__qualname__}.lock"
-    )
     if path in _held:  # this process holds it (the kernel is being compiled further up)
         yield
         return
@@ -438,10 +435,42 @@ def _shared_lock(compiled: Any) -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
-def compile_for(compiled: Any, *args: Any) -> None:
+def _lock_path(compiled: Any) -> str | None:
+    """The lock file of kernel ``compiled`` in its cache folder (None: no cache folder or no
+    ``flock`` on this platform)."""
+    folder = getattr(compiled._cache, "cache_path", None)
+    if fcntl is None or folder is None:
+        return None
+    return os.path.join(
+        folder, f"{compiled.py_func.__module__}.{compiled.py_func.__qualname__}.lock"
+    )
+
+
+def compile_for(compiled: Any, *args: Any, unless_busy: bool = False) -> None:
     """Compile (or load) kernel ``compiled`` for the types of ``args``, without calling it: for
-    internal kernels (:class:`Kernel`) in a helper's share."""
+    internal kernels (:class:`Kernel`) in a helper's share. ``unless_busy``: not when another
+    process holds its lock (it is compiling that kernel: the helper goes on to the next)."""
+    if unless_busy and _busy(compiled):
+        return
     compiled.compile(tuple(compiled.typeof_pyval(a) for a in args))
+
+
+def _busy(compiled: Any) -> bool:
+    """Whether another process holds the lock of kernel ``compiled`` (:func:`_shared_lock`)."""
+    path = _lock_path(compiled)
+    if path is None or path in _held:
+        return False
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)  # releases the lock when this process took it
+    return False
 
 
 def plain(compiled: F) -> F:

@@ -66,6 +66,8 @@ from ..solvers.base import _solve_chain
 from ..solvers.kernels import (
     INFEASIBLE,
     OK,
+    _cold_start,
+    _warm_start,
     active_set,
     certify,
 )
@@ -722,19 +724,45 @@ def _warm_up_plain() -> None:
 
 def _warm_up_share(planar: bool = False) -> None:
     """The share of :func:`_warm_up` a helper process compiles while the first process compiles
-    the rest (:func:`~emdm.core.jit.ensure_compiled`): the feasible point (the zonotope, and for
-    runs that are not plain planar the simplex method) and the certificate, the two subtrees of
-    the active set's cold start, which the first process gets to last (``planar``: for
-    :func:`_warm_up_plain`)."""
+    the rest (:func:`~emdm.core.jit.ensure_compiled`): the kernels the loop calls, in the reverse
+    of the order the first process meets them (the active set's cold start and its two subtrees,
+    the feasible point and the certificate, then its warm start, the task scale, the program and
+    the kinematics), each one skipped when the first process is compiling it already: the two
+    meet in the middle (``planar``: for :func:`_warm_up_plain`)."""
     from ..core.loading import load_scenario
 
     sc = load_scenario("task1", {"motion.max_time": 0.1})
+    prog = get_controller(Name.C_EMDM).program_data(sc)
     w = plain(step_work)(sc.n, sc.n, sc.nt, 0, 0)
+    rec = plain(new_record)(2, sc.n, sc.nt)
+    full = None if planar else True
+    qp = (w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
+    step = StepInput(
+        rec.q[0], w.J, w.Jm, rec.v[0], 0.0, rec.p[0], 0.0, w.pts, w.axes, w.gaps, SLOWEST
+    )
+    out = ProgramOut(w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.ids)
+    share: list[tuple[Any, tuple[Any, ...]]]
     if planar:
-        compile_for(feasible_point, w.A, w.b, w.lb, w.ub, w.x, w.qp.feas)
-    else:
-        compile_for(feasible_point_rows, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp.feas)
-    compile_for(certify, w.P, w.c, w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp, w.res)
+        share = [
+            (feasible_point, (w.A, w.b, w.lb, w.ub, w.x, w.qp.feas)),
+            (certify, qp),
+            (_cold_start, (*qp, full)),
+            (_warm_start, qp),
+            (task_scale, (w.A, w.b, w.lb, w.ub, w.qp.feas)),
+            (build_program, (prog, step, out, full)),
+            (kinematics, (sc.arm_data.lengths, rec.q[0], rec.p[0], w.J, w.Jm, w.kin)),
+        ]
+    else:  # the first process compiles the spatial kinematics and the program meanwhile, then
+        # the rows' settling (which calls the active set), then their task scale
+        share = [
+            (feasible_point_rows, (w.A, w.b, w.G, w.h, w.lb, w.ub, w.x, w.qp.feas)),
+            (certify, qp),
+            (_cold_start, (*qp, full)),
+            (_warm_start, qp),
+            (task_scale_rows, (w.A, w.b, w.G, w.h, w.lb, w.ub, w.qp.feas)),
+        ]
+    for compiled, args in share:
+        compile_for(compiled, *args, unless_busy=True)
 
 
 def _warm_up_plain_share() -> None:
