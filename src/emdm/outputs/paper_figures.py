@@ -208,11 +208,12 @@ def pair_figure(
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.5 if n == 3 else 2.3) if medium is PAPER else 3.4
+    height = (2.62 if n == 3 else 2.3) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
-        # limit must be readable at column width (about 9 mm per strip in the paper)
-        outer = fig.add_gridspec(2, 1, height_ratios=[1.0, 2.2 if n == 3 else 1.6])
+        # limit must be readable at column width (about 9 mm per strip in the paper), and the
+        # panels above about 9 mm too (at 6 mm their three ticks crowded)
+        outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
         upper = outer[0].subgridspec(1, 3)
         lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])

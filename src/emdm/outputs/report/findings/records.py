@@ -49,6 +49,7 @@ MetricKey = Literal[
     "fallback_steps",
     "final_q",
     "min_stop_margin",
+    "max_kkt_residual",
 ]
 """The fields of :class:`Outcomes`."""
 
@@ -71,6 +72,7 @@ class Outcomes:
     fallback_steps: int
     final_q: list[Any]
     min_stop_margin: float
+    max_kkt_residual: float
 
 
 EventKey = Literal[
