@@ -357,9 +357,7 @@ class Task1(StoryBase):
         fallbacks = self.mv(t, Name.UC_EMDM, "fallback_steps") + self.mv(
             t, Name.C_EMDM, "fallback_steps"
         )
-        worst = max(
-            (Name.UC_EMDM, Name.C_EMDM), key=lambda c: self.mv(t, c, "max_kkt_residual")
-        )
+        worst = max((Name.UC_EMDM, Name.C_EMDM), key=lambda c: self.mv(t, c, "max_kkt_residual"))
         answer = sentence(
             "The custom active-set solver returned a certified optimum at every step of UC-EMDM (",
             self.mt(t, Name.UC_EMDM, "steps", "d"),
