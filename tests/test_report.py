@@ -172,6 +172,19 @@ def test_every_animation_states_its_speed(report):
     assert text.count("× real time") == 4
 
 
+def test_no_template_placeholder_is_left_in_the_page(report):
+    """Every template's expressions are rendered: none of either environment's delimiters (the
+    LaTeX templates' ``((( )))`` or the page's ``{{ }}``) reaches the page or the sources."""
+    root, _ = report
+    page = (root / "index.html").read_text(encoding="utf-8")
+    for mark in ("(((", "((*", "{{", "{%"):
+        assert mark not in page, mark
+    for name in ("paper.tex", "pitch.tex"):  # (TeX itself writes "}}" and "{{")
+        text = (root / "paper" / name).read_text(encoding="utf-8")
+        for mark in ("(((", "((*", "((="):
+            assert mark not in text, (name, mark)
+
+
 def test_everything_is_local(report):
     root, page = report
     assert page.sources, "no images"
