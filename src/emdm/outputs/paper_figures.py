@@ -282,7 +282,7 @@ def pair_figure(
             if mixed and top > 1.5 * limit:
                 # constrained and unconstrained runs together: linear within the limits (the
                 # constrained runs' detail), logarithmic beyond (the unconstrained peaks)
-                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=2.0)
+                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.0)
                 span = top * 1.6
             qd_axes[j].set_ylim(-span, span)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
@@ -296,6 +296,15 @@ def pair_figure(
             # (beyond the limits, a tick at the peak itself: a rounder one below it read as the
             # axis' end, the curve "cut off")
             qd_tick = limit if top <= 1.5 * limit else float(f"{top:.2g}")
+            if mixed and top > 1.5 * limit:
+                # the limits on the left, where the constrained runs lie along them; the peak
+                # on the right (four labels on one side collide at this height)
+                qd_tick = limit
+                peak = float(f"{top:.2g}")
+                right = qd_axes[j].secondary_yaxis("right")
+                right.set_yticks([-peak, peak], [f"{-peak:g}", f"{peak:g}"])
+                right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+                right.tick_params(pad=1)
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())

@@ -75,10 +75,6 @@ def bare(num: Num) -> Num:
     return Num(num.text, num.src, num.fmt, num.op)
 
 
-def _words(count: int) -> str:
-    return {1: "one", 2: "two", 3: "three", 4: "four"}.get(count, str(count))
-
-
 def _flat(*parts: Any) -> Sentence:
     out: list[Any] = []
     for p in parts:

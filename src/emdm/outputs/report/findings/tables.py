@@ -140,13 +140,14 @@ class Tables(Claims):
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs. Each changes one thing in a nominal run (E3: the time step of "
-                "the failing weight setting of ",
+                "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
+                "brackets (stall: goal not reached). E3: the failing weights of ",
                 Ref("sec", "t1-pareto"),
-                "); its outcomes, with the nominal run's in brackets (E3: those weights at the "
-                "nominal ",
+                " at ",
                 DT,
-                "); stall: goal not reached.",
+                "/5 and, in brackets, at ",
+                DT,
+                ".",
             ),
             [
                 sentence("run"),

@@ -19,7 +19,6 @@ from .base import (
     T_EQ,
     W_M,
     StoryBase,
-    _words,
     eq,
 )
 
@@ -158,19 +157,7 @@ class Task1(StoryBase):
                 "): two joints at their bounds leave one unknown for two task equations, so "
                 "the objective has nothing to choose (",
             )
-            scaled_steps = self.pair(t, "C", "coincide_scaled_steps")
-            determined = self.pair(t, "C", "coincide_determined_steps")
-            p += sentence(
-                self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of these steps are scaled",
-            )
-            if determined == same and scaled_steps < same:
-                p += sentence(
-                    "; on the other ",
-                    _words(same - scaled_steps),
-                    " the bounds alone fix the command",
-                )
-            p += sentence(")")
+            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " of them scaled)")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(

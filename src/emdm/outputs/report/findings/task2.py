@@ -288,9 +288,8 @@ class Task2(Claims):
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
             if [n.text for n in within] == [n.text for n in whole]:
                 p += sentence(
-                    ", over each whole run and over their common first ",
+                    ", also over their common first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                    " alike",
                 )
             else:
                 p += sentence(
@@ -313,13 +312,13 @@ class Task2(Claims):
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
-                "Task 2, the four controllers (dashes in the legend), panels as in ",
+                "Task 2, all four controllers, panels as in ",
                 Ref("fig", "t1-uc"),
                 " but ",
             ) + self.panels(gap=True, only_c=True)
             caption += sentence(
-                "; joint velocities linear within the limits, logarithmic beyond (unconstrained "
-                "peaks up to ",
+                "; (e) linear within the limits (left ticks), logarithmic beyond them up to "
+                "each joint's peak (right ticks; UC up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
                 ")",
             )
