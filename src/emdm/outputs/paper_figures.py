@@ -353,7 +353,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
-    height = 1.55 if medium is PAPER else 2.7
+    height = 1.42 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -472,7 +472,7 @@ def workspace_figure(
             frameon=False,
             fontsize=medium.tiny,
             handlelength=1.6,
-            labelspacing=0.6,
+            labelspacing=0.5,
         )
     return stem
 
@@ -822,8 +822,19 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     return stem
 
 
-SHADES = (0.0, -0.45, 0.4, -0.25, 0.6, 0.2)
-"""How far each solver of a family moves from the family's colour (towards white when > 0)."""
+SOLVER_COLORS = (
+    "#0072B2",
+    "#E69F00",
+    "#009E73",
+    "#D55E00",
+    "#CC79A7",
+    "#56B4E9",
+    "#000000",
+    "#999999",
+)
+"""One colour per solver of a figure (Okabe-Ito without its yellow, then grey): six shades of
+one family colour could not be told apart in print."""
+FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
 
 
 def convergence_figure(
@@ -833,27 +844,22 @@ def convergence_figure(
     medium: Medium = PAPER,
 ) -> Path:
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
-    against objective evaluations (``curves``: name -> (family, evaluations, error)), coloured
-    by family (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
+    against objective evaluations (``curves``: name -> (family, evaluations, error)), each
+    solver in its own colour and marker, solid for gradient-based and dashed for gradient-free
+    (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
     height = 1.15 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
-    dashes = ("-", "--", ":", "-.")
-    marks = ("o", "s", "^", "D", "v", "P")
+    marks = ("o", "s", "^", "D", "v", "P", "X", "*")
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
-        seen: dict[str, int] = {}
-        for name, (family, evaluations, error) in curves.items():
-            i = seen[family] = seen.get(family, -1) + 1
-            # every solver its own shade of its family's colour, dash and marker, the marker at
-            # its last evaluation: a solver done in one or two evaluations (slsqp) is a point
-            base = np.array(matplotlib.colors.to_rgb(FAMILY_COLOR.get(family, "grey")))
-            mix = SHADES[i % len(SHADES)]  # > 0 towards white, < 0 towards black
-            shade = base + mix * (1.0 - base) if mix > 0 else base * (1.0 + mix)
+        for i, (name, (family, evaluations, error)) in enumerate(curves.items()):
+            # the marker at the solver's last evaluation: one done in a few evaluations (slsqp)
+            # is a short trace ending in its marker
             ax.loglog(
                 evaluations,
                 error,
-                color=tuple(shade),
-                linestyle=dashes[i % len(dashes)],
+                color=SOLVER_COLORS[i % len(SOLVER_COLORS)],
+                linestyle=FAMILY_DASH.get(family, ":"),
                 linewidth=medium.line,
                 marker=marks[i % len(marks)],
                 markevery=[len(evaluations) - 1],

@@ -5,7 +5,7 @@ from __future__ import annotations
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Cite, Ref, Sentence, sentence
+from ..trace import Cite, Sentence, sentence
 from .base import (
     M_SYM,
 )
@@ -82,10 +82,7 @@ class Front(Claims):
                 ", we write each control step as a strictly convex quadratic program (QP), solve it "
                 "with a custom active-set method whose every answer is certified by its KKT "
                 "conditions, and compare this EMDM controller with IVKC, each unconstrained (UC-) "
-                "or constrained by joint limits (C-); evidence runs that change one thing test our "
-                "explanations (",
-                Ref("tab", "evidence"),
-                ").",
+                "or constrained by joint limits (C-).",
             )
         )
         anims = [a for a in (self.anim(t, g) for t in ("task1", "task2") for g in PAIRS) if a]

@@ -182,7 +182,7 @@ class Solvers(StoryBase):
                 "Convergence on Task 2 C-EMDM's ",
                 "least dexterous program, " if hardest else "program at ",
                 *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
-                " (green: gradient-based, orange: gradient-free; marker: last evaluation).",
+                " (solid: gradient-based, dashed: gradient-free; marker: last evaluation).",
             ),
         )
         if self.has_figure("convergence"):
@@ -216,20 +216,19 @@ class Solvers(StoryBase):
         else:
             p += sentence("every solver reaches the goal at the same time. ")
         p += sentence(  # how the lab's times were taken: Table III's caption
-            "Inside the compiled control loop, warm-started from the last working set, the "
-            "active set's median solve takes ",
+            "Inside the compiled control loop, warm-started, the active set's median solve takes ",
             self.d.us("data/task2/metrics.json", "controllers", "C-EMDM", "median_solve_time"),
-            ". ",
         )
         # which times compare implementations as well as methods
         compiled = [k for k, r in rows.items() if r.loop == "compiled"]
         python = [k for k, r in rows.items() if r.loop != "compiled"]
         if compiled and python:
             p += sentence(
-                "Times compare implementations too: only ",
+                "; only ",
                 listed(compiled),
-                " run without Python in their loop. ",
+                " run without Python in their loop, so times compare implementations too",
             )
+        p += sentence(". ")
         sec.paragraphs.append(p)  # the recommendation closes the paper (conclusion)
         return sec
 
@@ -243,12 +242,12 @@ class Solvers(StoryBase):
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, and the least dexterous). ms: median time per "
-                "program, from scratch, called from Python. it./ev.: median iterations/"
-                "evaluations (--: none). gap, viol.: largest gap to the optimum and bound "
-                "violation (0: below ",
+                "program from scratch, called from Python; it./ev.: median iterations/"
+                "evaluations; gap, viol.: largest gap to the optimum and bound violation (0: "
+                "below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "). goal: time to goal with this solver in the loop. ADMM, a first-order "
-                "splitting, is grouped with the gradient-based methods.",
+                "); goal: time to goal with this solver in the loop. ADMM (first-order "
+                "splitting) sits with the gradient-based methods.",
             ),
             [
                 sentence("solver"),

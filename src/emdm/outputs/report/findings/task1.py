@@ -71,9 +71,8 @@ class Task1(StoryBase):
         p = sentence(
             "Both programs impose ",
             Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so the end effector follows the same path; only the second-order term of "
-            "the Euler step separates the two. The controllers differ in their null-space motion "
-            "alone: with ",
+            " exactly, so the end effector follows the same path (up to the Euler step's "
+            "second-order term); they differ in null-space motion alone: with ",
             W_M,
             " = 0 (E1) ",
         )
@@ -375,8 +374,7 @@ class Task1(StoryBase):
             )
         )
         p = sentence(
-            "Warm-started from the previous working set (else from an exact feasible point), it "
-            "takes a median of ",
+            "Warm-started from the previous working set, it takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
@@ -431,11 +429,11 @@ class Task1(StoryBase):
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 p += sentence(", all scaled ones")
         p += sentence(
-            ". Otherwise Task 1 is benign: ",
+            ". Otherwise Task 1 is benign (",
             COND_J,
-            " peaks at ",
+            " at most ",
             self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
-            " and the programs have no slack.",
+            ", no slack).",
         )
         sec.paragraphs.append(p)
         return sec
