@@ -39,6 +39,7 @@ from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
+from ..studies.lab import exact_answer
 from .animate import ellipse_points
 from .style import CONTROLLER_STYLE, FAMILY_COLOR, OKABE_ITO, RC
 
@@ -745,9 +746,9 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
 def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     """The pitch's solver slide: one axis, the median time per program of each solver (rows by
     family, the control period dashed), and in a column beside the axes, in words, whether its
-    answer is the optimum: ``exact`` (gap and bound violation at most 1e-9), ``within 10^-k``,
-    ``off by g``, and ``out of bounds`` (violation above 1e-6); hollow where the gap or the
-    violation is above 1e-6. The paper's :func:`solver_figure` plots the gaps on an axis."""
+    answer is the optimum: ``exact`` (:func:`~emdm.studies.lab.exact_answer`, filled), else
+    hollow with ``within 10^-k``, ``off by g``, and ``out of bounds`` (violation above 1e-6).
+    The paper's :func:`solver_figure` plots the gaps on an axis."""
     rows = lab["solvers"]
     order = [
         k
@@ -768,21 +769,22 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         for yi, name, t in zip(y, order, times, strict=True):
             r = rows[name]
             gap, violation = abs(r["max_abs_gap"]), r["max_violation"]
-            usable = gap <= 1e-6 and violation <= 1e-6  # an answer a controller can use
+            exact = exact_answer(gap, violation)  # the paper's criterion: filled
             colour = FAMILY_COLOR.get(r["family"], "grey")
             ax.plot(
                 [t],
                 [yi],
                 marker=markers.get(r["family"], "o"),
                 color=colour,
-                markerfacecolor=colour if usable else "white",
+                markerfacecolor=colour if exact else "white",
                 markersize=7,
                 linestyle="none",
             )
-            if gap <= 1e-9:
+            if exact:
                 word = "exact"
             elif gap <= 1e-4:
-                word = rf"within $10^{{{math.ceil(math.log10(gap))}}}$"
+                worst = max(gap, violation)  # exact in one of the two, not in both
+                word = rf"within $10^{{{math.ceil(math.log10(worst))}}}$"
             else:
                 word = f"off by {gap:.2g}"
             if violation > 1e-6:

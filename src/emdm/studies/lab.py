@@ -59,6 +59,16 @@ DEFAULT_LAB_SOLVERS = (
 SLOW_CALL = 0.02
 """A call slower than this (s) is timed once: its time is already far above timer noise."""
 
+EXACT = 1e-9
+"""A solver is exact on the lab's programs when its largest gap to the optimum and its largest
+bound violation are both at most this (the paper's and the pitch's one criterion)."""
+
+
+def exact_answer(gap: float, violation: float) -> bool:
+    """Whether a solver's largest gap to the optimum and bound violation make it exact."""
+    return abs(gap) <= EXACT and violation <= EXACT
+
+
 FEATURES = ("cond_reduced", "w_slack", "cond_J", "m", "alpha", "active")
 """Per-step features recorded with every re-solve (see :func:`step_features`)."""
 

@@ -16,6 +16,7 @@ from typing import Any
 
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
+from ....studies.lab import exact_answer
 from ...paper_figures import GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
@@ -274,8 +275,7 @@ class StoryBase:
             for k, r in rows.items()
             if r.family == family
             and r.failures == 0
-            and abs(r.max_abs_gap) <= 1e-9
-            and r.max_violation <= 1e-9
+            and exact_answer(r.max_abs_gap, r.max_violation)
         ]
 
     @staticmethod

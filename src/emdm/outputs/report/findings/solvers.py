@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ....studies.lab import exact_answer
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, sentence
 from .base import (
@@ -27,9 +28,7 @@ class Solvers(StoryBase):
         dt = self.rec.scenarios["task2"].motion.dt
         grad = self.best(rows, "gradient")
         free = [k for k, r in rows.items() if r.family == "gradient-free"]
-        exact_free = [
-            k for k in free if abs(rows[k].max_abs_gap) <= 1e-9 and rows[k].max_violation <= 1e-9
-        ]
+        exact_free = [k for k in free if exact_answer(rows[k].max_abs_gap, rows[k].max_violation)]
         inexact_free = [k for k in free if k not in exact_free]
         answer: Sentence = []
         if grad:
