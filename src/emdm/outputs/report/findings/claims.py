@@ -90,5 +90,8 @@ class Claims(StoryBase):
             self.pct(t, emdm, ivkc, "mean_manipulability"),
             " mean ",
             M_SYM,
-            " against UC-IVKC",
+            " against UC-IVKC, and a peak joint speed of ",
+            self.mt(t, emdm, "max_abs_qd", ".2f"),
+            " against ",
+            self.mt(t, ivkc, "max_abs_qd", ".2f", "rad/s"),
         )
