@@ -632,7 +632,7 @@ def pareto_figure(
                 ax.text(
                     0.03,
                     0.97,
-                    rf"$w_M/w_E={text}$" + "\nnot reached (not drawn)",
+                    rf"$w_M/w_E={text}$:" + "\nnot reached,\nnot drawn",
                     transform=ax.transAxes,
                     ha="left",
                     va="top",
