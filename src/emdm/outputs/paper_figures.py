@@ -200,6 +200,11 @@ def tracking_gap(run: Run) -> np.ndarray:
     return out
 
 
+FAR_BEYOND = 1.5
+"""A joint whose speeds go beyond this multiple of its limit is drawn on an axis linear within the
+limits and logarithmic beyond, its peak ticked on the right (:func:`pair_figure`)."""
+
+
 def pair_figure(
     runs: Sequence[Run], stem: Path, medium: Medium = PAPER, *, gap: bool = False
 ) -> Path:
@@ -280,9 +285,10 @@ def pair_figure(
             top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             span = max(top, limit) * 1.15
-            if mixed and top > 1.5 * limit:
-                # constrained and unconstrained runs together: linear within the limits (the
-                # constrained runs' detail), logarithmic beyond (the unconstrained peaks)
+            far = top > FAR_BEYOND * limit
+            if far:
+                # linear within the limits (the constrained runs' detail, the limit band),
+                # logarithmic beyond (the unconstrained peaks)
                 qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.0)
                 span = top * 1.6
             qd_axes[j].set_ylim(-span, span)
@@ -291,16 +297,12 @@ def pair_figure(
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
             qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
-            # two ticks per strip (three collide at this height): the position limits, and the
-            # velocity limits unless the commands go far beyond them (UC)
+            # two ticks per strip (three collide at this height): the position limits, the
+            # velocity limits on the left and, beyond them, the peak itself on the right (a
+            # rounder tick below it read as the axis' end, the curve "cut off")
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
-            # (beyond the limits, a tick at the peak itself: a rounder one below it read as the
-            # axis' end, the curve "cut off")
-            qd_tick = limit if top <= 1.5 * limit else float(f"{top:.2g}")
-            if mixed and top > 1.5 * limit:
-                # the limits on the left, where the constrained runs lie along them; the peak
-                # on the right (four labels on one side collide at this height)
-                qd_tick = limit
+            qd_tick = limit
+            if far:
                 peak = float(f"{top:.2g}")
                 right = qd_axes[j].secondary_yaxis("right")
                 right.set_yticks([-peak, peak], [f"{-peak:g}", f"{peak:g}"])
@@ -447,7 +449,7 @@ def workspace_figure(
                 linestyle="--",
                 marker="o",
                 markersize=2.5,
-                label="goal beyond\nlimit of $q_1$",
+                label="goal past $q_1$ limit",
             ),
             Line2D(  # in the colour of the run that stalls, as drawn
                 [],
@@ -473,7 +475,7 @@ def workspace_figure(
             frameon=False,
             fontsize=medium.tiny,
             handlelength=1.6,
-            labelspacing=0.5,
+            labelspacing=0.35,
         )
     return stem
 

@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from typing import Any
+
+import numpy as np
 
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....studies.lab import exact_answer
-from ...paper_figures import GAP_FLOOR
+from ...paper_figures import FAR_BEYOND, GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -56,6 +59,8 @@ DT = Math(r"\Delta t", "Δ<i>t</i>")
 COND_J = Math(r"\operatorname{cond}J", "cond&nbsp;<i>J</i>")
 VD = Math(r"v_d", "<i>v</i><sub>d</sub>")
 T_EQ = Math("t={}", "<i>t</i>&nbsp;=&nbsp;")
+K_EQ = Math("k={}", "<i>k</i>&nbsp;=&nbsp;")
+QDOT = Math(r"\dot q", "<i>q̇</i>")
 
 
 def q(j: int) -> Math:
@@ -347,7 +352,7 @@ class StoryBase:
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod
-    def panels(gap: bool = False, only_c: bool = False) -> Sentence:
+    def panels(gap: bool = False, only_c: bool = False, far: bool = False) -> Sentence:
         """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
         as its captions name them (without the final stop); ``gap``: panel (c) is the
         velocity-tracking gap (``pair_figure(..., gap=True)``); ``only_c``: panel (c) alone."""
@@ -364,9 +369,7 @@ class StoryBase:
                 ")",
             )
             if gap
-            else sentence(
-                "(c) distance to the goal ", ERR, " (log axis; dotted: the arrival tolerance)"
-            )
+            else sentence("(c) distance to the goal ", ERR, " (log; dotted: the tolerance)")
         )
         if only_c:
             return third
@@ -376,16 +379,24 @@ class StoryBase:
                 M_SYM,
                 ", (b) effort ",
                 E_SYM,
-                " (log axis, floored at ",
+                " (log, floored at ",
                 Math(r"10^{-9}", "10<sup>−9</sup>"),
                 "), ",
             )
             + third
             + sentence(
-                ", (d) joint positions with their limits and damper influence zones (shaded), "
-                "(e) joint velocities with their limits"
+                ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
+                "limits dotted",
+                ", log beyond them (peak on the right)" if far else "",
             )
         )
+
+    def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
+        """Whether a pair figure of ``controllers`` draws a joint's speeds on its logarithmic
+        axis beyond the limits (:data:`~emdm.outputs.paper_figures.FAR_BEYOND`): a run's peak
+        speed far beyond the joints' smallest limit."""
+        limit = float(np.min(np.abs(self.rec.scenarios[task].arm.qd_max)))
+        return any(self.mv(task, c, "max_abs_qd") > FAR_BEYOND * limit for c in controllers)
 
     def pair_caption(self, task: str, group: str) -> Sentence:
         """A pair figure's caption: its panels in full for the first (Task 1.1's), by reference
@@ -393,7 +404,11 @@ class StoryBase:
         ivkc, emdm = PAIRS[group]
         out = sentence(f"{ivkc} (solid) against {emdm} (dashed)")
         if (task, group) == ("task1", "UC"):
-            out += sentence(": ") + self.panels() + sentence(".")
+            out += (
+                sentence(": ")
+                + self.panels(far=self.far_beyond(task, PAIRS[group]))
+                + sentence(".")
+            )
         else:
             out += sentence(", panels as in ", Ref("fig", "t1-uc"), ".")
         if (

@@ -45,14 +45,16 @@ class Solvers(StoryBase):
                 self.sn(lab, grad, "median_evaluations", ".4g"),
                 " objective evaluations (",
                 self.sn(lab, grad, "median_iterations", ".4g"),
-                " iterations, ",
+                " iterations, each with the exact gradient; ",
                 self.sn(lab, grad, "median_time", unit="ms"),
                 "), while ",
             )
         if exact_free:
             answer += sentence(
-                "the exact gradient-free "
-                + ("methods need a median of " if len(exact_free) > 1 else "method, ")
+                "on the reduced program (",
+                Ref("sec", "formulation"),
+                ") the exact gradient-free "
+                + ("methods need a median of " if len(exact_free) > 1 else "method, "),
             )
             for i, k in enumerate(exact_free):
                 answer += sentence(
@@ -62,11 +64,6 @@ class Solvers(StoryBase):
                     self.sn(lab, k, "median_time", unit="ms"),
                     " (95th percentile ",
                     self.sn(lab, k, "p95_time", unit="ms"),
-                    *(
-                        (", worst ", self.sn(lab, k, "max_time", unit="ms"))
-                        if rows[k].max_time == rows[k].max_time  # not NaN
-                        else ()
-                    ),
                     ")",
                     "; " if i < len(exact_free) - 1 else "",
                 )
@@ -245,8 +242,7 @@ class Solvers(StoryBase):
                 "evaluations; gap, viol.: largest gap to the optimum and bound violation (0: "
                 "below ",
                 Math(r"10^{-12}", "10<sup>−12</sup>"),
-                "); goal: time to goal with this solver in the loop. ADMM (first-order "
-                "splitting) sits with the gradient-based methods.",
+                "); goal: time to goal with this solver in the loop.",
             ),
             [
                 sentence("solver"),
@@ -262,7 +258,7 @@ class Solvers(StoryBase):
         )
         for family, title in (
             ("exact", "exact QP"),
-            ("gradient", "gradient-based"),
+            ("gradient", "gradient-based and first-order (ADMM)"),
             ("gradient-free", "gradient-free"),
         ):
             names = [k for k, r in rows.items() if r.family == family]

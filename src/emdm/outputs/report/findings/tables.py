@@ -198,6 +198,6 @@ class Tables(Claims):
             if (key, ctrl) == ("t1-c-slack-policy", Name.C_IVKC) and (e3 := self.e3_row()):
                 table.rows.append(e3)
         self.tables["evidence"] = table
-        for s in sections:
-            if s.key == "t2-c":
+        for s in sections:  # with Task 1.2, whose answer first cites E2
+            if s.key == "t1-c":
                 s.tables.append("evidence")

@@ -13,6 +13,7 @@ from .base import (
     COND_J,
     DT,
     E_SYM,
+    K_EQ,
     M_SYM,
     MRATE,
     RATIO,
@@ -115,10 +116,10 @@ class Task1(StoryBase):
             "Both constrained controllers (",
             Ref("fig", "t1-c"),
             ") keep every joint outside its stop zone (smallest margin ",
-            self.mt(t, ivkc, "min_stop_margin", ".3f"),
-            " and ",
+            self.mt(t, ivkc, "min_stop_margin", ".3f", "rad"),
+            f" for {ivkc}, ",
             self.mt(t, emdm, "min_stop_margin", ".3f", "rad"),
-            f") and within its speed limit; {emdm} ",
+            f" for {emdm}) and within its speed limit; {emdm} ",
             *self.outcome(t, emdm),
             f" and {ivkc} ",
             *(
@@ -212,7 +213,9 @@ class Task1(StoryBase):
         answer = sentence(
             "The fronts (",
             Ref("fig", "pareto"),
-            ") show what the weights buy: at k = 0, raising ",
+            ") show what the weights buy: at ",
+            K_EQ,
+            "0, raising ",
             RATIO,
             " from 0 to ",
             self.d.num("data/task1-pareto-UC-EMDM/pareto.json", "ratios", -1, fmt=".0e"),
@@ -245,14 +248,19 @@ class Task1(StoryBase):
             self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
             if e0 > 0
             else Text("little"),
-            " effort over the effort-minimal optimum (ratio 0) at k = 0" if en >= e0 else " effort",
+            *(
+                (" effort over the effort-minimal optimum (ratio 0) at ", K_EQ, "0")
+                if en >= e0
+                else (" effort",)
+            ),
         )
         i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
             answer += sentence(
                 " but up to ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
-                " at k = ",
+                " at ",
+                K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
             )
         answer += sentence(".")
@@ -265,7 +273,8 @@ class Task1(StoryBase):
             for i, info in enumerate(csteps):
                 if info.degenerate:
                     p += sentence(
-                        "C-EMDM's front at k = ",
+                        "C-EMDM's front at ",
+                        K_EQ,
                         self.frontn("C-EMDM", i, "k", "d"),
                         " is a single point no weight can move (the task-scaled step, ",
                         *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
@@ -275,7 +284,8 @@ class Task1(StoryBase):
             if sat:
                 i, _ = sat[0]
                 p += sentence(
-                    "At k = ",
+                    "At ",
+                    K_EQ,
                     self.frontn("C-EMDM", i, "k", "d"),
                     " the front saturates: every ",
                     RATIO,
@@ -286,10 +296,15 @@ class Task1(StoryBase):
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
             if late and late == list(range(late[0], len(csteps))):  # m falls, whatever w_M
                 top = max(late, key=lambda i: csteps[i].M_max)  # the least negative of them all
+                ks: Sentence = []
+                for j, i in enumerate(late):  # the fronts computed, not the steps between them
+                    sep = "" if j == 0 else (" and " if j == len(late) - 1 else ", ")
+                    ks += sentence(sep, self.frontn("C-EMDM", i, "k", "d"))
                 p += sentence(
-                    "From k = ",
-                    self.frontn("C-EMDM", late[0], "k", "d"),
-                    " on every C-EMDM optimum has ",
+                    "At ",
+                    K_EQ,
+                    *ks,
+                    " every C-EMDM optimum has ",
                     MRATE,
                     " < 0 (at most ",
                     self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
@@ -319,16 +334,15 @@ class Task1(StoryBase):
             finer = r.finer_dt
             if finer.get("reached"):
                 p += sentence(
-                    "The same weights with ",
+                    "With ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " reach the goal in ",
+                    " they arrive in ",
                     self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
-                    " (E3), at an effort of ",
+                    " (E3) for an effort of ",
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
-                    " against ",
+                    " (nominal weights: ",
                     self.mt("task1", Name.UC_EMDM, "total_effort", ".3g"),
-                    " at the nominal weights: the miss comes from the step size, the cost from "
-                    "the weights. ",
+                    "): the miss comes from the step size, the cost from the weights. ",
                 )
             break
         if p:

@@ -499,13 +499,14 @@ class Task2(Claims):
                 p += sentence(".")
             else:
                 p += sentence(
-                    "; ADMM's follow the conditioning more closely (rank correlation ",
+                    "; ADMM's follow the reduced Hessian's conditioning more closely (rank "
+                    "correlation of iterations with it ",
                     self.d.num(
                         f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
                     ),
                     *(
                         (
-                            ", against ",
+                            ", the active set's ",
                             self.d.num(
                                 f,
                                 "challenges",
