@@ -276,7 +276,7 @@ class Pitch:
                 s.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
                 ")",
             )
-        out.append(s.uc_slack_saving())
+        out.append(s.uc_slack_saving(speeds=False))
         e8 = s.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             out.append(
@@ -295,18 +295,13 @@ class Pitch:
             return []
         out = [
             sentence(
-                "At the start, ",
-                RATIO,
-                " from 0 to its largest value: ",
+                "More weight on dexterity buys more: at the start ",
                 MRATE,
                 " from ",
                 self.s.frontn("UC-EMDM", 0, "M_min", ".3g"),
                 " to ",
                 self.s.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-                ", effort from ",
-                self.s.frontn("UC-EMDM", 0, "E_min", ".3g"),
-                " to ",
-                self.s.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
+                ", at a steeply rising effort",
             )
         ]
         if self.s.front("UC-EMDM", 0, "zero_E") > 0:

@@ -78,10 +78,11 @@ class Claims(StoryBase):
         }
         return [adjectives[m] for m, better in self._policy_terms() if better]
 
-    def uc_slack_saving(self) -> Sentence:
-        """Task 2.2: what UC-EMDM's slack does against UC-IVKC."""
+    def uc_slack_saving(self, speeds: bool = True) -> Sentence:
+        """Task 2.2: what UC-EMDM's slack does against UC-IVKC (``speeds``: and the peak joint
+        speeds, which the pitch leaves to its figure)."""
         t, ivkc, emdm = "task2", Name.UC_IVKC, Name.UC_EMDM
-        return sentence(
+        out = sentence(
             "UC-EMDM's slack absorbs up to ",
             self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
             " of the desired velocity, for ",
@@ -90,8 +91,13 @@ class Claims(StoryBase):
             self.pct(t, emdm, ivkc, "mean_manipulability"),
             " mean ",
             M_SYM,
-            " against UC-IVKC, and a peak joint speed of ",
-            self.mt(t, emdm, "max_abs_qd", ".2f"),
-            " against ",
-            self.mt(t, ivkc, "max_abs_qd", ".2f", "rad/s"),
+            " against UC-IVKC",
         )
+        if speeds:
+            out += sentence(
+                ", and a peak joint speed of ",
+                self.mt(t, emdm, "max_abs_qd", ".2f"),
+                " against ",
+                self.mt(t, ivkc, "max_abs_qd", ".2f", "rad/s"),
+            )
+        return out
