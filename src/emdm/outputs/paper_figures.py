@@ -722,7 +722,7 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
                 marker=markers[f],
                 color=FAMILY_COLOR[f],
                 linestyle="none",
-                label=f,
+                label=FAMILY_LABEL[f],
             )
             for f in ("exact", "gradient", "gradient-free")
             if any(rows[k]["family"] == f for k in order)
@@ -813,7 +813,14 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         ax.grid(axis="y", visible=False)
         fig.legend(
             handles=[
-                Line2D([], [], marker=markers[f], color=FAMILY_COLOR[f], linestyle="none", label=f)
+                Line2D(
+                    [],
+                    [],
+                    marker=markers[f],
+                    color=FAMILY_COLOR[f],
+                    linestyle="none",
+                    label=FAMILY_LABEL[f],
+                )
                 for f in ("exact", "gradient", "gradient-free")
                 if any(rows[k]["family"] == f for k in order)
             ],
@@ -826,6 +833,12 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     return stem
 
 
+FAMILY_LABEL = {
+    "exact": "QP methods",
+    "gradient": "gradient-based",
+    "gradient-free": "gradient-free",
+}
+"""A solver family as a legend names it (filled or hollow says whether an answer is exact)."""
 SOLVER_COLORS = (
     "#0072B2",
     "#E69F00",

@@ -89,6 +89,15 @@ class Pitch:
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
             sentence("C-EMDM ", *s.outcome(t2, Name.C_EMDM)),
         ]
+        if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):
+            # the stall is task scaling's: the like-for-like run beside it
+            t2c[0] = sentence(
+                "C-IVKC under task scaling ",
+                *s.outcome(t2, Name.C_IVKC),
+                " (",
+                *s.ivkc_with_slack(label=False),
+                ")",
+            )
         geo = self.d.value(f"data/{t2}/events.json", "geometry")
         if geo and geo["line_blocked"]:
             t2c.append(

@@ -19,7 +19,10 @@ class Solvers(StoryBase):
     def task2_solvers(self) -> Section:
         f = "data/task2-lab-C-EMDM/solvers.json"
         sec = Section(
-            "t2-solvers", "Task 2.1: gradient-based against gradient-free", level=2, brief="2.1"
+            "t2-solvers",
+            "Task 2.1: solvers, gradient-based against gradient-free",
+            level=2,
+            brief="2.1",
         )
         lab: LabName = "task2-lab-C-EMDM"
         rows = self.solvers(lab)

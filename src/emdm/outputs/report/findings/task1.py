@@ -47,7 +47,7 @@ class Task1(StoryBase):
         answer += sentence(
             "; their end-effector paths differ by at most ",
             gap,
-            "; distances to the goal in ",
+            ": their distances to the goal coincide in ",
             Ref("fig", "t1-uc"),
             "(c)) and raises the mean manipulability by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),

@@ -37,7 +37,9 @@ class Task2(Claims):
         answer = sentence(
             f"{emdm} ",
             *self.outcome(t, emdm),
-            f"; {ivkc} ",
+            f"; {ivkc}",
+            " under task scaling" if not reached_i and self.ivkc_with_slack() else "",
+            " ",
             *self.outcome(t, ivkc),
             " (",
             *(
