@@ -50,11 +50,11 @@ class Solvers(StoryBase):
                 self.sn(lab, grad, "median_iterations", ".4g"),
                 " iterations, each with the exact gradient; ",
                 self.sn(lab, grad, "median_time", unit="ms"),
-                "), while ",
+                "). ",
             )
         if exact_free:
             answer += sentence(
-                "on the reduced program (",
+                "On the reduced program (",
                 Ref("sec", "formulation"),
                 ") the exact gradient-free "
                 + ("methods need a median of " if len(exact_free) > 1 else "method, "),
@@ -101,7 +101,7 @@ class Solvers(StoryBase):
                 hi = max(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
                 answer += (
                     sentence(
-                        "; the others end between ",
+                        ". The others end between ",
                         self.sn(lab, lo, "max_abs_gap", ".2g"),
                         " (",
                         lo,
@@ -112,7 +112,7 @@ class Solvers(StoryBase):
                         ") from the optimum",
                     )
                     if max(gaps) > min(gaps)
-                    else sentence("; the others are inexact")
+                    else sentence(". The others are inexact")
                 )
                 # real time: which cannot keep the control period, typically or at times
                 typical_slow = [k for k in inexact_free if rows[k].median_time > dt]
@@ -139,7 +139,7 @@ class Solvers(StoryBase):
             else:
                 answer += sentence(".")
         elif inexact_free:
-            answer += sentence("every gradient-free method is inexact (")
+            answer += sentence("Every gradient-free method is inexact (")
             for i, k in enumerate(inexact_free):
                 answer += sentence(
                     k,
