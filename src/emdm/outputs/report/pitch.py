@@ -52,11 +52,15 @@ class Pitch:
                 "next task; a redundant arm has a joint to spare for that"
             ),
         ]
-        out.titles["task1"] = sentence(
-            "Task 1 (three links): ",
+        out.titles["task1"] = sentence(  # without limits / with limits
+            "Task 1: ",
             s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
+            " / ",
+            s.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
             " dexterity for ",
             s.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
+            " / ",
+            s.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
             " effort",
         )
         out.bullets["task1"] = [
