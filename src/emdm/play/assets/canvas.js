@@ -8,4 +8,20 @@
   if (base && typeof base._get_css_value === "function" && base._get_css_value.length === 1) {
     base._get_css_value = function (_name) { return "" }
   }
-})()
+})();
+// Bokeh 3.9 rewrites the style sheet that places each annotation, axis and title at every
+// paint, mostly with the same text; each write made the browser restyle the page at the next
+// getComputedStyle (Bokeh reads a plot's font size for every text it measures), which was the
+// largest single cost of a plot's paint. A sheet whose text is unchanged is left alone.
+(function () {
+  const dom = window.Bokeh && Bokeh.require && Bokeh.require("core/dom")
+  const sheet = dom && dom.InlineStyleSheet && dom.InlineStyleSheet.prototype
+  if (sheet && typeof sheet._update === "function" && sheet._update.length === 1) {
+    const update = sheet._update
+    sheet._update = function (css) {
+      if (this.el.textContent !== css) {
+        update.call(this, css)
+      }
+    }
+  }
+})();
