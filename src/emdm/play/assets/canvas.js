@@ -25,3 +25,38 @@
     }
   }
 })();
+// When an axis of a plot needs more or less room (its tick labels changed, as the Pareto
+// front's do at most changes), Bokeh 3.9 lays out the whole page again (15-25 ms: every widget
+// measured, every plot's style rewritten and repainted). A plot of fixed width and height
+// cannot move anything around it, so only that plot is laid out again, after the page was laid
+// out once.
+(function () {
+  const canvas = window.Bokeh && Bokeh.require && Bokeh.require("models/plots/plot_canvas")
+  const plot = canvas && canvas.PlotView && canvas.PlotView.prototype
+  if (!plot || typeof plot._invalidate_layout_if_needed !== "function") {
+    return
+  }
+  const fixed = (view) => {
+    const {width_policy, height_policy, width, height} = view.box_sizing()
+    return view._layout_computed && width != null && height != null &&
+      ["auto", "fixed"].includes(width_policy) && ["auto", "fixed"].includes(height_policy)
+  }
+  function own_layout() {
+    this.measure_layout()
+    this.update_bbox()
+    this._compute_layout()
+    this.after_layout()
+  }
+  const invalidate = plot._invalidate_layout_if_needed
+  plot._invalidate_layout_if_needed = function () {
+    if (!fixed(this)) {
+      return invalidate.call(this)
+    }
+    this.compute_layout = own_layout
+    try {
+      return invalidate.call(this)
+    } finally {
+      delete this.compute_layout
+    }
+  }
+})();
