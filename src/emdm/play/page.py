@@ -1168,7 +1168,12 @@ class Session:
         if not live:
             start = scenario.planar_arm.joint_positions(scenario.motion.q0)
             goal = scenario.motion.goal
-            _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
+            # a dragged goal stays where the page shows it: the scenario's is that point rounded
+            # to 0.1 mm (_on_goal), and sending it back cost the page a paint of its own before
+            # the change's
+            shown = np.asarray([*self.goal.data["x"], *self.goal.data["y"]], dtype=float)
+            if shown.shape != (2,) or not np.allclose(shown, goal, rtol=0, atol=1e-4):
+                _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
             _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
             self.goal.selected.indices = []
             self.handles.selected.indices = []
