@@ -38,7 +38,7 @@
   }
   const fixed = (view) => {
     const {width_policy, height_policy, width, height} = view.box_sizing()
-    return view._layout_computed && width != null && height != null &&
+    return view.root._layout_computed && width != null && height != null &&
       ["auto", "fixed"].includes(width_policy) && ["auto", "fixed"].includes(height_policy)
   }
   function own_layout() {
