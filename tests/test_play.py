@@ -354,6 +354,26 @@ def test_a_change_goes_to_the_page_as_one_message_that_reads_back_exactly(sessio
     assert meta["props"]["scrub"]["end"] == pytest.approx(end)
 
 
+def test_the_value_ranges_are_fitted_on_the_server_as_bokeh_fits_them(session):
+    """Sent with the change (a range fitted in the page was sent back to the server, a message per
+    plot): the finite values with 10 % padding, a span of 2 about a constant, kept without any."""
+    from emdm.play.page import _fitted
+
+    assert _fitted([1.0, 2.0, np.nan], []) == pytest.approx({"start": 0.95, "end": 2.05})
+    assert _fitted(np.full(3, 3.0)) == {"start": 2.0, "end": 4.0}
+    assert _fitted([], [np.nan, np.inf]) is None
+    s = session(scenario="task2")
+    for key in ("m", "E", "err", "alpha"):
+        drawn = [s.shown[f"steps{i}"][key] for i in range(2)]
+        assert s.shown_props[f"y-{key}"] == _fitted(*drawn)
+    assert s.shown_props["y-q"] == _fitted(*s.shown["qlines0"]["ys"], *s.shown["qlines1"]["ys"])
+    front = s.shown["front"]
+    assert s.shown_props["x-pareto"] == _fitted(front["M"])
+    assert s.shown_props["y-pareto"] == _fitted(front["E"])
+    low, high = np.nanmin(front["E"]), np.nanmax(front["E"])
+    assert s.shown_props["y-pareto"]["start"] <= low <= high <= s.shown_props["y-pareto"]["end"]
+
+
 def test_a_goal_being_dragged_is_followed_without_replaying(session):
     s = session()
     restarts, goal = s.restarts, dict(s.goal.data)

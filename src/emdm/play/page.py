@@ -113,6 +113,20 @@ def _set(model: Any, **values: Any) -> None:
         model.update(**changed)
 
 
+def _fitted(*columns: Any) -> dict[str, float] | None:
+    """The range that shows ``columns`` as Bokeh's DataRange1d fits one (10 % padding, a span of 2
+    about a constant), or None without a finite value. Fitted here and sent with the change: a
+    DataRange1d fitted in the page sent its range back to the server, a message per plot and
+    change that the page built while painting and the server read before the next change."""
+    values = np.concatenate([np.ravel(np.asarray(c, dtype=float)) for c in columns] + [[]])
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return None
+    low, high = float(values.min()), float(values.max())
+    span, middle = ((high - low) * 1.1 if high > low else 2.0), (low + high) / 2
+    return {"start": middle - span / 2, "end": middle + span / 2}
+
+
 def _log_format(control: Control) -> CustomJSTickFormatter:
     zero = f"tick <= {control.start + control.step / 2} ? '0' : " if control.zero_at_start else ""
     return CustomJSTickFormatter(code=f"return {zero}Number(Math.pow(10, tick).toPrecision(3))")
@@ -298,6 +312,8 @@ class Session:
                 self.ref,
                 self.status_html,
                 self.time_range,
+                *(fig.y_range for fig in self.figures),
+                self.pareto.x_range,
                 self.scrub,
                 self.save_toml,
                 self.save_png,
@@ -501,6 +517,7 @@ class Session:
                 width=PLOT_W,
                 height=PLOT_H,
                 x_range=self.time_range,
+                y_range=Range1d(start=0, end=1, name=f"y-{key}"),
                 title=title,
                 tools=[],
                 toolbar_location=None,
@@ -533,6 +550,7 @@ class Session:
             width=PLOT_W,
             height=PLOT_H,
             x_range=self.time_range,
+            y_range=Range1d(start=0, end=1, name="y-q"),
             title="joint angles q (rad)",
             tools=[],
             toolbar_location=None,
@@ -564,6 +582,8 @@ class Session:
         pareto = figure(
             width=PLOT_W,
             height=PLOT_H,
+            x_range=Range1d(start=0, end=1, name="x-pareto"),
+            y_range=Range1d(start=0, end=1, name="y-pareto"),
             title="Pareto front",
             tools=[],
             toolbar_location=None,
@@ -804,6 +824,7 @@ class Session:
             data = {key: steps[key] for key in keys}
         with self._message():
             self._put("pinned", data)
+            self._fit_series()
             _set(self.pin, label="Unpin the reference" if self.pinned else "Pin as reference")
             if self.scenario is not None:
                 _set(self.legend, text=self._legend(self.outcomes, self.scenario.n))
@@ -1118,6 +1139,7 @@ class Session:
             for renderer in self.coloured[i]:
                 fill = {"fill_color": color} if renderer.name.startswith("ellipse") else {}
                 _set(renderer.glyph, line_color=color, **fill)
+        self._fit_series()
         arm = scenario.planar_arm
         reach = arm.reach * 1.1
         for rng in (self.scene.x_range, self.scene.y_range):
@@ -1158,6 +1180,21 @@ class Session:
         self._prop("save-png", tags=[f"{name}.png", self._caption(scenario, outcomes)])
         _set(self.legend, text=self._legend(outcomes, scenario.n))
 
+    def _fit(self, name: str, *columns: Any) -> None:
+        """The plot range ``name`` shows ``columns`` (:func:`_fitted`); kept without a value."""
+        fitted = _fitted(*columns)
+        if fitted is not None:
+            self._prop(name, **fitted)
+
+    def _fit_series(self) -> None:
+        """The value ranges of the time plots (both runs and the pinned one) and of the joint
+        angles, from what they draw."""
+        runs = [self.shown.get(name, {}) for name in ("steps0", "steps1", "pinned")]
+        for key in ("m", "E", "err", "alpha"):
+            self._fit(f"y-{key}", *(data.get(key, []) for data in runs))
+        angles = [y for i in range(2) for y in self.shown.get(f"qlines{i}", {}).get("ys", [])]
+        self._fit("y-q", *angles)
+
     def _sync_widgets(
         self, scenario: Scenario, end: float, replay: bool, *, live: bool = False
     ) -> None:
@@ -1168,7 +1205,12 @@ class Session:
         if not live:
             start = scenario.planar_arm.joint_positions(scenario.motion.q0)
             goal = scenario.motion.goal
-            _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
+            # a dragged goal stays where the page shows it: the scenario's is that point rounded
+            # to 0.1 mm (_on_goal), and sending it back cost the page a paint of its own before
+            # the change's
+            shown = np.asarray([*self.goal.data["x"], *self.goal.data["y"]], dtype=float)
+            if shown.shape != (2,) or not np.allclose(shown, goal, rtol=0, atol=1e-4):
+                _set(self.goal, data={"x": [float(goal[0])], "y": [float(goal[1])]})
             _set(self.handles, data={"x": start[1:, 0].tolist(), "y": start[1:, 1].tolist()})
             self.goal.selected.indices = []
             self.handles.selected.indices = []
@@ -1314,6 +1356,8 @@ class Session:
         with self._message():
             fill = np.where(result.dominated, "white", "#0072B2")
             self._put("front", {"M": result.M, "E": result.E, "fill": fill, "ratio": result.ratio})
+            self._fit("x-pareto", result.M)
+            self._fit("y-pareto", result.E)
             if result.current >= 0:
                 label = f"\u25ef w_M / w_E = {result.ratio[result.current]:.3g}"
                 self._prop("front-label", text=label)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.controllers import state_at
+from ..core.controllers import task_jacobians
 from ..core.tolerances import CHATTER_SPEED, CHATTER_STEPS, COINCIDE, NEAR_SINGULAR, SLACK_USED
 from .loop import Run
 
@@ -67,7 +67,7 @@ def dexterity(run: Run) -> np.ndarray:
     rows = min(sc.nt, 3)  # planar, position and pose tasks list the position rows first
     scale = np.ones(sc.nt)
     scale[:rows] = 1.0 / sc.reach
-    J = np.stack([state_at(sc, q).kin.J for q in run.q]) * scale[None, :, None]
+    J = task_jacobians(sc, run.q) * scale[None, :, None]
     return np.asarray(np.linalg.svd(J, compute_uv=False)[:, -1])
 
 
