@@ -294,3 +294,25 @@ def test_the_lab_record_is_the_typed_record_the_report_reads(small_lab, tmp_path
     (folder / "solvers.json").write_text(json.dumps(record), encoding="utf-8")
     with pytest.raises(r.RecordError, match=r"solvers/cobyla: no field 'max_abs_gap'"):
         r.load_record(r.LabRecord, Data(tmp_path), "data/task2-lab-C-EMDM/solvers.json")
+
+
+@pytest.mark.parametrize("task", ["task1", "task2"])
+def test_slsqp_on_the_reduced_program_reaches_the_exact_optimum(task):
+    """The like-for-like control of the lab: SLSQP on the gradient-free methods' reduced program
+    (null-space variables for task1, the slack eliminated for task2) reaches the certified
+    optimum of the full program, and counts its evaluations as they do."""
+    sc = emdm.load_scenario(task)
+    run = emdm.simulate(sc, "C-EMDM")
+    ctrl = emdm.get_controller("C-EMDM")
+    for k in np.linspace(0, run.steps - 1, 6).astype(int):
+        qp = program_at(ctrl, sc, run.q[k]).qp
+        exact = get_solver("active-set").solve(qp)
+        if exact.x is None:
+            continue
+        got = get_solver("slsqp-reduced").solve(qp, history=True)
+        assert got.status == "optimal", (k, got.status)
+        assert abs(qp.objective(got.x) - qp.objective(exact.x)) <= 1e-10 * (
+            1 + abs(qp.objective(exact.x))
+        ), k
+        assert qp.violation(got.x) <= 1e-9, k
+        assert 0 < got.evaluations == len(got.history), k

@@ -27,7 +27,7 @@ from .base import (
 )
 from .interior_point import solve_interior_point
 from .kernels import BOUND_TOL, KKT_TOL
-from .nlp import gradient_free, solve_slsqp, solve_trust_constr
+from .nlp import gradient_free, solve_slsqp, solve_slsqp_reduced, solve_trust_constr
 from .qpsolvers_backend import register_backends
 
 DEFAULT_SOLVER = "active-set"
@@ -75,6 +75,15 @@ register(
         solve_slsqp,
         "scipy SLSQP, exact gradients and constraint Jacobian",
         loop=Loop.PYTHON,  # scipy's Python driver calls the compiled step once per iteration
+    )
+)
+register(
+    SolverSpec(
+        "slsqp-reduced",
+        Family.GRADIENT,
+        solve_slsqp_reduced,
+        "scipy SLSQP on the reduced program the gradient-free methods search, exact gradient",
+        loop=Loop.PYTHON,
     )
 )
 register(

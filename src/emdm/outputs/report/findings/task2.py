@@ -479,14 +479,7 @@ class Task2(Claims):
             p += sentence(
                 "The reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                "; at ",
-                M_SYM,
-                " = 0, where ",
-                M_SYM,
-                " is not differentiable, ",
-                Math("J_m", "<i>J</i><sub>m</sub>"),
-                " is the steepest one-sided ascent. The active set's iterations stay few (a "
-                "median of ",
+                ". The active set's iterations stay few (a median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
