@@ -848,9 +848,11 @@ SOLVER_COLORS = (
     "#56B4E9",
     "#000000",
     "#999999",
+    "#882255",
+    "#44AA99",
 )
-"""One colour per solver of a figure (Okabe-Ito without its yellow, then grey): six shades of
-one family colour could not be told apart in print."""
+"""One colour per solver of a figure (Okabe-Ito without its yellow, grey, then two of Tol's):
+six shades of one family colour could not be told apart in print."""
 FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
 
 
@@ -866,7 +868,7 @@ def convergence_figure(
     (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
     height = 1.15 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
-    marks = ("o", "s", "^", "D", "v", "P", "X", "*")
+    marks = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<")
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         for i, (name, (family, evaluations, error)) in enumerate(curves.items()):

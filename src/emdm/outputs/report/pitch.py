@@ -91,7 +91,19 @@ class Pitch:
             )
         t2c = [
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
-            sentence("C-EMDM ", *s.outcome(t2, Name.C_EMDM)),
+            sentence(
+                "C-EMDM ",
+                *s.outcome(t2, Name.C_EMDM),
+                ", at a mean ",
+                M_SYM,
+                " of ",
+                s.mt(t2, Name.C_EMDM, "mean_manipulability", ".3f"),
+                " against ",
+                s.mt(t2, Name.C_IVKC, "mean_manipulability", ".3f", "m²"),
+                " (",
+                s.pct(t2, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+                ")",
+            ),
         ]
         if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):
             # the stall is task scaling's: the like-for-like run beside it
