@@ -232,12 +232,16 @@ def pair_figure(
         def drawn(run: Run) -> dict[str, Any]:
             st = _style(run, medium)
             if mixed and not run.controller.name.startswith("C-"):
-                # beside the constrained pair, the unconstrained one in its own lighter hue and
-                # its own dash (dotted IVKC, dash-dotted EMDM): the two oranges and the two blues
-                # are one shade apart, which print and grey scale do not keep
+                # beside the constrained pair, the unconstrained one in hues of its own (reddish
+                # purple IVKC, bluish green EMDM) and its own dash (dotted, dash-dotted): the
+                # lighter orange and blue of the UC pair were one shade from the C pair's
                 ivkc = run.controller.name.endswith("IVKC")
-                st = {**st, "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"]}
-                st["linewidth"] = 1.3 * st["linewidth"]  # a dotted light line is faint
+                st = {
+                    **st,
+                    "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"],
+                    "color": "#CC79A7" if ivkc else "#009E73",
+                }
+                st["linewidth"] = 1.3 * st["linewidth"]  # a dotted line is faint
             return st
 
         for run in runs:
