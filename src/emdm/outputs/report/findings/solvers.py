@@ -106,7 +106,7 @@ class Solvers(StoryBase):
                 answer += sentence(
                     ". On that program SLSQP needs a median of ",
                     self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                    f" ({LIKE_FOR_LIKE}): the gap is the method's, not the formulation's",
+                    f" ({LIKE_FOR_LIKE}), so the gap comes from the method, not the formulation",
                 )
             if inexact_free:
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]

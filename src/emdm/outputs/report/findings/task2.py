@@ -58,7 +58,7 @@ class Task2(Claims):
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
                 e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
                 if e4 < self.mv(t, emdm, "time_to_goal"):  # the stall is the policy's: say so
-                    answer += sentence(f", sooner than {emdm}: the stall is task scaling's")
+                    answer += sentence(f", sooner than {emdm}: the stall comes from task scaling")
             answer += sentence(".")
         else:
             answer += sentence(".")
