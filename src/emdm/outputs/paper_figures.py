@@ -661,6 +661,31 @@ def pareto_figure(
     return stem
 
 
+FAMILY_LABEL = {
+    "exact": "QP methods",
+    "gradient": "gradient-based",
+    "gradient-free": "gradient-free",
+}
+"""A solver family as a legend names it (filled or hollow says whether an answer is exact)."""
+FAMILY_MARKER = {"exact": "s", "gradient": "o", "gradient-free": "^"}
+
+
+def _family_handles(rows: Mapping[str, Any], order: Sequence[str]) -> list[Artist]:
+    """One legend entry per solver family drawn (its marker and colour), in family order."""
+    return [
+        Line2D(
+            [],
+            [],
+            marker=FAMILY_MARKER[f],
+            color=FAMILY_COLOR[f],
+            linestyle="none",
+            label=FAMILY_LABEL[f],
+        )
+        for f in ("exact", "gradient", "gradient-free")
+        if any(rows[k]["family"] == f for k in order)
+    ]
+
+
 def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = PAPER) -> Path:
     """Per solver (rows, grouped by family): median time per program (left, with the control
     period) and the largest gap to the exact optimum (right; bound violations marked)."""
@@ -673,7 +698,6 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
     ]
     floor = 1e-12
     height = (0.5 + 0.15 * len(order)) if medium is PAPER else 2.7
-    markers = {"exact": "s", "gradient": "o", "gradient-free": "^"}
     width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
     with _figure(stem, medium, width, height) as fig:
         left, right = fig.subplots(1, 2, sharey=True)
@@ -681,7 +705,7 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         for yi, name in zip(y, order, strict=True):
             r = rows[name]
             style = {
-                "marker": markers.get(r["family"], "o"),
+                "marker": FAMILY_MARKER.get(r["family"], "o"),
                 "color": FAMILY_COLOR.get(r["family"], "grey"),
                 "markersize": 4.5 if medium is PAPER else 7,
                 "linestyle": "none",
@@ -719,18 +743,7 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
         ]
         right.set_xlim(floor / 10, 30 * max([1.0, *finite]))  # no marker clipped at the edge
         left.set_ylim(-0.6, len(order) - 0.1)
-        handles = [  # the families' markers first: a reader must not guess them
-            Line2D(
-                [],
-                [],
-                marker=markers[f],
-                color=FAMILY_COLOR[f],
-                linestyle="none",
-                label=FAMILY_LABEL[f],
-            )
-            for f in ("exact", "gradient", "gradient-free")
-            if any(rows[k]["family"] == f for k in order)
-        ]
+        handles = _family_handles(rows, order)  # first: a reader must not guess them
         handles.append(
             Line2D([], [], color="#D55E00", marker="x", linestyle="none", label="bound violation")
         )
@@ -762,7 +775,6 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         for k, r in rows.items()
         if r["family"] == f
     ]
-    markers = {"exact": "s", "gradient": "o", "gradient-free": "^"}
     medium = SLIDE
     with _figure(stem, medium, 3.8, 3.0) as fig:  # beside the slide's bullets (0.64 of its width)
         # the verdicts in an axes of their own, so that the layout keeps room for them
@@ -780,7 +792,7 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
             ax.plot(
                 [t],
                 [yi],
-                marker=markers.get(r["family"], "o"),
+                marker=FAMILY_MARKER.get(r["family"], "o"),
                 color=colour,
                 markerfacecolor=colour if exact else "white",
                 markersize=7,
@@ -816,18 +828,7 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         ax.set_ylim(-0.6, len(order) - 0.4)
         ax.grid(axis="y", visible=False)
         fig.legend(
-            handles=[
-                Line2D(
-                    [],
-                    [],
-                    marker=markers[f],
-                    color=FAMILY_COLOR[f],
-                    linestyle="none",
-                    label=FAMILY_LABEL[f],
-                )
-                for f in ("exact", "gradient", "gradient-free")
-                if any(rows[k]["family"] == f for k in order)
-            ],
+            handles=_family_handles(rows, order),
             loc="outside lower center",
             ncols=3,
             fontsize=medium.tiny,
@@ -837,12 +838,6 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     return stem
 
 
-FAMILY_LABEL = {
-    "exact": "QP methods",
-    "gradient": "gradient-based",
-    "gradient-free": "gradient-free",
-}
-"""A solver family as a legend names it (filled or hollow says whether an answer is exact)."""
 SOLVER_COLORS = (
     "#0072B2",
     "#E69F00",
