@@ -473,3 +473,38 @@ def test_the_pareto_bound_on_late_fronts_is_the_largest_of_them(quick_report):
     assert len(said) == 1
     top = max(steps[i].M_max for i in late)
     assert float(said[0].text) == pytest.approx(top, rel=0.06)  # the bound, to its 2 digits
+
+
+@pytest.mark.parametrize("gain", [0.002, 0.05])
+def test_the_whole_run_sweep_is_read_against_the_nominal_ratio(quick_report, tmp_path, gain):
+    """Nineteenth reading: Fig. 2's whole-run panels were not interpreted. The answer quotes the
+    nominal run's effort and the dearest larger ratio that still arrives, and says the mean m
+    levels off only when the larger ratios add less than 1 %. The quick grid has no arriving
+    ratio above the nominal one, so two are added to a copy of its record."""
+    import json
+    import shutil
+
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data, render_latex
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report / "data", root / "data")
+    path = root / "data" / "task1-pareto-UC-EMDM" / "weight_grid.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    assert Story(Data(root)).whole_runs_levelled() == []  # nothing above the nominal arrives
+    nominal = next(r for r in record["runs"] if r["w_manip"] == 5.0)
+    for factor, effort, m in ((2.0, 1.3, 1.0 + gain / 2), (4.0, 2.9, 1.0 + gain)):
+        run = dict(nominal, w_manip=5.0 * factor)
+        run["total_effort"] = nominal["total_effort"] * effort
+        run["mean_manipulability"] = nominal["mean_manipulability"] * m
+        record["runs"].append(run)
+    path.write_text(json.dumps(record), encoding="utf-8")
+    said = Story(Data(root)).whole_runs_levelled()
+    efforts = [float(s.text) for s in said if getattr(s, "src", "").endswith("/total_effort")]
+    assert efforts == [
+        pytest.approx(nominal["total_effort"], rel=5e-3),
+        pytest.approx(nominal["total_effort"] * 2.9, rel=5e-3),
+    ]
+    text = render_latex(said)
+    assert ("levels off" in text) == (gain < 0.01)
+    assert f"{100 * gain:+.1f}" in text

@@ -26,16 +26,13 @@ class Front(Claims):
         )
         if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
             out += sentence(
-                "On a two-link arm with limits, C-IVKC under our task scaling stalls ",
-                self.ev(t2, Name.C_IVKC, "stall", "error", fmt=".2f", unit="m"),
-                " from the goal",
+                "On a two-link arm with limits, C-EMDM's slack leaves the blocked straight line "
+                "and arrives in ",
+                self.ttg(t2, Name.C_EMDM),
+                ", while C-IVKC under our task scaling stalls",
             )
             if self.ivkc_with_slack():
                 out += sentence(" (") + self.ivkc_with_slack(label=False) + sentence(")")
-            out += sentence(
-                "; C-EMDM's slack leaves the blocked straight line and arrives in ",
-                self.ttg(t2, Name.C_EMDM),
-            )
             if self.emdm_without_term():
                 out += sentence("; ") + self.emdm_without_term(label=False)
             out += sentence(". ")

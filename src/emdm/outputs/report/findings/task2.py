@@ -205,7 +205,18 @@ class Task2(Claims):
         p = sentence()
         e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
         e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
-        if not reached_i and (e4.get("reached") or e5.get("reached")):
+        told = bool(self.ivkc_with_slack()) and e4["time_to_goal"] < self.mv(
+            t, emdm, "time_to_goal"
+        )
+        if not reached_i and told and e5.get("reached"):  # E4 and the stall's cause are answered
+            p += sentence(
+                "With the joint limits widened to ±3 rad (E5, ",
+                Ref("tab", "evidence"),
+                f") {ivkc} arrives too, in ",
+                self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
+                ". ",
+            )
+        elif not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
             if e4.get("reached"):  # (its time is in the answer)
                 p += sentence("with a slack (E4, ", Ref("tab", "evidence"), ")")
@@ -371,17 +382,34 @@ class Task2(Claims):
         outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
         if outside:
             answer += sentence(" (")
-            for i, c in enumerate(outside):
+            first: list[int] = []
+            for i, c in enumerate(
+                outside
+            ):  # "C1 by up to a and b rad at joints 1 and 2, C2 by ..."
                 joints = [
                     j for j, x in enumerate(self.evv(t, c, "limits", "excess_by_joint")) if x > 0
                 ]
-                answer += sentence("; " if i else "", f"{c}: ")
+                answer += sentence(", " if i else "", f"{c} by ", "" if i else "up to ")
                 for n, j in enumerate(joints):
                     answer += sentence(
-                        ", " if n else "",
-                        f"joint {j + 1} by up to " if n == 0 else f"joint {j + 1} by ",
-                        self.ev(t, c, "limits", "excess_by_joint", j, fmt=".2f", unit="rad"),
+                        " and " if n == len(joints) - 1 and n else (", " if n else ""),
+                        self.ev(
+                            t,
+                            c,
+                            "limits",
+                            "excess_by_joint",
+                            j,
+                            fmt=".2f",
+                            unit="rad" if n == len(joints) - 1 else "",
+                        ),
                     )
+                if joints != first:
+                    names = [str(j + 1) for j in joints]
+                    answer += sentence(
+                        " at joint" + ("s " if len(names) > 1 else " "),
+                        ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1],
+                    )
+                    first = first or joints
             answer += sentence(") into the elbow-up configuration the constrained pair cannot use")
         answer += (
             sentence("; ")
@@ -477,9 +505,9 @@ class Task2(Claims):
         p = sentence()
         if self.d.exists(f):
             p += sentence(
-                "The reduced Hessian's condition number reaches ",
+                "Though the reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                ". The active set's iterations stay few (a median of ",
+                ", the active set's iterations stay few (a median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
