@@ -172,6 +172,9 @@ UC_DASH = {"IVKC": (0, (1, 1.2)), "EMDM": (0, (4, 1.2, 1, 1.2))}
 """The unconstrained pair's dashes where all four controllers share axes (dotted, dash-dotted),
 against the constrained pair's solid and dashed lines."""
 
+EFFORT_FLOOR = 1e-9
+"""Where :func:`pair_figure`'s log axis of the effort is floored (rad²/s²): a run at rest has
+zero effort, which a log axis cannot draw."""
 GAP_FLOOR = 1e-6
 """Where :func:`pair_figure`'s log axis of the tracking gap is floored (m/s): a task imposed
 exactly misses by rounding only (about 1e-16), drawn on the floor."""
@@ -247,7 +250,7 @@ def pair_figure(
         for run in runs:
             st = drawn(run)
             ax_m.plot(run.t, run.m, **st)
-            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, 1e-9), **st)
+            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             if gap:
                 ax_err.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
             else:

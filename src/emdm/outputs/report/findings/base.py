@@ -20,7 +20,7 @@ import numpy as np
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
-from ...paper_figures import FAR_BEYOND, GAP_FLOOR
+from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -39,6 +39,7 @@ from .records import (
 )
 
 FLOOR_EXP = round(math.log10(GAP_FLOOR))
+EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
 """The decade the paper's tracking-gap axis is floored at (its caption says it)."""
 
 # ---------------------------------------------------------------------------- inline math
@@ -144,6 +145,27 @@ class StoryBase:
     def evidn(self, key: EvidenceKey, *path: str | int, fmt: str, unit: str = "") -> Num:
         value = self.evid(key, *path)
         return traced(value, "data/evidence.json", ("runs", key, *path), fmt, unit)
+
+    def override(self, key: EvidenceKey, field: str, *index: int, fmt: str, unit: str = "") -> Num:
+        """The value the evidence run ``key`` sets in place of the nominal one (``"arm.q_max"``,
+        ``"slack.max", 0``), traced to its record."""
+        return self.evidn(key, "overrides", field, *index, fmt=fmt, unit=unit)
+
+    def weight_off(self, key: EvidenceKey) -> Sentence:
+        """An evidence run's dexterity weight, as its change: ``w_M = 0``."""
+        return sentence(*eq(W_M, self.override(key, "weights.manipulability", fmt="g")))
+
+    def limits_widened(self, text: bool = False) -> Sentence:
+        """E5's joint limits: ``|q| <= 3 rad`` in a table cell, ``±3 rad`` in a sentence
+        (``text``); the interval where they are not symmetric."""
+        key: EvidenceKey = "t2-c-ivkc-wide-limits"
+        lo, hi = (self.evid(key, "overrides", f) for f in ("arm.q_min", "arm.q_max"))
+        top = self.override(key, "arm.q_max", fmt=".3g", unit="rad")
+        if lo != -hi:
+            return sentence("[", self.override(key, "arm.q_min", fmt=".3g"), ", ", top, "]")
+        if text:
+            return sentence("±", top)
+        return sentence(Math(r"|q|\leq", "|<i>q</i>| ≤ "), top)
 
     def solvers(self, lab: LabName) -> dict[str, SolverRow]:
         """A solver lab's rows by solver (empty when the report ran no such lab)."""
@@ -381,7 +403,7 @@ class StoryBase:
                 ", (b) effort ",
                 E_SYM,
                 " (log, floored at ",
-                Math(r"10^{-9}", "10<sup>−9</sup>"),
+                Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
                 "), ",
             )
             + third

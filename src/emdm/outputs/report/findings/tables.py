@@ -6,6 +6,7 @@ from ....core.controllers import Name
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, sentence
 from .base import (
+    C_S,
     DT,
     ERR,
     M_SYM,
@@ -122,7 +123,7 @@ class Tables(Claims):
 
     def evidence_table(self, sections: list[Section]) -> None:
         items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
-            ("E1", "t1-uc-no-manip", Name.UC_EMDM, sentence(W_M, " = 0"), "reference"),
+            ("E1", "t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip"), "reference"),
             ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
             # E2 runs the pair: its second row carries no label of its own
             ("", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
@@ -131,22 +132,27 @@ class Tables(Claims):
                 "E5",
                 "t2-c-ivkc-wide-limits",
                 Name.C_IVKC,
-                sentence(Math(r"|q|\leq3", "|<i>q</i>| ≤ 3"), " rad"),
+                self.limits_widened(),
                 None,
             ),
-            ("E6", "t2-c-emdm-no-manip", Name.C_EMDM, sentence(W_M, " = 0"), None),
+            ("E6", "t2-c-emdm-no-manip", Name.C_EMDM, self.weight_off("t2-c-emdm-no-manip"), None),
             (
                 "E7",
                 "t2-c-emdm-tight-slack",
                 Name.C_EMDM,
-                sentence(Math(r"|\delta|\leq0.1", "|δ| ≤ 0.1"), " m/s"),
+                sentence(
+                    Math(r"|\delta|\leq", "|δ| ≤ "),
+                    self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
+                ),
                 None,
             ),
             (
                 "E8",
                 "t2-uc-emdm-stiff-slack",
                 Name.UC_EMDM,
-                sentence(Math(r"c_S=10^4", "<i>c</i><sub>S</sub> = 10<sup>4</sup>")),
+                sentence(
+                    *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e"))
+                ),
                 None,
             ),
         ]

@@ -210,7 +210,9 @@ class Task2(Claims):
         )
         if not reached_i and told and e5.get("reached"):  # E4 and the stall's cause are answered
             p += sentence(
-                "With the joint limits widened to ±3 rad (E5, ",
+                "With the joint limits widened to ",
+                *self.limits_widened(text=True),
+                " (E5, ",
                 Ref("tab", "evidence"),
                 f") {ivkc} arrives too, in ",
                 self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
@@ -223,7 +225,9 @@ class Task2(Claims):
             if e4.get("reached") and e5.get("reached"):
                 p += sentence(" and ")
             if e5.get("reached"):
-                p += sentence("with the joint limits widened to ±3 rad (E5)")
+                p += sentence(
+                    "with the joint limits widened to ", *self.limits_widened(text=True), " (E5)"
+                )
             p += sentence(
                 ": the stall comes from keeping the task direction under the limits, not from "
                 "IVKC. "
