@@ -1055,6 +1055,11 @@ def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
     return stem
 
 
+STILL_TOL = 1e-3
+"""Joint angles within this of a run's final ones (rad) count as the final pose in the stills:
+a run that stops short of the goal is drawn while it moves, not at copies of one pose."""
+
+
 def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Medium = SLIDE) -> Path:
     """Animation stills: each run's arm at ``times`` instants (darker = later), path, goal and
     the manipulability ellipse at the last state, the runs side by side."""
@@ -1075,9 +1080,13 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
     with _figure(stem, medium, width, height) as fig:
         axes = fig.subplots(1, len(runs), squeeze=False)[0]
         for ax, run in zip(axes, runs, strict=True):
-            # each run's own instants: a run that ends early is not drawn at times it never had
-            instants = np.linspace(0.0, float(run.t[-1]), times)
-            drawn = [min(round(t / sc.motion.dt), run.steps) for t in instants]
+            # each run's own instants: a run that ends early is not drawn at times it never had,
+            # and one that stops moving (a stall) only until it does, not as copies of one pose
+            away = np.flatnonzero(np.max(np.abs(run.q - run.q[-1]), axis=1) > STILL_TOL)
+            still = int(away[-1]) + 1 if away.size else 0
+            last = still if still < run.steps and not run.reached else run.steps
+            instants = np.linspace(0.0, float(run.t[last]), times)
+            drawn = [min(round(t / sc.motion.dt), last) for t in instants]
             st = _style(run, medium)
             ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.2, linewidth=0))
             ax.plot(run.p[:, 0], run.p[:, 1], color=st["color"], linewidth=medium.line * 0.8)
@@ -1112,7 +1121,10 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_xticks([])
             ax.set_yticks([])
             ax.set_xlabel(  # below the workspace, where no arm can cover it
-                r"arm at $t$ = " + ", ".join(f"{run.t[k]:.2f}" for k in drawn) + " s",
+                r"arm at $t$ = "
+                + ", ".join(f"{run.t[k]:.2f}" for k in drawn)
+                + " s"
+                + (", then still" if last < run.steps else ""),
                 fontsize=medium.tiny,
                 color="#444444",
             )
