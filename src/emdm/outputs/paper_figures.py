@@ -898,9 +898,10 @@ def convergence_figure(
         ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         if medium is not PAPER:  # the paper's caption names the program
             ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
-        ax.legend(
-            loc="center left",
-            bbox_to_anchor=(1.01, 0.5),
+        # a figure legend: the layout gives the axes the figure's whole height beside it (an
+        # axes legend taller than the axes shrank them to half the figure)
+        fig.legend(
+            loc="outside right center",
             fontsize=medium.tiny,
             frameon=False,
             handlelength=2.2,
