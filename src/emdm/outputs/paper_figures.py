@@ -113,6 +113,11 @@ def _figure(stem: Path, medium: Medium, width: float, height: float) -> Iterator
             fig.savefig(stem.with_suffix(suffix))
 
 
+UC_MARK_EVERY = 1.0
+"""Beside the constrained pair, the unconstrained pair's curves carry a marker every this many
+seconds (staggered by half between the two)."""
+
+
 def _style(run: Run, medium: Medium) -> dict[str, Any]:
     base = CONTROLLER_STYLE.get(run.controller.name, {"color": OKABE_ITO[0], "linestyle": "-"})
     # in a pair both runs are drawn solid; the EMDM run dashed over the IVKC run reads better
@@ -245,6 +250,14 @@ def pair_figure(
                     "color": "#CC79A7" if ivkc else "#009E73",
                 }
                 st["linewidth"] = 1.3 * st["linewidth"]  # a dotted line is faint
+                # sparse markers, staggered between the two: where the pair's curves coincide
+                # (m and E before the UC runs arrive) both stay visible
+                every = max(1, round(UC_MARK_EVERY / sc.motion.dt))
+                st["marker"] = "o" if ivkc else "^"
+                st["markevery"] = (0 if ivkc else every // 2, every)
+                st["markersize"] = 2.4 if medium is PAPER else 4.0
+                st["markerfacecolor"] = "white"
+                st["markeredgewidth"] = 0.6
             return st
 
         for run in runs:
@@ -295,9 +308,11 @@ def pair_figure(
             far = top > FAR_BEYOND * limit
             if far:
                 # linear within the limits (the constrained runs' detail, the limit band),
-                # logarithmic beyond (the unconstrained peaks)
+                # logarithmic beyond (the unconstrained peaks), the log part shaded grey
                 qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.0)
                 span = top * 1.6
+                for a, b in ((limit, span), (-span, -limit)):
+                    qd_axes[j].axhspan(a, b, color="#000000", alpha=0.06, linewidth=0, zorder=0)
             qd_axes[j].set_ylim(-span, span)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))

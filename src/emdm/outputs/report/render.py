@@ -18,10 +18,20 @@ from typing import Any
 import jinja2
 import markupsafe
 
+from ...core.tolerances import KKT_TOL
 from .document import Document, roman
 from .findings import Story
 from .pitch import Pitch
-from .trace import Data, Segment, Text, latex_escape, render_html, render_latex
+from .trace import (
+    Data,
+    Segment,
+    Text,
+    latex_escape,
+    number_html,
+    number_latex,
+    render_html,
+    render_latex,
+)
 
 TEMPLATES = Path(__file__).with_name("templates")
 
@@ -65,6 +75,7 @@ def latex_environment() -> jinja2.Environment:
     )
     env.filters["tex"] = _tex
     env.filters["plain"] = _plain
+    env.globals["kkt_tol"] = number_latex(format(KKT_TOL, ".0e"))
     return env
 
 
@@ -78,6 +89,7 @@ def html_environment() -> jinja2.Environment:
     )
     env.filters["h"] = lambda v: markupsafe.Markup(_html(v))
     env.filters["plain"] = _plain
+    env.globals["kkt_tol"] = markupsafe.Markup(number_html(format(KKT_TOL, ".0e")))
     return env
 
 

@@ -410,7 +410,7 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                ", log beyond them (peak on the right)" if far else "",
+                ", log beyond them (grey; peak on the right)" if far else "",
             )
         )
 

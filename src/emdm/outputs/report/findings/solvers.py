@@ -259,10 +259,10 @@ class Solvers(StoryBase):
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, with the least dexterous). ms: median time from "
-                "scratch, called from Python; it./ev.: median iterations/evaluations; gap, "
-                "viol.: largest gap to the optimum, bound violation (0: below ",
+                "scratch, from Python; it./ev.: median iterations/evaluations; gap, viol.: "
+                "largest gap to the optimum, bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
-                "); goal: time to goal with it in the loop.",
+                "); goal: arrival with it in the loop.",
             ),
             [
                 sentence("solver"),

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ....core.controllers import Name
+from ....core.tolerances import KKT_TOL
 from ..config import PAIRS
 from ..document import Section
 from ..trace import Math, Ref, Sentence, Text, sentence
@@ -22,6 +24,9 @@ from .base import (
     StoryBase,
     eq,
 )
+
+KKT_EXP = round(math.log10(KKT_TOL))
+"""The exponent of the KKT check's acceptance threshold, as the paper writes it."""
 
 
 class Task1(StoryBase):
@@ -88,7 +93,7 @@ class Task1(StoryBase):
                 ),
                 ". ",
             )
-        p += sentence("Neither controller sees the joint limits: ")
+        p += sentence("Neither sees the joint limits: ")
         for name in (ivkc, emdm):
             if self.evv(t, name, "limits", "max_excess") > 0:
                 p += sentence(
@@ -99,8 +104,9 @@ class Task1(StoryBase):
                     ", ",
                 )
         p += sentence(
-            "and both exceed the speed limit of ",
+            "and both exceed the ",
             self.scn(t, "arm", "qd_max", 0, fmt=".1f", unit="rad/s"),
+            " speed limit",
             " (",
             Ref("tab", "outcomes"),
             ").",
@@ -149,13 +155,13 @@ class Task1(StoryBase):
         same = self.pair(t, "C", "coincide_steps")
         if same:
             p = sentence(
-                "The commands are identical for the first ",
+                "The first ",
                 self.pairn(t, "C", "coincide_steps", "d"),
-                " steps (until ",
+                " commands are identical (to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                "): two joints at their bounds leave one unknown for two task equations, so "
-                "the objective has nothing to choose (",
+                "): two joints on their bounds leave one unknown for two equations, so the "
+                "objective has no choice (",
             )
             p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " of them scaled)")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
@@ -401,11 +407,11 @@ class Task1(StoryBase):
             "; largest relative KKT residual ",
             self.mt(t, worst, "max_kkt_residual", ".2g"),
             ", accepted up to ",
-            Math("10^{-9}", "10<sup>−9</sup>"),
-            "), so the off-the-shelf fallback (daqp, then quadprog) ",
+            Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
+            "), so the fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
-            answer += sentence("was never needed.")
+            answer += sentence("was never used.")
         else:
             answer += sentence(
                 "answered ",

@@ -20,12 +20,6 @@ from .base import (
 )
 from .claims import Claims, cap
 
-M_TWO_LINK = Math(
-    r"m=l_1l_2|\sin q_2|",
-    "<i>m</i> = <i>l</i><sub>1</sub><i>l</i><sub>2</sub>|sin <i>q</i><sub>2</sub>|",
-)
-"""A two-link arm's manipulability."""
-
 
 class Task2(Claims):
     # ------------------------------------------------------------------ Task 2
@@ -58,7 +52,25 @@ class Task2(Claims):
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
                 e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
                 if e4 < self.mv(t, emdm, "time_to_goal"):  # the stall is the policy's: say so
-                    answer += sentence(f", sooner than {emdm}: the stall comes from task scaling")
+                    answer += sentence(f", sooner than {emdm}")
+                    m4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "mean_manipulability")
+                    if m4 > self.mv(t, emdm, "mean_manipulability"):  # like for like, in full
+                        answer += sentence(
+                            " and with a higher mean ",
+                            M_SYM,
+                            " (",
+                            self.evidn(
+                                "t2-c-ivkc-slack-policy",
+                                "runs",
+                                ivkc,
+                                "mean_manipulability",
+                                fmt=".3f",
+                            ),
+                            " against ",
+                            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+                            ")",
+                        )
+                    answer += sentence(": the stall comes from task scaling")
             answer += sentence(".")
         else:
             answer += sentence(".")
@@ -154,14 +166,14 @@ class Task2(Claims):
                     " to the end",
                 )
             p += sentence(  # its distance to the goal then is in the answer above
-                ", it freezes after ",
+                ", it freezes ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
-                " of progress (",
+                " along the line (",
                 T_EQ,
                 self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
                 "), joint ",
                 self.ev(t, ivkc, "stall", "joint", fmt="d"),
-                " at the edge of its stop zone",
+                " at its stop zone's edge",
             )
             p += sentence(".")
             sec.paragraphs.append(p)
@@ -258,9 +270,7 @@ class Task2(Claims):
                                     ", since every route into the admissible goal configuration "
                                     "flips the elbow through ",
                                     M_SYM,
-                                    " = 0 (",
-                                    M_TWO_LINK,
-                                    ")",
+                                    " = 0",
                                 )
                                 if self.elbow_flip_forced(t)
                                 else ()
@@ -280,7 +290,11 @@ class Task2(Claims):
                 )
             e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
             if not e7.get("reached", True):
-                p += sentence("; with its slack bounded by 0.1 m/s it stalls (E7)")
+                p += sentence(
+                    "; with its slack bounded by ",
+                    self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
+                    " it stalls (E7)",
+                )
             p += sentence(".")
         sec.paragraphs.append(p)
         p = sentence(
@@ -334,7 +348,7 @@ class Task2(Claims):
                 " but ",
             ) + self.panels(gap=True, only_c=True)
             caption += sentence(
-                "; (e) linear within the limits (left ticks), logarithmic beyond them up to "
+                "; (e) linear within the limits (left ticks), logarithmic beyond them (grey) up to "
                 "each joint's peak (right ticks; UC up to ",
                 self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
                 ")",
@@ -526,8 +540,8 @@ class Task2(Claims):
                 p += sentence(".")
             else:
                 p += sentence(
-                    "; ADMM's follow the reduced Hessian's conditioning more closely (rank "
-                    "correlation of iterations with it ",
+                    "; ADMM's follow that conditioning more closely (rank correlation of "
+                    "iterations with it ",
                     self.d.num(
                         f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
                     ),
