@@ -365,11 +365,11 @@ class StoryBase:
                 ")",
             )
         p += sentence(
-            "; scaling buys the straight line (path ",
+            ". Scaling buys a straighter path: ",
             self.mt("task1", emdm, "path_length", ".2f", "m"),
-            ", with a slack ",
+            " long against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
-            ").",
+            " with a slack.",
         )
         return p
 
