@@ -114,8 +114,8 @@ def _figure(stem: Path, medium: Medium, width: float, height: float) -> Iterator
 
 
 UC_MARK_EVERY = 1.0
-"""Beside the constrained pair, the unconstrained pair's curves carry a marker every this many
-seconds (staggered by half between the two)."""
+"""Beside the constrained pair, UC-IVKC's curves carry a hollow marker every this many seconds
+(UC-EMDM's curve covers it where the two coincide)."""
 
 
 def _style(run: Run, medium: Medium) -> dict[str, Any]:
@@ -250,14 +250,13 @@ def pair_figure(
                     "color": "#CC79A7" if ivkc else "#009E73",
                 }
                 st["linewidth"] = 1.3 * st["linewidth"]  # a dotted line is faint
-                # sparse markers, staggered between the two: where the pair's curves coincide
-                # (m and E before the UC runs arrive) both stay visible
-                every = max(1, round(UC_MARK_EVERY / sc.motion.dt))
-                st["marker"] = "o" if ivkc else "^"
-                st["markevery"] = (0 if ivkc else every // 2, every)
-                st["markersize"] = 2.4 if medium is PAPER else 4.0
-                st["markerfacecolor"] = "white"
-                st["markeredgewidth"] = 0.6
+                if ivkc:  # sparse hollow markers on top: visible where UC-EMDM's curve covers it
+                    st["marker"] = "o"
+                    st["markevery"] = max(1, round(UC_MARK_EVERY / sc.motion.dt))
+                    st["markersize"] = 2.4 if medium is PAPER else 4.0
+                    st["markerfacecolor"] = "none"
+                    st["markeredgewidth"] = 0.6
+                    st["zorder"] = 3
             return st
 
         for run in runs:

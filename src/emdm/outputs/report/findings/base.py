@@ -366,10 +366,10 @@ class StoryBase:
             )
         p += sentence(
             ". Scaling buys a straighter path: ",
-            self.mt("task1", emdm, "path_length", ".2f", "m"),
-            " long against ",
+            self.mt("task1", emdm, "path_length", ".2f"),
+            " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
-            " with a slack.",
+            ".",
         )
         return p
 

@@ -37,8 +37,6 @@ class Front(Claims):
                     "; given a slack instead, C-IVKC arrives too",
                     ", ahead of C-EMDM" if sooner else "",
                 )
-            if self.emdm_without_term():
-                out += sentence("; without its dexterity term, C-EMDM arrives sooner")
             out += sentence(". ")
         rows = self.solvers("task2-lab-C-EMDM")
         if rows:
@@ -50,7 +48,7 @@ class Front(Claims):
                     grad,
                     " reaches each exact optimum in a median of ",
                     self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
-                    " objective evaluations",
+                    " evaluations",
                 )
                 if free:
                     out += sentence(

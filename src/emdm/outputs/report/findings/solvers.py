@@ -199,7 +199,8 @@ class Solvers(StoryBase):
                 "Convergence on Task 2 C-EMDM's ",
                 "least dexterous program, " if hardest else "program at ",
                 *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
-                " (solid: gradient-based, dashed: gradient-free; marker: last evaluation).",
+                ", for the solvers that count objective evaluations (solid: gradient-based, "
+                "dashed: gradient-free; marker: last evaluation).",
             ),
         )
         if self.has_figure("convergence"):

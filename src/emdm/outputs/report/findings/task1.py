@@ -196,7 +196,7 @@ class Task1(StoryBase):
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
-            " (colour, log scale, 0 at its bottom; circle: the nominal weights); right: whole runs, "
+            " (colour, log scale, ratio 0 at its lower end; circle: the nominal weights); right: whole runs, "
             "one per weight setting",
         )
         cap += sentence(".")
