@@ -191,6 +191,19 @@ def test_warnings_for_unreachable_goal_and_overshooting_damper():
         load_scenario("task1")
 
 
+@pytest.mark.parametrize("task", ["task1", "task2"])
+def test_the_papers_stop_zone_argument_holds_for_both_tasks(task):
+    """Section II says no joint enters its stop zone because dt < K_safe (i - s) and
+    qd_max dt < i - s: both must hold for the brief's tasks, with no loader warning."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sc = load_scenario(task)
+    room = np.asarray(sc.damper.influence) - np.asarray(sc.damper.stop)
+    assert np.all(sc.motion.dt < np.asarray(sc.damper.gain) * room)
+    top = np.maximum(np.abs(sc.arm.qd_min), np.abs(sc.arm.qd_max))
+    assert np.all(top * sc.motion.dt < room)
+
+
 def test_public_api_is_explicit():
     assert "simulate" in emdm.__all__ and "PlanarArm" in emdm.__all__
     for name in emdm.__all__:
