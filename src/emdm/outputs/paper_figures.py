@@ -1137,10 +1137,10 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_yticks([])
             ax.set_xlabel(  # below the workspace, where no arm can cover it
                 r"arm at $t$ = "
-                + ", ".join(f"{run.t[k]:.2f}" for k in drawn)
+                + ", ".join(f"{run.t[k]:.2f}".rstrip("0").rstrip(".") for k in drawn)
                 + " s"
                 + (", then still" if last < run.steps else ""),
-                fontsize=medium.tiny,
+                fontsize=medium.small,
                 color="#444444",
             )
     return stem
