@@ -149,7 +149,7 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert evidence["t1-c-slack-policy"]["pair"]["coincide_steps"] == 0
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
     text = (root / "index.html").read_text(encoding="utf-8")
-    assert "it stalls, its distance to the goal staying at" in text
+    assert "cannot, and never reaches it: from" in text and " on it stalls " in text
     assert "evidence" in text.lower()
 
 

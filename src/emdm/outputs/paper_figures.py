@@ -113,11 +113,6 @@ def _figure(stem: Path, medium: Medium, width: float, height: float) -> Iterator
             fig.savefig(stem.with_suffix(suffix))
 
 
-UC_MARK_EVERY = 1.0
-"""Beside the constrained pair, UC-IVKC's curves carry a hollow marker every this many seconds
-(UC-EMDM's curve covers it where the two coincide)."""
-
-
 def _style(run: Run, medium: Medium) -> dict[str, Any]:
     base = CONTROLLER_STYLE.get(run.controller.name, {"color": OKABE_ITO[0], "linestyle": "-"})
     # in a pair both runs are drawn solid; the EMDM run dashed over the IVKC run reads better
@@ -180,9 +175,6 @@ against the constrained pair's solid and dashed lines."""
 EFFORT_FLOOR = 1e-9
 """Where :func:`pair_figure`'s log axis of the effort is floored (rad²/s²): a run at rest has
 zero effort, which a log axis cannot draw."""
-GAP_FLOOR = 1e-6
-"""Where :func:`pair_figure`'s log axis of the tracking gap is floored (m/s): a task imposed
-exactly misses by rounding only (about 1e-16), drawn on the floor."""
 
 
 def time_end(runs: Sequence[Run]) -> float | None:
@@ -197,28 +189,14 @@ def time_end(runs: Sequence[Run]) -> float | None:
     return end if max(float(r.t[k]) for r, k in stalls if k is not None) <= end else None
 
 
-def tracking_gap(run: Run) -> np.ndarray:
-    """Per command: how far the achieved tip velocity misses the desired one, ``||J(q_k) qd_k -
-    v_d,k||`` (m/s), from the recorded states and commands (0 up to rounding for a run that
-    imposes the task; the slack, or the scaled-off part ``(1 - alpha) ||v_d||``, otherwise)."""
-    arm = run.scenario.planar_arm
-    out = np.empty(run.steps)
-    for k in range(run.steps):
-        out[k] = np.linalg.norm(arm.jacobian(run.q[k]) @ run.qd[k] - run.v[k])
-    return out
-
-
 FAR_BEYOND = 1.5
 """A joint whose speeds go beyond this multiple of its limit is drawn on an axis linear within the
 limits and logarithmic beyond, its peak ticked on the right (:func:`pair_figure`)."""
 
 
-def pair_figure(
-    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, *, gap: bool = False
-) -> Path:
+def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
     """A pair (or all four controllers of a task) in one composite: (a) m(t), (b) E(t), (c) the
-    distance to the goal ||e||(t) (``gap``: the velocity-tracking gap of :func:`tracking_gap`)
-    above, (d) q(t) and (e) qd(t) below, one strip per joint."""
+    distance to the goal ||e||(t) above, (d) q(t) and (e) qd(t) below, one strip per joint."""
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
@@ -249,34 +227,28 @@ def pair_figure(
                     "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"],
                     "color": "#CC79A7" if ivkc else "#009E73",
                 }
-                st["linewidth"] = 1.3 * st["linewidth"]  # a dotted line is faint
-                if ivkc:  # sparse hollow markers on top: visible where UC-EMDM's curve covers it
-                    st["marker"] = "o"
-                    st["markevery"] = max(1, round(UC_MARK_EVERY / sc.motion.dt))
-                    st["markersize"] = 2.4 if medium is PAPER else 4.0
-                    st["markerfacecolor"] = "none"
-                    st["markeredgewidth"] = 0.6
-                    st["zorder"] = 3
+                # thin, on top of the constrained pair's thick lines (no markers: they crowded the
+                # panels where four curves meet)
+                st["linewidth"] = 0.9 * st["linewidth"]
+                st["zorder"] = 3
+            elif mixed:
+                st["linewidth"] = 1.5 * st["linewidth"]
             return st
 
         for run in runs:
             st = drawn(run)
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
-            if gap:
-                ax_err.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
-            else:
-                ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
+            ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             for j in range(n):
                 q_axes[j].plot(run.t, run.q[:, j], **st)
                 qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
         for ax in (ax_m, ax_e, ax_err, *q_axes, *qd_axes):
             _shade(ax, spans)
-        if not gap:
-            ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
+        ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
-        ax_err.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)" if gap else r"$\|e\|$ (m)", labelpad=1)
+        ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
         for ax in (ax_m, ax_e, ax_err):
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))

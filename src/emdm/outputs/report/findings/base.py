@@ -20,7 +20,7 @@ import numpy as np
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
-from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
+from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -38,7 +38,6 @@ from .records import (
     SolverRow,
 )
 
-FLOOR_EXP = round(math.log10(GAP_FLOOR))
 EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
 """The decade the paper's tracking-gap axis is floored at (its caption says it)."""
 
@@ -375,25 +374,10 @@ class StoryBase:
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod
-    def panels(gap: bool = False, only_c: bool = False, far: bool = False) -> Sentence:
+    def panels(only_c: bool = False, far: bool = False) -> Sentence:
         """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
-        as its captions name them (without the final stop); ``gap``: panel (c) is the
-        velocity-tracking gap (``pair_figure(..., gap=True)``); ``only_c``: panel (c) alone."""
-        third = (
-            sentence(
-                "(c) velocity-tracking gap ",
-                Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
-                " (log axis, floored at ",
-                Math(rf"10^{{{FLOOR_EXP}}}", f"10<sup>−{-FLOOR_EXP}</sup>"),
-                ": the slack ",
-                DELTA,
-                ", or the scaled-off part ",
-                Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
-                ")",
-            )
-            if gap
-            else sentence("(c) distance to the goal ", ERR, " (log; dotted: the tolerance)")
-        )
+        as its captions name them (without the final stop); ``only_c``: panel (c) alone."""
+        third = sentence("(c) distance to the goal ", ERR, " (log; dotted: the tolerance)")
         if only_c:
             return third
         return (

@@ -49,7 +49,7 @@ class Claims(StoryBase):
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
         return sentence(
-            "with a slack instead, C-IVKC arrives in ",
+            "with a slack, C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
             " (E4)" if label else "",
         )

@@ -34,7 +34,7 @@ class Front(Claims):
             if self.ivkc_with_slack():
                 sooner = e4["time_to_goal"] < self.mv(t2, Name.C_EMDM, "time_to_goal")
                 out += sentence(
-                    "; given a slack instead, C-IVKC arrives too",
+                    "; with a slack, C-IVKC arrives too",
                     ", ahead of C-EMDM" if sooner else "",
                 )
             out += sentence(". ")

@@ -62,54 +62,76 @@ class Solvers(StoryBase):
                 ") the exact gradient-free "
                 + ("methods need a median of " if len(exact_free) > 1 else "method, "),
             )
-            for i, k in enumerate(exact_free):
+            k0 = exact_free[0]
+            if len(exact_free) == 1 and rows[k0].p95_time <= dt < rows[k0].max_time:
+                # one method, within the period at the 95th percentile but not at worst: plainly
                 answer += sentence(
-                    *((k, " ") if len(exact_free) > 1 else (k, ", needs a median of ")),
-                    self.sn(lab, k, "median_evaluations", ".4g"),
+                    k0,
+                    ", needs a median of ",
+                    self.sn(lab, k0, "median_evaluations", ".4g"),
                     " evaluations and ",
-                    self.sn(lab, k, "median_time", unit="ms"),
-                    " (95th percentile ",
-                    self.sn(lab, k, "p95_time", unit="ms"),
-                    *(  # the worst solve, where the verdict below turns on it
-                        (", worst ", self.sn(lab, k, "max_time", unit="ms"))
-                        if rows[k].p95_time <= dt < rows[k].max_time
-                        else ()
-                    ),
-                    ")",
-                    "; " if i < len(exact_free) - 1 else "",
+                    self.sn(lab, k0, "median_time", unit="ms"),
+                    ". Its 95th percentile, ",
+                    self.sn(lab, k0, "p95_time", unit="ms"),
+                    ", is within the ",
+                    self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
+                    " control period; its worst solve, ",
+                    self.sn(lab, k0, "max_time", unit="ms"),
+                    ", is not",
                 )
-            over = [k for k in exact_free if rows[k].p95_time > dt]
-            typical = [k for k in exact_free if rows[k].median_time > dt]
-            one = len(exact_free) == 1
-            answer += sentence(
-                "; against the control period of ",
-                self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                ", "
-                + (
-                    ("its median already exceeds it" if one else "their medians already exceed it")
-                    if len(typical) == len(exact_free)
-                    else ("it overruns it" if one else "each overruns it")
-                    + " on at least one program in 20"
-                    if len(over) == len(exact_free)
-                    else "some overrun it on at least one program in 20"
-                    if over
-                    else "its 95th percentile is within it"
-                    + (
-                        " but not its worst solve"
-                        if one and rows[exact_free[0]].max_time > dt
-                        else ""
+            else:
+                for i, k in enumerate(exact_free):
+                    answer += sentence(
+                        *((k, " ") if len(exact_free) > 1 else (k, ", needs a median of ")),
+                        self.sn(lab, k, "median_evaluations", ".4g"),
+                        " evaluations and ",
+                        self.sn(lab, k, "median_time", unit="ms"),
+                        " (95th percentile ",
+                        self.sn(lab, k, "p95_time", unit="ms"),
+                        *(  # the worst solve, where the verdict below turns on it
+                            (", worst ", self.sn(lab, k, "max_time", unit="ms"))
+                            if rows[k].p95_time <= dt < rows[k].max_time
+                            else ()
+                        ),
+                        ")",
+                        "; " if i < len(exact_free) - 1 else "",
                     )
-                    if grad
-                    else "within it at the 95th percentile"
-                ),
-            )
+                over = [k for k in exact_free if rows[k].p95_time > dt]
+                typical = [k for k in exact_free if rows[k].median_time > dt]
+                one = len(exact_free) == 1
+                answer += sentence(
+                    "; against the control period of ",
+                    self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
+                    ", "
+                    + (
+                        (
+                            "its median already exceeds it"
+                            if one
+                            else "their medians already exceed it"
+                        )
+                        if len(typical) == len(exact_free)
+                        else ("it overruns it" if one else "each overruns it")
+                        + " on at least one program in 20"
+                        if len(over) == len(exact_free)
+                        else "some overrun it on at least one program in 20"
+                        if over
+                        else "its 95th percentile is within it"
+                        + (
+                            " but not its worst solve"
+                            if one and rows[exact_free[0]].max_time > dt
+                            else ""
+                        )
+                        if grad
+                        else "within it at the 95th percentile"
+                    ),
+                )
             twin = rows.get(LIKE_FOR_LIKE)
             if twin and exact_answer(twin.max_abs_gap, twin.max_violation):
                 # the same formulation, a gradient-based method: the gap is the method's
                 answer += sentence(
-                    ". On that program SLSQP needs a median of ",
+                    f". On that same reduced program SLSQP ({LIKE_FOR_LIKE}) needs a median of ",
                     self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                    f" ({LIKE_FOR_LIKE}), so the gap comes from the method, not the formulation",
+                    " evaluations, so the gap comes from the method, not the formulation",
                 )
             if inexact_free:
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]

@@ -42,19 +42,9 @@ class Task1(StoryBase):
             ".1e" if self.pair(t, "UC", "max_path_gap") < 1e-3 else ".4f",
             "m",
         )
-        answer = sentence(f"{emdm} tracks the goal as {ivkc} does (")
-        if same_time and self.mv(t, emdm, "reached"):
-            answer += sentence("both reach it in ", self.ttg(t, emdm))
-        else:
-            answer += sentence(
-                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
-            )
-        answer += sentence(
-            "; their end-effector paths differ by at most ",
-            gap,
-            ": their distances to the goal coincide in ",
-            Ref("fig", "t1-uc"),
-            "(c)) and raises the mean manipulability by ",
+        # the result first, then how closely the two track
+        answer = sentence(
+            f"{emdm} raises the mean manipulability by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
             " (",
             self.mt(t, emdm, "mean_manipulability", ".3f"),
@@ -62,7 +52,20 @@ class Task1(StoryBase):
             self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
             f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
             self.pct(t, emdm, ivkc, "total_effort"),
-            ").",
+            f") and tracks the goal as {ivkc} does. ",
+        )
+        if same_time and self.mv(t, emdm, "reached"):
+            answer += sentence("Both reach it in ", self.ttg(t, emdm))
+        else:
+            answer += sentence(
+                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
+            )
+        answer += sentence(
+            "; their end-effector paths differ by at most ",
+            gap,
+            ", so their distances to the goal coincide in ",
+            Ref("fig", "t1-uc"),
+            "(c).",
         )
         sec.answer = answer
         self.answers.append(
@@ -118,14 +121,20 @@ class Task1(StoryBase):
         t = "task1"
         ivkc, emdm = PAIRS["C"]
         sec = Section("t1-c", "Task 1.2: C-EMDM against C-IVKC", level=2, brief="1.2")
+        # the result first, then safety, then the arrivals
         answer = sentence(
-            "Both constrained controllers (",
+            f"{emdm} again raises the mean manipulability (",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
+            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            self.pct(t, emdm, ivkc, "total_effort"),
+            "). Both constrained controllers (",
             Ref("fig", "t1-c"),
-            ") keep every joint outside its stop zone (smallest margin ",
+            ") keep every joint within its speed limit and outside its stop zone, with smallest "
+            "margins of ",
             self.mt(t, ivkc, "min_stop_margin", ".3f", "rad"),
-            f" for {ivkc}, ",
+            f" ({ivkc}) and ",
             self.mt(t, emdm, "min_stop_margin", ".3f", "rad"),
-            f" for {emdm}) and within its speed limit; {emdm} ",
+            f" ({emdm}). {emdm} ",
             *self.outcome(t, emdm),
             f" and {ivkc} ",
             *(
@@ -140,13 +149,7 @@ class Task1(StoryBase):
                 ", later than the UC pair because the task is scaled for the first ",
                 self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
             )
-        answer += sentence(
-            f", and {emdm} again raises the mean manipulability (",
-            self.pct(t, emdm, ivkc, "mean_manipulability"),
-            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
-            self.pct(t, emdm, ivkc, "total_effort"),
-            ").",
-        )
+        answer += sentence(".")
         sec.answer = answer
         self.answers.append(
             ("Task 1.2: implement and compare C-EMDM and C-IVKC, same analysis", answer)
@@ -204,7 +207,7 @@ class Task1(StoryBase):
         answer = sentence(
             "The fronts (",
             Ref("fig", "pareto"),
-            ") show what the weights buy: at ",
+            ") show what the weights buy. At ",
             K_EQ,
             "0, raising ",
             RATIO,
@@ -214,11 +217,11 @@ class Task1(StoryBase):
             *eq(MRATE, self.frontn("UC-EMDM", 0, "M_min", ".3g")),
             " to ",
             self.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-            " at an effort growing from ",
+            " and its effort from ",
             self.frontn("UC-EMDM", 0, "E_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
-            "; ",
+            ". ",
         )
         shares = [
             (info.nominal_E_log_pct, i)
@@ -227,12 +230,12 @@ class Task1(StoryBase):
         ]
         if shares:
             answer += sentence(
-                "on every UC-EMDM front the nominal ratio lies in the lowest ",
+                "On every UC-EMDM front the nominal ratio lies in the lowest ",
                 self.frontn("UC-EMDM", max(shares)[1], "nominal_E_log_pct", ".0f"),
-                "% of the effort range (log scale), costing ",
+                "% of the effort range (log scale). It costs ",
             )
         else:
-            answer += sentence("the nominal ratio costs ")
+            answer += sentence("The nominal ratio costs ")
         e0 = self.front("UC-EMDM", 0, "zero_E")
         en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(
@@ -248,7 +251,7 @@ class Task1(StoryBase):
         i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
             answer += sentence(
-                " but up to ",
+                ", but up to ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
                 " at ",
                 K_EQ,
@@ -315,7 +318,7 @@ class Task1(StoryBase):
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
                 " UC-EMDM fails to reach the goal (final error ",
                 self.gridn("UC-EMDM", i, "final_error", fmt=".3f", unit="m"),
-                "): its largest joint speed reaches ",
+                "): its joint speeds reach ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                 ", and a step of ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
@@ -328,13 +331,14 @@ class Task1(StoryBase):
                 p += sentence(
                     "With ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " they arrive in ",
+                    " it arrives in ",
                     self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
-                    " (E3) for an effort of ",
+                    " (E3) for ",
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
-                    " (nominal weights: ",
-                    self.mt("task1", Name.UC_EMDM, "total_effort", ".3g"),
-                    "): the miss comes from the step size, the cost from the weights. ",
+                    " of effort, against ",
+                    self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
+                    " with nominal weights at that step: the step size causes the miss, the "
+                    "weights the cost. ",
                 )
             break
         if p:

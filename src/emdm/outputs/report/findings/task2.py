@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ....core.controllers import Name
+from ....core.tolerances import STALL_BAND
 from ..config import PAIRS
 from ..document import Section
 from ..trace import Math, Num, Ref, Sentence, sentence, traced
@@ -28,14 +29,7 @@ class Task2(Claims):
         ivkc, emdm = PAIRS["C"]
         sec = Section("t2-c", "Task 2.1: C-EMDM against C-IVKC", level=2, brief="2.1")
         reached_e, reached_i = self.mv(t, emdm, "reached"), self.mv(t, ivkc, "reached")
-        answer = sentence(
-            f"{emdm} ",
-            *self.outcome(t, emdm),
-            f"; {ivkc}",
-            " under task scaling" if not reached_i and self.ivkc_with_slack() else "",
-            " ",
-            *self.outcome(t, ivkc),
-            " (",
+        refs = sentence(
             *(
                 (Ref("fig", "workspace"), ", ")
                 if self.d.value(f"data/{t}/events.json", "geometry")
@@ -44,10 +38,38 @@ class Task2(Claims):
             Ref("fig", "t2-c"),
             ", ",
             Ref("tab", "outcomes"),
-            ")",
         )
+        if reached_e and not reached_i and self.evv(t, ivkc, "stall"):
+            # the contrast first (who can leave the line), then where the other stops
+            scaled = " under task scaling" if self.ivkc_with_slack() else ""
+            answer = sentence(
+                f"{emdm} can leave the straight line to the goal and reaches it in ",
+                self.ttg(t, emdm),
+                f". {ivkc}{scaled} cannot, and never reaches it: from ",
+                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+                " on it stalls ",
+                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
+                f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
+                *refs,
+                ")",
+            )
+        else:
+            answer = sentence(
+                f"{emdm} ",
+                *self.outcome(t, emdm),
+                f"; {ivkc}",
+                " under task scaling" if not reached_i and self.ivkc_with_slack() else "",
+                " ",
+                *self.outcome(t, ivkc),
+                " (",
+                *refs,
+                ")",
+            )
         if reached_e and not reached_i:
-            answer += sentence(": one can leave the straight line to the goal, the other cannot")
+            if not self.evv(t, ivkc, "stall"):
+                answer += sentence(
+                    ": one can leave the straight line to the goal, the other cannot"
+                )
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
                 e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
@@ -55,22 +77,10 @@ class Task2(Claims):
                     answer += sentence(f", sooner than {emdm}")
                     m4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "mean_manipulability")
                     if m4 > self.mv(t, emdm, "mean_manipulability"):  # like for like, in full
-                        answer += sentence(
-                            " and with a higher mean ",
-                            M_SYM,
-                            " (",
-                            self.evidn(
-                                "t2-c-ivkc-slack-policy",
-                                "runs",
-                                ivkc,
-                                "mean_manipulability",
-                                fmt=".3f",
-                            ),
-                            " against ",
-                            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
-                            ")",
+                        answer += sentence(  # (both means are in Table I's rows)
+                            " and with a higher mean ", M_SYM, " (", Ref("tab", "outcomes"), ")"
                         )
-                    answer += sentence(": the stall comes from task scaling")
+                    answer += sentence(": task scaling causes the stall")
             answer += sentence(".")
         else:
             answer += sentence(".")
@@ -343,10 +353,9 @@ class Task2(Claims):
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
-                "Task 2, all four controllers, panels as in ",
+                "Task 2, all four controllers (the unconstrained pair thin), panels as in ",
                 Ref("fig", "t1-uc"),
-                " but ",
-            ) + self.panels(gap=True, only_c=True)
+            )
             caption += sentence(
                 "; (e) linear within the limits (left ticks), logarithmic beyond them (grey) up to "
                 "each joint's peak (right ticks; UC up to ",
@@ -399,7 +408,7 @@ class Task2(Claims):
         )
         outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
         if outside:
-            answer += sentence(" (")
+            answer += sentence(" into the elbow-up configuration the constrained pair cannot use. ")
             first: list[int] = []
             for i, c in enumerate(
                 outside
@@ -407,7 +416,11 @@ class Task2(Claims):
                 joints = [
                     j for j, x in enumerate(self.evv(t, c, "limits", "excess_by_joint")) if x > 0
                 ]
-                answer += sentence(", " if i else "", f"{c} by ", "" if i else "up to ")
+                answer += sentence(
+                    ", " if i else "",
+                    f"{c} exceeds them by " if not i else f"{c} by ",
+                    "" if i else "up to ",
+                )
                 for n, j in enumerate(joints):
                     answer += sentence(
                         " and " if n == len(joints) - 1 and n else (", " if n else ""),
@@ -428,14 +441,13 @@ class Task2(Claims):
                         ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1],
                     )
                     first = first or joints
-            answer += sentence(") into the elbow-up configuration the constrained pair cannot use")
         answer += (
-            sentence("; ")
-            + self.uc_slack_saving()
+            sentence(". " if outside else "; ")
+            + (cap(self.uc_slack_saving()) if outside else self.uc_slack_saving())
             + sentence(
                 " (",
                 Ref("tab", "outcomes"),
-                *((", ", Ref("fig", shown), "(c)") if self.has_figure(shown) else ()),
+                *((", ", Ref("fig", shown)) if self.has_figure(shown) else ()),
                 ").",
             )
         )
@@ -445,23 +457,17 @@ class Task2(Claims):
         e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             p += sentence(
-                "E8 (",
-                *eq(
-                    C_S,
-                    self.d.num(
-                        "data/evidence.json",
-                        "runs",
-                        "t2-uc-emdm-stiff-slack",
-                        "overrides",
-                        "weights.slack",
-                        fmt=".0e",
-                    ),
-                ),
-                "): the slack peaks at ",
+                "The slack saves effort by giving up ",
+                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                " while ",
+                ERR,
+                " is large. With ",
+                *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
+                " (E8) it peaks at ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "max_abs_slack", fmt=".0e", unit="m/s"
                 ),
-                " and ",
+                ", and ",
                 emdm,
                 " behaves like ",
                 ivkc,
@@ -471,11 +477,7 @@ class Task2(Claims):
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
                 ),
-                "): the slack saves effort by giving up ",
-                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-                " while ",
-                ERR,
-                " is large.",
+                ").",
             )
         sec.paragraphs.append(p)
         return sec
@@ -523,25 +525,25 @@ class Task2(Claims):
         p = sentence()
         if self.d.exists(f):
             p += sentence(
-                "Though the reduced Hessian's condition number reaches ",
+                "The reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                ", the active set's iterations stay few (a median of ",
+                ", yet the active set needs few iterations",
+                " and no fallback" if self.mv(t, emdm, "fallback_steps") == 0 else "",
+                ". Warm-started it takes a median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
-                " iterations warm-started, ",
+                ", cold ",
                 self.sn("task2-lab-C-EMDM", "active-set", "median_iterations", ".4g"),
-                " cold in ",
+                " (",
                 Ref("tab", "solvers"),
-                "; no fallback)" if self.mv(t, emdm, "fallback_steps") == 0 else ")",
+                ").",
             )
             ch = self.d.value(f, "challenges", "solvers")
-            if "admm" not in ch or ch["admm"].get("iterations_vs_cond_spearman") is None:
-                p += sentence(".")
-            else:
+            if "admm" in ch and ch["admm"].get("iterations_vs_cond_spearman") is not None:
                 p += sentence(
-                    "; ADMM's follow that conditioning more closely (rank correlation of "
-                    "iterations with it ",
+                    " ADMM's iterations follow the conditioning more closely: their rank "
+                    "correlation with it is ",
                     self.d.num(
                         f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
                     ),
@@ -560,7 +562,7 @@ class Task2(Claims):
                         if ch.get("active-set", {}).get("iterations_vs_cond_spearman") is not None
                         else ()
                     ),
-                    ").",
+                    ".",
                 )
         sec.paragraphs.append(p)
         return sec
