@@ -218,11 +218,13 @@ class Solvers(StoryBase):
             "convergence",
             "figures/convergence",
             sentence(
-                "Convergence on Task 2 C-EMDM's ",
-                "least dexterous program, " if hardest else "program at ",
+                "Convergence on the ",
+                "least dexterous Task 2 program ("
+                if hardest
+                else "first re-solved Task 2 program (",
                 *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
-                ", for the solvers that count objective evaluations (solid: gradient-based, "
-                "dashed: gradient-free; marker: last evaluation).",
+                ") for solvers counting evaluations (solid: gradient-based, dashed: "
+                "gradient-free; marker: last).",
             ),
         )
         if self.has_figure("convergence"):
@@ -263,10 +265,8 @@ class Solvers(StoryBase):
         compiled = [k for k, r in rows.items() if r.loop == "compiled"]
         python = [k for k, r in rows.items() if r.loop != "compiled"]
         if compiled and python:
-            p += sentence(
-                "; only ",
-                listed(compiled),
-                " run without Python, so times compare implementations too",
+            p += sentence(  # Table III stars them
+                "; the starred solvers run without Python, so times compare implementations too"
             )
         p += sentence(". ")
         sec.paragraphs.append(p)  # the recommendation closes the paper (conclusion)
@@ -282,7 +282,8 @@ class Solvers(StoryBase):
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, with the least dexterous). ms: median time from "
-                "scratch, from Python; it./ev.: median iterations/evaluations; gap, viol.: "
+                "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
+                "evaluations; gap, viol.: "
                 "largest gap to the optimum, bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "); goal: arrival with it in the loop.",
@@ -317,7 +318,7 @@ class Solvers(StoryBase):
                 )
                 table.rows.append(
                     [
-                        sentence(k),
+                        sentence(k, "*" if r.loop == "compiled" else ""),
                         sentence(bare(self.sn(lab, k, "median_time", unit="ms"))),
                         sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
                             self.sn(lab, k, "median_iterations") if r.median_iterations else "--",
