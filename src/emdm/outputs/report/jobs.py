@@ -294,7 +294,7 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
         out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}"))]
         if task == "task2" and group == "C":  # the paper's Task 2 figure: all four overlaid
             four = [runs[c] for c in (*PAIRS["C"], *PAIRS["UC"])]
-            # panel (c) the tracking gap: the slack and the scaling, where Task 2's pairs differ
+            # panel (c) the distance to the goal, as in every pair figure: the stall and the detour
             out.append(str(pf.pair_figure(four, stage / PAPER_FIGURES / f"{task}-all")))
         if not cfg.quick:
             out.append(
