@@ -119,8 +119,9 @@ class SolverStudy:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update({**state, "spec": get_solver(state["spec"])})
 
-    def summary(self) -> dict[str, Any]:
-        """The solver's row of ``solvers.json``."""
+    def summary(self, period: float) -> dict[str, Any]:
+        """The solver's row of ``solvers.json`` (``period``: the control period its times are
+        held against, counted in ``over_period``)."""
         times = np.array([s.time for s in self.solves])
         found = [s for s in self.solves if s.x is not None]
         gaps = np.array([s.gap for s in found]) if found else np.array([math.nan])
@@ -133,6 +134,7 @@ class SolverStudy:
             "median_time": float(np.median(times)),
             "p95_time": float(np.percentile(times, 95)),
             "max_time": float(np.max(times)),
+            "over_period": int(np.sum(times > period)),
             "median_iterations": float(np.median([s.iterations for s in self.solves])),
             "median_evaluations": float(np.median([s.evaluations for s in self.solves])),
             "max_gap": float(gaps.max()),
@@ -393,7 +395,9 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
         # the gradient-free methods' exact l1 penalty: rho = penalty_weight (1 + max|P|)
         "penalty_weight": PENALTY,
         "repeats": lab.repeats,
-        "solvers": {name: study.summary() for name, study in lab.studies.items()},
+        "solvers": {
+            name: study.summary(lab.scenario.motion.dt) for name, study in lab.studies.items()
+        },
         "challenges": challenges(lab),
     }
 

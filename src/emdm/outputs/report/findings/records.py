@@ -198,6 +198,7 @@ SolverKey = Literal[
     "median_time",
     "p95_time",
     "max_time",
+    "over_period",
     "median_iterations",
     "median_evaluations",
     "max_gap",
@@ -223,6 +224,8 @@ class SolverRow:
     median_time: float
     p95_time: float
     max_time: float
+    over_period: int
+    """How many of its programs took longer than the control period."""
     median_iterations: float
     median_evaluations: float
     max_gap: float

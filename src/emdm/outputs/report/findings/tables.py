@@ -121,8 +121,8 @@ class Tables(Claims):
         items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
             ("E1", "t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip"), "reference"),
             ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
-            # E2 runs the pair: its second row carries no label of its own
-            ("", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
+            # E2 runs the pair: both rows are E2's
+            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
             ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
             (
                 "E5",
@@ -156,11 +156,11 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached). E3, from ",
+                "brackets (stall: goal not reached). E3 (",
                 Ref("sec", "t1-pareto"),
-                ": both at ",
+                ") runs at ",
                 DT,
-                "/5.",
+                "/5, its brackets too.",
             ),
             [
                 sentence("run"),
