@@ -364,7 +364,7 @@ class StoryBase:
                 ")",
             )
         p += sentence(
-            ". Scaling buys a straighter path: ",
+            ". Scaling keeps the tip on a straighter path: ",
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),

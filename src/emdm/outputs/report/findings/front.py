@@ -116,7 +116,7 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "Task scaling buys only the straight line: in Task 1 a slack makes C-EMDM ",
+                "All task scaling gains is a straight line: in Task 1 a slack makes C-EMDM ",
                 listed(gains),
                 " (E2)",
                 ", and in Task 2 C-IVKC arrives with one (E4)" if self.ivkc_with_slack() else "",

@@ -353,15 +353,21 @@ class Task2(Claims):
         if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
             peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
             caption = sentence(
-                "Task 2, all four controllers (the unconstrained pair thin), panels as in ",
+                "Task 2, all four controllers (the unconstrained pair thin; where its curves "
+                "coincide, UC-EMDM's hides UC-IVKC's), panels as in ",
                 Ref("fig", "t1-uc"),
             )
-            caption += sentence(
-                "; (e) linear within the limits (left ticks), logarithmic beyond them (grey) up to "
-                "each joint's peak (right ticks; UC up to ",
-                self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
-                ")",
-            )
+            if self.far_beyond("task1", PAIRS["UC"]):  # Fig. 1's caption explains the log part
+                caption += sentence(
+                    " (UC joint speeds up to ", self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"), ")"
+                )
+            else:
+                caption += sentence(
+                    "; (e) linear within the limits (left ticks), logarithmic beyond them (grey) "
+                    "up to each joint's peak (right ticks; UC up to ",
+                    self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
+                    ")",
+                )
             # time axes end at the last arrival when the runs that missed had stalled by then
             # (paper_figures.time_end, the same rule on the same records)
             four = (*PAIRS["UC"], *PAIRS["C"])
