@@ -168,10 +168,6 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
-UC_DASH = {"IVKC": (0, (1, 1.2)), "EMDM": (0, (4, 1.2, 1, 1.2))}
-"""The unconstrained pair's dashes where all four controllers share axes (dotted, dash-dotted),
-against the constrained pair's solid and dashed lines."""
-
 EFFORT_FLOOR = 1e-9
 """Where :func:`pair_figure`'s log axis of the effort is floored (rad²/s²): a run at rest has
 zero effort, which a log axis cannot draw."""
@@ -200,7 +196,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.62 if n == 3 else 2.3) if medium is PAPER else 3.4
+    height = (2.5 if n == 3 else 2.2) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
@@ -213,30 +209,8 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
-        mixed = 0 < sum(r.controller.name.startswith("C-") for r in runs) < len(runs)
-
-        def drawn(run: Run) -> dict[str, Any]:
-            st = _style(run, medium)
-            if mixed and not run.controller.name.startswith("C-"):
-                # beside the constrained pair, the unconstrained one in hues of its own (reddish
-                # purple IVKC, bluish green EMDM) and its own dash (dotted, dash-dotted): the
-                # lighter orange and blue of the UC pair were one shade from the C pair's
-                ivkc = run.controller.name.endswith("IVKC")
-                st = {
-                    **st,
-                    "linestyle": UC_DASH["IVKC" if ivkc else "EMDM"],
-                    "color": "#CC79A7" if ivkc else "#009E73",
-                }
-                # thin, on top of the constrained pair's thick lines (no markers: they crowded the
-                # panels where four curves meet)
-                st["linewidth"] = 0.9 * st["linewidth"]
-                st["zorder"] = 3
-            elif mixed:
-                st["linewidth"] = 1.5 * st["linewidth"]
-            return st
-
         for run in runs:
-            st = drawn(run)
+            st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
@@ -321,7 +295,7 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         # panel letters above the axes, where no curve can hide them
         for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
-        handles: list[Artist] = [Line2D([], [], **drawn(r)) for r in runs]
+        handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         if spans:
             handles.append(
                 Patch(color="#999999", alpha=0.35, label=r"both task-scaled ($\alpha<1$)")
@@ -579,7 +553,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.0 * len(names) + 0.3) if medium is PAPER else 2.7
+    height = (1.0 * len(names) + 0.2) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)
@@ -968,18 +942,25 @@ def manipulability_figure(
 
 def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
     """The effort spent so far, sum E dt up to t (linear, so a saving shows as a gap that
-    stays), and the manipulability m(t) of a pair: two large panels (a slide's figure, where the
-    pair composite's five panels would be too small to read)."""
-    height = 2.3 if medium is SLIDE else 1.6
-    with _figure(stem, medium, medium.wide, height) as fig:
+    stays), and the manipulability m(t) of a pair: two panels, large on a slide (where the pair
+    composite's five would be too small to read), compact in the paper (Task 2.2's figure)."""
+    height = 2.3 if medium is SLIDE else 1.05
+    width = medium.wide if medium is SLIDE else medium.column
+    with _figure(stem, medium, width, height) as fig:
         ax_e, ax_m = fig.subplots(1, 2)
         for run in runs:
             st = _style(run, medium)
             spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
             ax_e.plot(run.t, spent, **st)
             ax_m.plot(run.t, run.m, **st)
-        ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
-        ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
+        if medium is SLIDE:
+            ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
+            ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
+        else:
+            ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
+            ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
+            for ax, letter in ((ax_e, "(a)"), (ax_m, "(b)")):  # as the pair figures' panels
+                ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         for ax in (ax_e, ax_m):
             ax.set_xlabel(r"$t$ (s)")
         ax_m.legend(loc="best", frameon=True, framealpha=0.9)

@@ -292,10 +292,10 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
     pair = [runs[ivkc], runs[emdm]]
     with pf.png_only(cfg.quick):
         out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}"))]
-        if task == "task2" and group == "C":  # the paper's Task 2 figure: all four overlaid
-            four = [runs[c] for c in (*PAIRS["C"], *PAIRS["UC"])]
-            # panel (c) the distance to the goal, as in every pair figure: the stall and the detour
-            out.append(str(pf.pair_figure(four, stage / PAPER_FIGURES / f"{task}-all")))
+        if (task, group) == ("task2", "UC"):  # the paper's Task 2.2 figure: two compact panels
+            out.append(
+                str(pf.effort_figure(pair, stage / PAPER_FIGURES / "task2-UC-effort", pf.PAPER))
+            )
         if not cfg.quick:
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))

@@ -407,22 +407,32 @@ class StoryBase:
 
     def pair_caption(self, task: str, group: str) -> Sentence:
         """A pair figure's caption: its panels in full for the first (Task 1.1's), by reference
-        to it for the others."""
+        to it for the others, then what this pair's figure adds (the scaled span, the time axes'
+        end)."""
         ivkc, emdm = PAIRS[group]
-        out = sentence(f"{ivkc} (solid) against {emdm} (dashed)")
-        if (task, group) == ("task1", "UC"):
-            out += (
-                sentence(": ")
-                + self.panels(far=self.far_beyond(task, PAIRS[group]))
-                + sentence(".")
-            )
-        else:
-            out += sentence(", panels as in ", Ref("fig", "t1-uc"), ".")
+        notes: list[Sentence] = []
         if (
             self.pair(task, group, "coincide_scaled_steps")
             and self.pair(task, group, "coincide_all_scaled") is not None
         ):
             scaled = self.evv(task, emdm, "scaling")
             if scaled and not scaled["whole_run"]:
-                out += sentence(" Grey: both task-scaled (", ALPHA_LT1, ").")
-        return out
+                notes.append(sentence("grey: both task-scaled (", ALPHA_LT1, ")"))
+        # time axes end at the last arrival when the one run that missed had stalled by then
+        # (paper_figures.time_end, the same rule on the same records)
+        missed = [c for c in (ivkc, emdm) if not self.mv(task, c, "reached")]
+        if len(missed) == 1:
+            arrived = emdm if missed == [ivkc] else ivkc
+            stall = self.evv(task, missed[0], "stall")
+            if stall and stall["t"] <= self.mv(task, arrived, "time_to_goal"):
+                notes.append(
+                    sentence(f"time axes end at {arrived}'s arrival ({missed[0]} stalled)")
+                )
+        out = sentence(f"{ivkc} (solid), {emdm} (dashed)")
+        if (task, group) == ("task1", "UC"):
+            out += sentence(": ") + self.panels(far=self.far_beyond(task, PAIRS[group]))
+        else:
+            out += sentence(", as in ", Ref("fig", "t1-uc"))
+        for note in notes:
+            out += sentence("; ") + note
+        return out + sentence(".")

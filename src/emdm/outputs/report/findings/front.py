@@ -5,7 +5,7 @@ from __future__ import annotations
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Cite, Sentence, sentence
+from ..trace import Cite, Ref, Sentence, sentence
 from .base import (
     M_SYM,
 )
@@ -107,16 +107,16 @@ class Front(Claims):
         sec = Section("conclusion", "Conclusion")
         p = sentence(
             "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: it "
-            "tracks as IVKC does and ",
-            *self.dexterity_gain(),
-            ". On the non-redundant arm the slack, not the dexterity term, decides: it lets "
+            "tracks as IVKC does and trades effort for manipulability (",
+            Ref("tab", "outcomes"),
+            "). On the non-redundant arm the slack, not the dexterity term, decides: it lets "
             "C-EMDM leave a straight line that the joint limits block, where task scaling "
             "stalls C-IVKC. ",
         )
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "All task scaling gains is a straight line: in Task 1 a slack makes C-EMDM ",
+                "Task scaling's only gain is a straighter path: in Task 1 a slack makes C-EMDM ",
                 listed(gains),
                 " (E2)",
                 ", and in Task 2 C-IVKC arrives with one (E4)" if self.ivkc_with_slack() else "",

@@ -190,13 +190,6 @@ class Solvers(StoryBase):
             "In the compiled loop the warm-started active set solves in ",
             self.d.us("data/task2/metrics.json", "controllers", "C-EMDM", "median_solve_time"),
         )
-        # which times compare implementations as well as methods
-        compiled = [k for k, r in rows.items() if r.loop == "compiled"]
-        python = [k for k, r in rows.items() if r.loop != "compiled"]
-        if compiled and python:
-            p += sentence(  # Table III stars them
-                "; the starred solvers run without Python, so times compare implementations too"
-            )
         p += sentence(". ")
         sec.paragraphs.append(p)  # the recommendation closes the paper (conclusion)
         return sec
@@ -253,7 +246,7 @@ class Solvers(StoryBase):
                 "evaluations; gap, viol.: "
                 "largest gap to the optimum, bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
-                "); goal: arrival with it in the loop.",
+                "); goal: arrival in closed loop.",
             ),
             [
                 sentence("solver"),

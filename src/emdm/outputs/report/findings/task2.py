@@ -350,52 +350,31 @@ class Task2(Claims):
             ".",
         )
         sec.paragraphs.append(p)
-        if self.d.exists("paper/figures/task2-all.png"):  # Tasks 2.1 and 2.2 overlaid
-            peak = max(PAIRS["UC"], key=lambda c: self.mv(t, c, "max_abs_qd"))
-            caption = sentence(
-                "Task 2, all four controllers (the unconstrained pair thin; where its curves "
-                "coincide, UC-EMDM's hides UC-IVKC's), panels as in ",
-                Ref("fig", "t1-uc"),
-            )
-            if self.far_beyond("task1", PAIRS["UC"]):  # Fig. 1's caption explains the log part
-                caption += sentence(
-                    " (UC joint speeds up to ", self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"), ")"
-                )
-            else:
-                caption += sentence(
-                    "; (e) linear within the limits (left ticks), logarithmic beyond them (grey) "
-                    "up to each joint's peak (right ticks; UC up to ",
-                    self.mt(t, peak, "max_abs_qd", ".1f", "rad/s"),
-                    ")",
-                )
-            # time axes end at the last arrival when the runs that missed had stalled by then
-            # (paper_figures.time_end, the same rule on the same records)
-            four = (*PAIRS["UC"], *PAIRS["C"])
-            missed = [c for c in four if not self.mv(t, c, "reached")]
-            last = max((self.mv(t, c, "time_to_goal") for c in four if c not in missed), default=0)
-            if missed and all(
-                self.evv(t, c, "stall") and self.evv(t, c, "stall", "t") <= last for c in missed
-            ):
-                caption += sentence(
-                    "; time axes end at the last arrival (",
-                    ", ".join(missed),
-                    " stalled)",
-                )
-            caption += sentence(".")
-            sec.figures.append(self.figure("t2-c", "figures/task2-all", caption))
-        else:
-            sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
+        sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
         return sec
 
     def task2_uc(self) -> Section:
         t = "task2"
         ivkc, emdm = PAIRS["UC"]
         sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
-        if self.d.exists("paper/figures/task2-UC.png"):  # the page's; the paper's is Fig. t2-c
+        if self.d.exists("paper/figures/task2-UC.png"):  # the page's, all five panels
             sec.figures.append(
                 self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
             )
-        shown = "t2-c" if self.d.exists("paper/figures/task2-all.png") else "t2-uc"
+        # the paper's: what the slack changes, effort and m, in two compact panels
+        shown = self.figure(
+            "t2-uc-effort",
+            "figures/task2-UC-effort",
+            sentence(
+                f"{ivkc} (solid), {emdm} (dashed): (a) effort up to ",
+                Math("t", "<i>t</i>"),
+                ", (b) ",
+                M_SYM,
+                ".",
+            ),
+        )
+        if self.has_figure(shown):
+            sec.figures.append(shown)
         answer = (
             sentence(
                 f"Both unconstrained controllers reach the goal ({ivkc} in ",
@@ -414,7 +393,7 @@ class Task2(Claims):
         )
         outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
         if outside:
-            answer += sentence(" into the elbow-up configuration the constrained pair cannot use. ")
+            answer += sentence(" for the elbow-up configuration (", Ref("sec", "t2-c"), "). ")
             first: list[int] = []
             for i, c in enumerate(
                 outside
