@@ -120,10 +120,10 @@ class Tables(Claims):
     def evidence_table(self, sections: list[Section]) -> None:
         items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
             ("E1", "t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip"), "reference"),
-            ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("slack policy"), "pair"),
+            ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("free slack"), "pair"),
             # E2 runs the pair: both rows are E2's
-            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("slack policy"), "pair"),
-            ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("slack policy"), None),
+            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("free slack"), "pair"),
+            ("E4", "t2-c-ivkc-slack-policy", Name.C_IVKC, sentence("free slack"), None),
             (
                 "E5",
                 "t2-c-ivkc-wide-limits",

@@ -74,7 +74,7 @@ class Task2(Claims):
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
                 e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
                 if e4 < self.mv(t, emdm, "time_to_goal"):  # the stall is the policy's: say so
-                    answer += sentence(f", sooner than {emdm}")
+                    answer += sentence(f", before {emdm}")
                     m4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "mean_manipulability")
                     if m4 > self.mv(t, emdm, "mean_manipulability"):  # like for like, in full
                         answer += sentence(  # (both means are in Table I's rows)
