@@ -349,22 +349,22 @@ class StoryBase:
         ivkc = Name.C_IVKC
         if self.evid(e2, "runs", ivkc, "reached"):  # the pair under the slack policy
             p += sentence(
-                ". Under the slack C-EMDM's mean ",
+                ". With the slack, C-EMDM's mean ",
                 M_SYM,
-                " is ",
+                " differs from C-IVKC's by ",
                 self.d.pct(
                     (*e2r, emdm, "mean_manipulability"), (*e2r, ivkc, "mean_manipulability")
                 ),
-                " against C-IVKC's for ",
+                " for ",
                 self.d.pct((*e2r, emdm, "total_effort"), (*e2r, ivkc, "total_effort")),
-                " effort (scaled: ",
+                " effort (",
                 self.pct("task1", emdm, ivkc, "mean_manipulability"),
                 " for ",
                 self.pct("task1", emdm, ivkc, "total_effort"),
-                ")",
+                " under scaling)",
             )
         p += sentence(
-            ". Scaling keeps the tip on a straighter path: ",
+            ". Scaling keeps a straighter path: ",
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),

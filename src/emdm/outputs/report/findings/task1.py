@@ -333,12 +333,12 @@ class Task1(StoryBase):
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " it arrives in ",
                     self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
-                    " (E3) for ",
+                    " (E3) but spends ",
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
-                    " of effort, against ",
+                    " of effort against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
-                    " with nominal weights at that step: the step size causes the miss, the "
-                    "weights the cost. ",
+                    " with nominal weights: the step size causes the miss, the weights the "
+                    "extra effort. ",
                 )
             break
         if p:
