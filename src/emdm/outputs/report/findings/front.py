@@ -52,13 +52,13 @@ class Front(Claims):
                 )
                 if free:
                     out += sentence(
-                        "; the only exact gradient-free method, "
+                        "; the only exact gradient-free one, "
                         if len(self.exact(rows, "gradient-free")) == 1
-                        else "; the fastest exact gradient-free method, ",
+                        else "; the fastest exact gradient-free one, ",
                         free,
                         ", needs ",
                         self.sn("task2-lab-C-EMDM", free, "median_evaluations", ".4g"),
-                        ".",
+                        " evaluations.",
                     )
                 else:
                     out += sentence("; every gradient-free method is inexact.")
