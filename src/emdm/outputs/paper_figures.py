@@ -943,11 +943,13 @@ def manipulability_figure(
 def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
     """The effort spent so far, sum E dt up to t (linear, so a saving shows as a gap that
     stays), and the manipulability m(t) of a pair: two panels, large on a slide (where the pair
-    composite's five would be too small to read), compact in the paper (Task 2.2's figure)."""
-    height = 2.3 if medium is SLIDE else 1.05
+    composite's five would be too small to read). In the paper (Task 2.2's figure) a third
+    panel, the joint positions against their limits, shows where the pair leaves them."""
+    height = 2.3 if medium is SLIDE else 1.2
     width = medium.wide if medium is SLIDE else medium.column
     with _figure(stem, medium, width, height) as fig:
-        ax_e, ax_m = fig.subplots(1, 2)
+        axes = fig.subplots(1, 2 if medium is SLIDE else 3)
+        ax_e, ax_m = axes[0], axes[1]
         for run in runs:
             st = _style(run, medium)
             spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
@@ -956,14 +958,35 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
         if medium is SLIDE:
             ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
             ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
+            ax_m.legend(loc="best", frameon=True, framealpha=0.9)
         else:
+            ax_q = axes[2]
+            arm = runs[0].scenario.arm
+            for bound in {*map(float, arm.q_min), *map(float, arm.q_max)}:
+                ax_q.axhline(bound, color="black", linewidth=0.6)
+            for run in runs:
+                ax_q.plot(run.t, run.q, **{**_style(run, medium), "label": None})
+            first = runs[0]
+            for j in range(first.q.shape[1]):  # name each joint just below where its first run
+                ax_q.annotate(  # ends (the limit lines run above the ends)
+                    rf"$q_{j + 1}$",
+                    (float(first.t[-1]), float(first.q[-1, j])),
+                    xytext=(-1, -2),
+                    textcoords="offset points",
+                    ha="right",
+                    va="top",
+                    fontsize=medium.tiny,
+                )
+            ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))
             ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
             ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-            for ax, letter in ((ax_e, "(a)"), (ax_m, "(b)")):  # as the pair figures' panels
+            ax_q.set_ylabel(r"$q$ (rad)", labelpad=1)
+            for ax, letter in zip(axes, ("(a)", "(b)", "(c)"), strict=True):  # as the pairs'
                 ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
-        for ax in (ax_e, ax_m):
+            handles, labels = ax_e.get_legend_handles_labels()  # above: no panel has room
+            fig.legend(handles, labels, loc="outside upper center", ncols=2, frameon=False)
+        for ax in axes:
             ax.set_xlabel(r"$t$ (s)")
-        ax_m.legend(loc="best", frameon=True, framealpha=0.9)
     return stem
 
 

@@ -34,7 +34,7 @@ class Front(Claims):
             if self.ivkc_with_slack():
                 sooner = e4["time_to_goal"] < self.mv(t2, Name.C_EMDM, "time_to_goal")
                 out += sentence(
-                    "; with a slack, C-IVKC arrives too",
+                    "; with a free slack, C-IVKC arrives too",
                     ", ahead of C-EMDM" if sooner else "",
                 )
             out += sentence(". ")
@@ -119,7 +119,9 @@ class Front(Claims):
                 "Task scaling's only gain is a straighter path: in Task 1 a slack makes C-EMDM ",
                 listed(gains),
                 " (E2)",
-                ", and in Task 2 C-IVKC arrives with one (E4)" if self.ivkc_with_slack() else "",
+                ", and in Task 2 C-IVKC arrives with a free one (E4)"
+                if self.ivkc_with_slack()
+                else "",
                 "; in these tasks, where the path does not matter, a slack was the better choice. ",
             )
         p += sentence(

@@ -163,10 +163,10 @@ class Task1(StoryBase):
                 " commands are identical (to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                "): two joints on their bounds leave one unknown for two equations, so the "
-                "objective has no choice (",
+                "): with two joints at their bounds the task fixes the third, so each program "
+                "allows one command whatever its objective (",
             )
-            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " of them scaled)")
+            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " scaled)")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(

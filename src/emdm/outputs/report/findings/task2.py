@@ -370,7 +370,7 @@ class Task2(Claims):
                 Math("t", "<i>t</i>"),
                 ", (b) ",
                 M_SYM,
-                ".",
+                ", (c) joint positions and limits.",
             ),
         )
         if self.has_figure(shown):
