@@ -106,13 +106,18 @@ class Pitch:
             ),
         ]
         if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):
-            # the stall is task scaling's: the like-for-like run beside it
-            t2c[0] = sentence(
-                "C-IVKC under task scaling ",
-                *s.outcome(t2, Name.C_IVKC),
-                " (",
-                *s.ivkc_with_slack(label=False),
-                ")",
+            # the stall is task scaling's (the next slide gives the run with a slack)
+            stall = s.evv(t2, Name.C_IVKC, "stall")
+            t2c[0] = (
+                sentence(
+                    "C-IVKC under task scaling stalls ",
+                    s.ev(t2, Name.C_IVKC, "stall", "error", fmt=".3f", unit="m"),
+                    " from the goal, from ",
+                    s.ev(t2, Name.C_IVKC, "stall", "t", fmt=".2f", unit="s"),
+                    " on",
+                )
+                if stall
+                else sentence("C-IVKC under task scaling ", *s.outcome(t2, Name.C_IVKC))
             )
         geo = self.d.value(f"data/{t2}/events.json", "geometry")
         if geo and geo["line_blocked"]:
@@ -345,16 +350,16 @@ class Pitch:
         if failed:
             out.append(
                 sentence(
-                    "Too much weight on dexterity: at ",
+                    "Too much dexterity weight (",
                     RATIO,
                     " = ",
                     self.s.gridn("UC-EMDM", failed[0], "w_manip", fmt=".4g"),
                     Text("/"),
                     self.s.gridn("UC-EMDM", failed[0], "w_effort", fmt=".2g"),
-                    " the run misses the goal",
+                    ") misses the goal",
                     *(
                         (
-                            ", a failure of the time step: with ",
+                            "; with ",
                             DT,
                             " = ",
                             self.s.gridn(
