@@ -195,12 +195,12 @@ class Task1(StoryBase):
                 r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
                 "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
             ),
-            " (columns 1-4), each point the program's optimum at the nominal run's state ",
+            " (columns 1-4), each point the optimum at the nominal run's state ",
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
-            " (colour, log scale, ratio 0 at its lower end; circle: the nominal weights); right: whole runs, "
-            "one per weight setting",
+            " (colour, log scale, 0 at its lower end; circle: nominal); right: whole runs, one "
+            "per setting. Without a slack only the ratio matters",
         )
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
