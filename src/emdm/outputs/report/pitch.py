@@ -9,9 +9,9 @@ from ...core.controllers import Name
 from ...studies.lab import exact_answer
 from .document import Document
 from .findings import DT, ERR, M_SYM, MRATE, RATIO, Story
-from .findings.base import T_EQ
+from .findings.base import C_S, T_EQ, eq
 from .findings.claims import cap, listed
-from .trace import Data, Math, Sentence, Text, sentence
+from .trace import Data, Sentence, Text, sentence
 
 
 @dataclass
@@ -300,7 +300,7 @@ class Pitch:
         ]
         if s.evv(t, ivkc, "limits", "max_excess") > 0:
             out[0] += sentence(
-                ", by leaving the joint limits (joint ",
+                ", by leaving the joint limits (UC-IVKC: joint ",
                 s.ev(t, ivkc, "limits", "excess_joint", fmt="d"),
                 " by up to ",
                 s.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
@@ -312,7 +312,7 @@ class Pitch:
             out.append(
                 sentence(
                     "A stiff slack (",
-                    Math(r"c_S=10^4", "<i>c</i><sub>S</sub> = 10<sup>4</sup>"),
+                    *eq(C_S, s.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
                     ") removes the saving: it behaves like IVKC",
                 )
             )

@@ -114,7 +114,13 @@ class Tables(Claims):
                     ")",
                 )
             )
-        change = sentence(*eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")))
+        slower = self.rec.scenarios["task1"].motion.dt / finer["dt"]
+        change = sentence(
+            *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")),
+            " at ",
+            DT,
+            f"/{slower:.0f}",
+        )
         return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
 
     def evidence_table(self, sections: list[Section]) -> None:
@@ -156,11 +162,11 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached). E3 (",
-                Ref("sec", "t1-pareto"),
-                ") runs at ",
+                "brackets (stall: goal not reached); E3's are the nominal weights at its ",
                 DT,
-                "/5, its brackets too.",
+                " (",
+                Ref("sec", "t1-pareto"),
+                ").",
             ),
             [
                 sentence("run"),
