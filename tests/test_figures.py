@@ -312,3 +312,18 @@ def test_time_axes_end_at_the_last_arrival_only_when_the_others_stalled():
     cut = emdm.simulate(short, "C-IVKC")
     assert not cut.reached and cut.stalled_from is None
     assert time_end([cut, runs[1]]) is None
+
+
+def test_the_tracking_gap_is_the_slack_and_the_scaled_off_part(task2_runs):
+    """Fig. 5(d): ||J qd - v_d|| from the states and commands equals what each program gave up,
+    ||(1 - alpha) v_d + delta|| (J qd + delta = alpha v_d at every certified step), and is
+    rounding only where the task is imposed."""
+    from emdm.outputs.paper_figures import tracking_gap
+
+    for name, run in task2_runs.items():
+        gap = tracking_gap(run)
+        given_up = np.linalg.norm((1.0 - run.alpha)[:, None] * run.v[:-1] + run.delta, axis=1)
+        assert gap.shape == (run.steps,)
+        assert np.allclose(gap, given_up, rtol=1e-9, atol=1e-12), name
+    assert tracking_gap(task2_runs["UC-IVKC"]).max() < 1e-12
+    assert tracking_gap(task2_runs["UC-EMDM"]).max() > 0.1  # its slack at work

@@ -190,9 +190,29 @@ FAR_BEYOND = 1.5
 limits and logarithmic beyond, its peak ticked on the right (:func:`pair_figure`)."""
 
 
-def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path:
-    """A pair (or all four controllers of a task) in one composite: (a) m(t), (b) E(t), (c) the
-    distance to the goal ||e||(t) above, (d) q(t) and (e) qd(t) below, one strip per joint."""
+GAP_FLOOR = 1e-6
+"""Where :func:`pair_figure`'s log axis of the tracking gap is floored (m/s): a task imposed
+exactly misses by rounding only (about 1e-16), drawn on the floor."""
+
+
+def tracking_gap(run: Run) -> np.ndarray:
+    """Per command: how far the achieved tip velocity misses the desired one, ``||J(q_k) qd_k -
+    v_d,k||`` (m/s), from the recorded states and commands (0 up to rounding for a run that
+    imposes the task; the slack, or the scaled-off part ``(1 - alpha) ||v_d||``, otherwise)."""
+    arm = run.scenario.planar_arm
+    out = np.empty(run.steps)
+    for k in range(run.steps):
+        out[k] = np.linalg.norm(arm.jacobian(run.q[k]) @ run.qd[k] - run.v[k])
+    return out
+
+
+def pair_figure(
+    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, *, gap: bool = False
+) -> Path:
+    """A pair in one composite: (a) m(t), (b) E(t), (c) the distance to the goal ||e||(t)
+    above, (d) q(t) and (e) qd(t) below, one strip per joint; ``gap``: a fourth panel above,
+    (d) the velocity-tracking gap of :func:`tracking_gap` (the slack at work), the joints then
+    (e) and (f)."""
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
@@ -202,11 +222,12 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
-        upper = outer[0].subgridspec(1, 3)
+        upper = outer[0].subgridspec(1, 4 if gap else 3)
         lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
+        ax_gap = fig.add_subplot(upper[0, 3], sharex=ax_m) if gap else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
         for run in runs:
@@ -214,19 +235,24 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
+            if ax_gap is not None:
+                ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
             for j in range(n):
                 q_axes[j].plot(run.t, run.q[:, j], **st)
                 qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
-        for ax in (ax_m, ax_e, ax_err, *q_axes, *qd_axes):
+        upper_axes = [ax_m, ax_e, ax_err, *([ax_gap] if ax_gap is not None else [])]
+        for ax in (*upper_axes, *q_axes, *qd_axes):
             _shade(ax, spans)
         ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
         ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
-        for ax in (ax_m, ax_e, ax_err):
+        if ax_gap is not None:
+            ax_gap.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)", labelpad=1)
+        for ax in upper_axes:
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
-        for ax in (ax_e, ax_err):
+        for ax in upper_axes[1:]:
             ax.yaxis.set_major_locator(LogLocator(numticks=3))
             ax.yaxis.set_minor_locator(NullLocator())
         # time in seconds on every panel: its label only under the joint strips
@@ -286,14 +312,15 @@ def pair_figure(runs: Sequence[Run], stem: Path, medium: Medium = PAPER) -> Path
                 ax.set_xlim(-0.02 * end, 1.03 * end)
         q_axes[-1].set_xlabel(r"$t$ (s)")
         qd_axes[-1].set_xlabel(r"$t$ (s)")
+        joint_q, joint_qd = ("(e)", "(f)") if gap else ("(d)", "(e)")
         q_axes[0].set_title(
-            r"$\bf (d)$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
+            rf"$\bf {joint_q}$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
         )
         qd_axes[0].set_title(
-            r"$\bf (e)$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
+            rf"$\bf {joint_qd}$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2
         )
         # panel letters above the axes, where no curve can hide them
-        for ax, letter in ((ax_m, "(a)"), (ax_e, "(b)"), (ax_err, "(c)")):
+        for ax, letter in zip(upper_axes, ("(a)", "(b)", "(c)", "(d)"), strict=False):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         if spans:

@@ -433,6 +433,14 @@ class StoryBase:
             out += sentence(": ") + self.panels(far=self.far_beyond(task, PAIRS[group]))
         else:
             out += sentence(", as in ", Ref("fig", "t1-uc"))
+        if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
+            out += sentence(
+                " with (d) the tracking gap ",
+                Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+                " (the slack, or the scaled-off ",
+                Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
+                "), joints in (e), (f)",
+            )
         for note in notes:
             out += sentence("; ") + note
         return out + sentence(".")

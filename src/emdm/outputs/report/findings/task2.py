@@ -175,15 +175,19 @@ class Task2(Claims):
                     self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
                     " to the end",
                 )
-            p += sentence(  # its distance to the goal then is in the answer above
+            told = reached_e and not reached_i  # the answer above gives the stall's time
+            p += sentence(  # (and its distance to the goal)
                 ", it freezes ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
-                " along the line (",
-                T_EQ,
-                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
-                "), joint ",
+                " along the line",
+                *(
+                    ()
+                    if told
+                    else (" (", T_EQ, self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"), ")")
+                ),
+                ", joint ",
                 self.ev(t, ivkc, "stall", "joint", fmt="d"),
-                " at its stop zone's edge",
+                " at its stop zone",
             )
             p += sentence(".")
             sec.paragraphs.append(p)
