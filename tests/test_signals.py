@@ -207,6 +207,29 @@ def test_a_signal_whose_exception_is_dropped_still_stops_the_command(tmp_path, m
     assert snapshot(out) == before and [p.name for p in tmp_path.iterdir()] == ["out"]
 
 
+def test_a_failure_after_a_dropped_signal_is_reported_as_the_signal(monkeypatch, capsys):
+    """A SIGTERM whose exception Python dropped (in logging's fork handler) stopped the workers;
+    the pool then broke and the command used to end in 'internal error: BrokenProcessPool' with
+    status 1. A failure after a recorded signal is the signal's doing: 143, one line."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from emdm.cli.boundary import run_command
+    from emdm.errors import request_stop
+
+    def command() -> int:
+        request_stop(signal.SIGTERM)  # as the handler does before its exception is dropped
+        raise BrokenProcessPool("A process in the process pool was terminated abruptly")
+
+    assert run_command(command) == 143
+    assert capsys.readouterr().err == "emdm: terminated (SIGTERM); nothing was written\n"
+
+    def failing() -> int:  # without a signal, a failure stays what it is
+        raise BrokenProcessPool("gone")
+
+    assert run_command(failing) == 1
+    assert "internal error: BrokenProcessPool" in capsys.readouterr().err
+
+
 def test_a_second_signal_stops_at_once(tmp_path):
     """A command that does not stop on the first signal (its exception dropped, a cleanup that
     hangs) stops on the second, with its status and one line."""

@@ -306,8 +306,12 @@ def run_command(command: Callable[[], int], *, final: bool = False) -> int:
                     sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
                 check_stop()  # a signal whose exception was dropped still stops the command
                 return status
-            except BaseException:
+            except BaseException as exc:
                 _close_dask()
+                if not isinstance(exc, KeyboardInterrupt):
+                    # a signal whose exception was dropped (in a finalizer, a fork handler)
+                    # stopped the workers; the failure that followed is the signal's doing
+                    check_stop()
                 raise
             finally:
                 clear_stop()  # the record is this command's (library calls check it too)
