@@ -390,7 +390,10 @@ def workspace_figure(
         )
         for run in runs:
             st = _style(run, medium)
-            ax.plot(run.p[:, 0], run.p[:, 1], **st)
+            # above the dotted straight line it may run along (C-IVKC's stalled path does)
+            ax.plot(
+                run.p[:, 0], run.p[:, 1], **{**st, "linewidth": 1.4 * st["linewidth"]}, zorder=3
+            )
             if not run.reached:
                 ax.plot(
                     *run.p[-1],
@@ -975,7 +978,7 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
     height = 2.3 if medium is SLIDE else 1.2
     width = medium.wide if medium is SLIDE else medium.column
     with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(1, 2 if medium is SLIDE else 3)
+        axes = fig.subplots(1, 2 if medium is SLIDE else 4)
         ax_e, ax_m = axes[0], axes[1]
         for run in runs:
             st = _style(run, medium)
@@ -1005,10 +1008,20 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
                     fontsize=medium.tiny,
                 )
             ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))
+            ax_gap = axes[3]  # what the slack gives up: the tracking gap, as Fig. 5's (d)
+            for run in runs:
+                ax_gap.semilogy(
+                    run.t[:-1],
+                    np.maximum(tracking_gap(run), GAP_FLOOR),
+                    **{**_style(run, medium), "label": None},
+                )
+            ax_gap.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)", labelpad=1)
+            ax_gap.yaxis.set_major_locator(LogLocator(numticks=3))
+            ax_gap.yaxis.set_minor_locator(NullLocator())
             ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
             ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
             ax_q.set_ylabel(r"$q$ (rad)", labelpad=1)
-            for ax, letter in zip(axes, ("(a)", "(b)", "(c)"), strict=True):  # as the pairs'
+            for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)"), strict=True):  # as the pairs'
                 ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
             handles, labels = ax_e.get_legend_handles_labels()  # above: no panel has room
             fig.legend(handles, labels, loc="outside upper center", ncols=2, frameon=False)

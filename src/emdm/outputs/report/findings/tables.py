@@ -162,7 +162,8 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); E3's are the nominal weights at its ",
+                "brackets (stall: goal not reached); for E3 they give the nominal weights, also "
+                "at its ",
                 DT,
                 " (",
                 Ref("sec", "t1-pareto"),

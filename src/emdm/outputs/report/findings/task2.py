@@ -374,7 +374,9 @@ class Task2(Claims):
                 Math("t", "<i>t</i>"),
                 ", (b) ",
                 M_SYM,
-                ", (c) joint positions and limits.",
+                ", (c) joint positions and limits, (d) tracking gap as in ",
+                Ref("fig", "t2-c"),
+                "(d).",
             ),
         )
         if self.has_figure(shown):
