@@ -248,7 +248,7 @@ def pair_figure(
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
         ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
         if ax_gap is not None:
-            ax_gap.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)", labelpad=1)
+            ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
         for ax in upper_axes:
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
@@ -1015,7 +1015,7 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
                     np.maximum(tracking_gap(run), GAP_FLOOR),
                     **{**_style(run, medium), "label": None},
                 )
-            ax_gap.set_ylabel(r"$\|J\dot q-v_d\|$ (m/s)", labelpad=1)
+            ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
             ax_gap.yaxis.set_major_locator(LogLocator(numticks=3))
             ax_gap.yaxis.set_minor_locator(NullLocator())
             ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)

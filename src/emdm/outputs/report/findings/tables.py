@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, sentence
+from ..trace import Math, Sentence, sentence
 from .base import (
     C_S,
     DT,
@@ -82,6 +82,14 @@ class Tables(Claims):
         for s in sections:
             if s.key == "task1":
                 s.tables.append("outcomes")
+
+    def e3_step(self) -> Sentence:
+        """E3's time step, as its row writes it (``Δt/5``)."""
+        runs = self.rec.grids.get("UC-EMDM", [])
+        finer = next((r.finer_dt for r in runs if not r.reached and r.finer_dt), None)
+        if not finer or "dt" not in finer:
+            return sentence(DT)
+        return sentence(DT, f"/{self.rec.scenarios['task1'].motion.dt / finer['dt']:.0f}")
 
     def e3_row(self) -> list[Sentence] | None:
         """Table II's E3: the first weight setting of the grid that misses the goal, re-run with
@@ -162,12 +170,9 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); for E3 they give the nominal weights, also "
-                "at its ",
-                DT,
-                " (",
-                Ref("sec", "t1-pareto"),
-                ").",
+                "brackets (stall: goal not reached); E3's: the nominal weights at the same ",
+                *self.e3_step(),
+                ".",
             ),
             [
                 sentence("run"),
