@@ -122,12 +122,8 @@ class Tables(Claims):
                     ")",
                 )
             )
-        slower = self.rec.scenarios["task1"].motion.dt / finer["dt"]
         change = sentence(
-            *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")),
-            " at ",
-            DT,
-            f"/{slower:.0f}",
+            *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")), " at ", *self.e3_step()
         )
         return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
 
