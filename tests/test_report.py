@@ -16,6 +16,7 @@ from conftest import headless_chromium
 
 import emdm
 from emdm.outputs.report import format_value
+from emdm.outputs.report.config import FREE_SLACK
 from emdm.outputs.report.render import compile_documents, document, latex_environment
 from emdm.outputs.report.trace import expected_text, number_html, render_latex
 
@@ -144,7 +145,11 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert stall and stall["joint"] == 2 and stall["distance_to_stop"] < 1e-6
     assert events["geometry"]["line_blocked"]
     evidence = json.loads((root / "data" / "evidence.json").read_text())["runs"]
-    assert evidence["t2-c-ivkc-slack-policy"]["runs"]["C-IVKC"]["reached"]
+    assert evidence["t2-c-slack-policy"]["runs"]["C-IVKC"]["reached"]
+    # E4 frees C-EMDM's slack too: its bound lifted to one the run stays far from
+    e4 = evidence["t2-c-slack-policy"]
+    assert e4["overrides"]["slack.max"] == [FREE_SLACK, FREE_SLACK]
+    assert 0 < e4["runs"]["C-EMDM"]["max_abs_slack"] < 0.01 * FREE_SLACK
     assert evidence["t1-uc-no-manip"]["reference"]["max_abs_qd_difference"] < 1e-12
     assert evidence["t1-c-slack-policy"]["pair"]["coincide_steps"] == 0
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
@@ -323,6 +328,12 @@ def test_limits_and_pair_events_per_joint_and_over_a_common_window():
     assert lim["excess_by_joint"] == [max(float(x), 0.0) for x in over]
     assert max(lim["excess_by_joint"]) == lim["max_excess"] > 0
     assert explain.limits(a)["excess_by_joint"] == [0.0, 0.0]  # C-: within the limits
+    # a pinned episode names its first and last step on the bound, as the CSV's rows show them
+    pin = explain.pinned(a)[0]
+    j, side = pin["joint"] - 1, 1 if pin["side"] == "upper" else -1
+    k0, k1 = np.searchsorted(a.t, [pin["t0"], pin["t_last"]])
+    assert np.all(a.active[k0 : k1 + 1, j] == side) and k1 - k0 + 1 == pin["steps"]
+    assert a.active[k1 + 1, j] != side and pin["t1"] == a.t[k1 + 1]
 
 
 def test_a_paper_that_does_not_compile_replaces_nothing(
@@ -393,7 +404,7 @@ def test_a_renamed_record_field_stops_the_story_before_any_sentence(quick_report
     records = Records.load(Data(root))
     assert records.outcomes["task1"]["C-EMDM"].reached is True
     assert records.pairs["task2"]["C"].common_until_t > 0
-    assert records.evidence["t2-c-ivkc-slack-policy"].runs["C-IVKC"]["reached"] is True
+    assert records.evidence["t2-c-slack-policy"].runs["C-IVKC"]["reached"] is True
     # the solver labs and Task 1's Pareto records are typed too (fronts at k = 0 first)
     assert records.fronts["UC-EMDM"][0].k == 0 and records.fronts["C-EMDM"][0].degenerate
     assert records.grids["UC-EMDM"] and records.labs["task2-lab-C-EMDM"].solvers

@@ -186,8 +186,8 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 
 FAR_BEYOND = 1.5
-"""A joint whose speeds go beyond this multiple of its limit is drawn on an axis linear within the
-limits and logarithmic beyond, its peak ticked on the right (:func:`pair_figure`)."""
+"""A joint whose speeds go beyond this multiple of its limit has its peaks beyond the limits
+ticked on the right (:func:`pair_figure`)."""
 
 
 GAP_FLOOR = 1e-6
@@ -273,18 +273,13 @@ def pair_figure(
             qd_axes[j].set_ylabel(rf"$\dot q_{j + 1}$", labelpad=1)
             for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
                 qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
-            top = max(float(np.abs(r.qd[:, j]).max()) if r.steps else 0.0 for r in runs)
+            high = max(float(r.qd[:, j].max()) if r.steps else 0.0 for r in runs)
+            low = min(float(r.qd[:, j].min()) if r.steps else 0.0 for r in runs)
+            top = max(high, -low)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
-            span = max(top, limit) * 1.15
             far = top > FAR_BEYOND * limit
-            if far:
-                # linear within the limits (the constrained runs' detail, the limit band),
-                # logarithmic beyond (the unconstrained peaks), the log part shaded grey
-                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.0)
-                span = top * 1.6
-                for a, b in ((limit, span), (-span, -limit)):
-                    qd_axes[j].axhspan(a, b, color="#000000", alpha=0.06, linewidth=0, zorder=0)
-            qd_axes[j].set_ylim(-span, span)
+            # linear throughout: the limits dotted, a run beyond them seen as far as it goes
+            qd_axes[j].set_ylim(1.15 * min(low, -limit), 1.15 * max(high, limit))
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
@@ -295,14 +290,18 @@ def pair_figure(
             # rounder tick below it read as the axis' end, the curve "cut off")
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:
-                peak = float(f"{top:.2g}")
+            if far:  # the peaks beyond the limits, each signed as it was reached
+                peaks = [float(f"{v:.2g}") for v in (low, high) if abs(v) > FAR_BEYOND * limit]
                 right = qd_axes[j].secondary_yaxis("right")
-                right.set_yticks([-peak, peak], [f"{-peak:g}", f"{peak:g}"])
+                right.set_yticks(peaks, [f"{v:g}" for v in peaks])
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 right.tick_params(pad=1)
-            for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
-                a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
+            lo_qd, hi_qd = qd_axes[j].get_ylim()
+            qd_ticks = [-qd_tick, qd_tick]
+            if 2 * qd_tick < 0.3 * (hi_qd - lo_qd):  # the two labels would touch: the limit on
+                qd_ticks = [qd_tick if high >= -low else -qd_tick]  # the peak's side alone
+            for a, ticks in ((ax, [-q_tick, q_tick]), (qd_axes[j], qd_ticks)):
+                a.set_yticks(ticks, [f"{v:g}" for v in ticks])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
@@ -583,7 +582,7 @@ def pareto_figure(
     weight setting; the settings that fail to reach are named)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (1.0 * len(names) + 0.2) if medium is PAPER else 2.7
+    height = (0.92 * len(names) + 0.2) if medium is PAPER else 2.7
     whole = len(steps)
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)

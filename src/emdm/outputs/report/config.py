@@ -142,6 +142,10 @@ class Evidence:
     reference: str | None = None
 
 
+FREE_SLACK = 1e3
+"""m/s: the slack bound of a "free" slack where the program has a bounded one (Task 2's
+C-EMDM). Scenarios take finite bounds only; a test checks that no evidence run comes near it."""
+
 EVIDENCE = (
     Evidence(
         "t1-uc-no-manip", "task1", (Name.UC_EMDM,), {"weights.manipulability": 0.0}, Name.UC_IVKC
@@ -152,8 +156,15 @@ EVIDENCE = (
         (Name.C_IVKC, Name.C_EMDM),
         {"controller.on_infeasible": "slack"},
     ),
-    Evidence(
-        "t2-c-ivkc-slack-policy", "task2", (Name.C_IVKC,), {"controller.on_infeasible": "slack"}
+    Evidence(  # both with a free slack: C-EMDM's bound lifted to one no run comes near
+        "t2-c-slack-policy",
+        "task2",
+        (Name.C_IVKC, Name.C_EMDM),
+        {
+            "controller.on_infeasible": "slack",
+            "slack.min": [-FREE_SLACK, -FREE_SLACK],
+            "slack.max": [FREE_SLACK, FREE_SLACK],
+        },
     ),
     Evidence(
         "t2-c-ivkc-wide-limits", "task2", (Name.C_IVKC,), {"arm.q_min": -3.0, "arm.q_max": 3.0}

@@ -103,7 +103,8 @@ def pinned(run: Run) -> list[dict[str, Any]]:
                             "side": side,
                             "kind": kind,
                             "t0": float(run.t[a]),
-                            "t1": float(run.t[b + 1]),
+                            "t1": float(run.t[b + 1]),  # the last command's end
+                            "t_last": float(run.t[b]),  # the last step on the bound
                             "steps": b - a + 1,
                             "duration": float((b - a + 1) * dt),
                         }

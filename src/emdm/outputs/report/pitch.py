@@ -134,6 +134,11 @@ class Pitch:
         ev: list[Sentence] = []
         if s.ivkc_with_slack():  # (the evidence labels are the paper's, not the talk's)
             ev.append(cap(s.ivkc_with_slack(label=False)))
+            e4 = s.evid("t2-c-slack-policy", "runs", Name.C_EMDM)
+            if e4.get("reached"):  # the same freedom for both: C-EMDM's time beside it
+                ev[-1] += sentence(
+                    ", C-EMDM with one in ", s.evid_goal("t2-c-slack-policy", Name.C_EMDM)
+                )
         if s.emdm_without_term():
             ev.append(cap(s.emdm_without_term(label=False)))
         e7 = s.evid("t2-c-emdm-tight-slack", "runs", Name.C_EMDM)

@@ -345,29 +345,15 @@ class StoryBase:
         )
         for metric, better in self._policy_terms():
             p += sentence(words[metric][0 if better else 1])
-        e2r = ("data/evidence.json", "runs", e2, "runs")
-        ivkc = Name.C_IVKC
-        if self.evid(e2, "runs", ivkc, "reached"):  # the pair under the slack policy
-            p += sentence(
-                ". With the slack, C-EMDM's mean ",
-                M_SYM,
-                " differs from C-IVKC's by ",
-                self.d.pct(
-                    (*e2r, emdm, "mean_manipulability"), (*e2r, ivkc, "mean_manipulability")
-                ),
-                " for ",
-                self.d.pct((*e2r, emdm, "total_effort"), (*e2r, ivkc, "total_effort")),
-                " effort (",
-                self.pct("task1", emdm, ivkc, "mean_manipulability"),
-                " for ",
-                self.pct("task1", emdm, ivkc, "total_effort"),
-                " under scaling)",
-            )
         p += sentence(
             ". Scaling keeps a straighter path: ",
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
+            ", where the slack, up to ",
+            self.evidn(e2, "runs", emdm, "max_abs_slack", fmt=".2f", unit="m/s"),
+            ", turns the tip off ",
+            Math("v_d", "<i>v</i><sub>d</sub>"),
             ".",
         )
         return p
@@ -394,14 +380,14 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                ", log beyond them (grey; peak on the right)" if far else "",
+                " (peaks beyond them ticked on the right)" if far else "",
             )
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
-        """Whether a pair figure of ``controllers`` draws a joint's speeds on its logarithmic
-        axis beyond the limits (:data:`~emdm.outputs.paper_figures.FAR_BEYOND`): a run's peak
-        speed far beyond the joints' smallest limit."""
+        """Whether a pair figure of ``controllers`` ticks a joint's peak speeds beyond the
+        limits (:data:`~emdm.outputs.paper_figures.FAR_BEYOND`): a run's peak speed far beyond
+        the joints' smallest limit."""
         limit = float(np.min(np.abs(self.rec.scenarios[task].arm.qd_max)))
         return any(self.mv(task, c, "max_abs_qd") > FAR_BEYOND * limit for c in controllers)
 

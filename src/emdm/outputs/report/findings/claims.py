@@ -45,14 +45,22 @@ class Claims(StoryBase):
     def ivkc_with_slack(self, label: bool = True) -> Sentence:
         """E4, the like-for-like Task 2 comparison: C-IVKC given a free slack instead of scaling
         (empty when that run did not arrive; ``label``: name the evidence run)."""
-        key: EvidenceKey = "t2-c-ivkc-slack-policy"
+        key: EvidenceKey = "t2-c-slack-policy"
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
-        return sentence(  # free: unbounded (Section II), unlike C-EMDM's slack
+        return sentence(  # free: unbounded (Section II), as C-EMDM's is in the same run
             "with a free slack, C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
             " (E4)" if label else "",
         )
+
+    def ivkc_first_with_slack(self) -> bool:
+        """In E4, where both have a free slack, C-IVKC arrives before C-EMDM."""
+        key: EvidenceKey = "t2-c-slack-policy"
+        i, e = (self.evid(key, "runs", c) for c in (Name.C_IVKC, Name.C_EMDM))
+        if not i.get("reached"):
+            return False
+        return not e.get("reached") or i["time_to_goal"] < e["time_to_goal"]
 
     def emdm_without_term(self, label: bool = True) -> Sentence:
         """E6: Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner)."""

@@ -162,7 +162,7 @@ class PairEvents:
 EvidenceKey = Literal[
     "t1-uc-no-manip",
     "t1-c-slack-policy",
-    "t2-c-ivkc-slack-policy",
+    "t2-c-slack-policy",
     "t2-c-ivkc-wide-limits",
     "t2-c-emdm-no-manip",
     "t2-c-emdm-tight-slack",

@@ -142,11 +142,14 @@ class Task1(StoryBase):
                 if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
                 else self.outcome(t, ivkc)
             ),
+            ", on paths at most ",
+            self.pairn(t, "C", "max_path_gap", ".4f", "m"),
+            " apart",
         )
         scaled = self.evv(t, emdm, "scaling")
         if scaled:
             answer += sentence(
-                ", later than the UC pair because the task is scaled for the first ",
+                ", later than the UC pair as the task is scaled for the first ",
                 self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
             )
         answer += sentence(".")
@@ -156,17 +159,19 @@ class Task1(StoryBase):
         )
         sec.figures.append(self.figure("t1-c", "figures/task1-C", self.pair_caption(t, "C")))
         same = self.pair(t, "C", "coincide_steps")
-        if same:
+        # every common step is one where the joints at their bounds leave at most two free
+        # joints, which the two task equations fix: the reason is stated only when it holds
+        if same and self.pair(t, "C", "coincide_determined_steps") == same:
             p = sentence(
                 "The first ",
                 self.pairn(t, "C", "coincide_steps", "d"),
                 " commands are identical (to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                "): with two joints at their bounds the task fixes the third, so each program "
-                "allows one command whatever its objective (",
+                "): on each, the joints at their bounds and the task leave a single admissible "
+                "command, whatever the objective (",
             )
-            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " scaled)")
+            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " of them scaled)")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(
@@ -223,19 +228,7 @@ class Task1(StoryBase):
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
             ". ",
         )
-        shares = [
-            (info.nominal_E_log_pct, i)
-            for i, info in enumerate(self.rec.fronts["UC-EMDM"])
-            if info.nominal_E_log_pct is not None
-        ]
-        if shares:
-            answer += sentence(
-                "On every UC-EMDM front the nominal ratio lies in the lowest ",
-                self.frontn("UC-EMDM", max(shares)[1], "nominal_E_log_pct", ".0f"),
-                "% of the effort range (log scale). It costs ",
-            )
-        else:
-            answer += sentence("The nominal ratio costs ")
+        answer += sentence("The nominal ratio costs ")
         e0 = self.front("UC-EMDM", 0, "zero_E")
         en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(

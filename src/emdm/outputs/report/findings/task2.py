@@ -6,7 +6,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Num, Ref, Sentence, sentence, traced
+from ..trace import Math, Num, Ref, Segment, Sentence, sentence, traced
 from .base import (
     ALPHA,
     C_S,
@@ -20,9 +20,27 @@ from .base import (
     q,
 )
 from .claims import Claims, cap
+from .records import EvidenceKey
 
 
 class Task2(Claims):
+    def flip_delayed(self) -> tuple[Segment | str, ...]:
+        """``, a crossing the term delays (to t = B s from A s)``: the nominal C-EMDM flips its
+        elbow later than E6, which runs without the dexterity term (empty otherwise)."""
+        key: EvidenceKey = "t2-c-emdm-no-manip"
+        emdm = Name.C_EMDM
+        mine = self.evv("task2", emdm, "singular", "elbow_flips")
+        e6 = self.evid(key, "runs", emdm, "events", "singular", "elbow_flips")
+        if not mine or not e6 or e6[0] >= mine[0]:
+            return ()
+        return (
+            ", a crossing the term delays (to ",
+            self.ev("task2", emdm, "singular", "elbow_flips", 0, fmt=".2f"),
+            " from ",
+            self.evidn(key, "runs", emdm, "events", "singular", "elbow_flips", 0, fmt=".2f"),
+            " s)",
+        )
+
     # ------------------------------------------------------------------ Task 2
     def task2_c(self) -> Section:
         t = "task2"
@@ -72,13 +90,17 @@ class Task2(Claims):
                 )
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
                 answer += sentence(". ") + cap(self.ivkc_with_slack())
-                e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "time_to_goal")
-                if e4 < self.mv(t, emdm, "time_to_goal"):  # the stall is the policy's: say so
-                    answer += sentence(f", before {emdm}")
-                    m4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc, "mean_manipulability")
-                    if m4 > self.mv(t, emdm, "mean_manipulability"):  # like for like, in full
-                        answer += sentence(  # (both means are in Table I's rows)
-                            " and with a higher mean ", M_SYM, " (", Ref("tab", "outcomes"), ")"
+                key: EvidenceKey = "t2-c-slack-policy"
+                if self.ivkc_first_with_slack():  # the stall is the policy's: say so
+                    answer += sentence(
+                        f", before {emdm} with a free slack too (",
+                        self.evid_goal(key, emdm),
+                        ")",
+                    )
+                    m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
+                    if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
+                        answer += sentence(  # (both means are in Table II's rows)
+                            " and with a higher mean ", M_SYM, " (", Ref("tab", "evidence"), ")"
                         )
                     answer += sentence(": task scaling causes the stall")
             answer += sentence(".")
@@ -185,9 +207,15 @@ class Task2(Claims):
                     if told
                     else (" (", T_EQ, self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"), ")")
                 ),
-                ", joint ",
-                self.ev(t, ivkc, "stall", "joint", fmt="d"),
-                " at its stop zone",
+                *(  # (the joint already named as pinned needs no second mention)
+                    ()
+                    if pins and pins[0]["joint"] == self.evv(t, ivkc, "stall", "joint")
+                    else (
+                        ", joint ",
+                        self.ev(t, ivkc, "stall", "joint", fmt="d"),
+                        " at its stop zone",
+                    )
+                ),
             )
             p += sentence(".")
             sec.paragraphs.append(p)
@@ -211,7 +239,7 @@ class Task2(Claims):
                     f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound from ",
                     self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
                     " to ",
-                    self.ev(t, emdm, "pinned", 0, "t1", fmt=".2f", unit="s"),
+                    self.ev(t, emdm, "pinned", 0, "t_last", fmt=".2f", unit="s"),
                     " while the arm stretches; ",
                 )
             flips = self.evv(t, emdm, "singular", "elbow_flips")
@@ -229,11 +257,9 @@ class Task2(Claims):
             sec.paragraphs.append(p)
         # evidence (their numbers are in the evidence table)
         p = sentence()
-        e4 = self.evid("t2-c-ivkc-slack-policy", "runs", ivkc)
+        e4 = self.evid("t2-c-slack-policy", "runs", ivkc)
         e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
-        told = bool(self.ivkc_with_slack()) and e4["time_to_goal"] < self.mv(
-            t, emdm, "time_to_goal"
-        )
+        told = bool(self.ivkc_with_slack()) and self.ivkc_first_with_slack()
         if not reached_i and told and e5.get("reached"):  # E4 and the stall's cause are answered
             p += sentence(
                 "With the joint limits widened to ",
@@ -285,11 +311,11 @@ class Task2(Claims):
                                     "flips the elbow through ",
                                     M_SYM,
                                     " = 0",
+                                    *self.flip_delayed(),
                                 )
                                 if self.elbow_flip_forced(t)
                                 else ()
                             ),
-                            "; the slack, not the term, carries it to the goal",
                         )
                         if higher
                         else (
@@ -305,7 +331,8 @@ class Task2(Claims):
             e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
             if not e7.get("reached", True):
                 p += sentence(
-                    "; with its slack bounded by ",
+                    "; with ",
+                    Math(r"|\delta|\leq", "|δ| ≤ "),
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
                     " it stalls (E7)",
                 )
@@ -346,13 +373,7 @@ class Task2(Claims):
                     Num(within[1].text, within[1].src, within[1].fmt, unit="m²"),
                 )
             p += sentence(": its route crosses ", M_SYM, " = 0, while ", ivkc, " stands still")
-        p += sentence(
-            ". Its effort is ",
-            self.mt(t, emdm, "total_effort", ".2f"),
-            " against ",
-            self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
-            ".",
-        )
+        p += sentence(".")  # (the efforts are in Table I: the brief asks for m here)
         sec.paragraphs.append(p)
         sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
         return sec
@@ -518,15 +539,15 @@ class Task2(Claims):
             p += sentence(
                 "The reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                ", yet the active set needs few iterations",
-                " and no fallback" if self.mv(t, emdm, "fallback_steps") == 0 else "",
-                ". Warm-started it takes a median of ",
+                ", yet the active set needs ",
+                "no fallback and, " if self.mv(t, emdm, "fallback_steps") == 0 else "",
+                "warm-started, a median of ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
-                ", cold ",
+                " iterations (cold ",
                 self.sn("task2-lab-C-EMDM", "active-set", "median_iterations", ".4g"),
-                " (",
+                ", ",
                 Ref("tab", "solvers"),
                 ").",
             )
