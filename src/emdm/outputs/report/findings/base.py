@@ -20,7 +20,7 @@ import numpy as np
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
-from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND
+from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -39,7 +39,10 @@ from .records import (
 )
 
 EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
-"""The decade the paper's tracking-gap axis is floored at (its caption says it)."""
+"""The decade the pair figures' effort axis is floored at (Fig. 1's caption says it)."""
+
+GAP_FLOOR_EXP = round(math.log10(GAP_FLOOR))
+"""The decade the tracking-gap axis is floored at (Fig. 5's caption says it)."""
 
 # ---------------------------------------------------------------------------- inline math
 ALPHA = Math(r"\alpha", "α")
@@ -425,6 +428,8 @@ class StoryBase:
                 Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
                 " (the slack, or the scaled-off ",
                 Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
+                "; log, floored at ",
+                Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
                 "), joints in (e), (f)",
             )
         for note in notes:

@@ -267,7 +267,7 @@ class Solvers(StoryBase):
             colsep=2.0,  # the widest cells: a 3.4e-8 gap and a 0.099 violation
         )
         for family, title in (
-            ("exact", "exact QP"),
+            ("exact", "QP methods"),
             ("gradient", "gradient-based and first-order (ADMM)"),
             ("gradient-free", "gradient-free"),
         ):
