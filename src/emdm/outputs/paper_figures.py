@@ -298,7 +298,7 @@ def pair_figure(
                 right.tick_params(pad=1)
             lo_qd, hi_qd = qd_axes[j].get_ylim()
             qd_ticks = [-qd_tick, qd_tick]
-            if 2 * qd_tick < 0.3 * (hi_qd - lo_qd):  # the two labels would touch: the limit on
+            if 2 * qd_tick < 0.5 * (hi_qd - lo_qd):  # the two labels would touch: the limit on
                 qd_ticks = [qd_tick if high >= -low else -qd_tick]  # the peak's side alone
             for a, ticks in ((ax, [-q_tick, q_tick]), (qd_axes[j], qd_ticks)):
                 a.set_yticks(ticks, [f"{v:g}" for v in ticks])
@@ -996,14 +996,15 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
             for run in runs:
                 ax_q.plot(run.t, run.q, **{**_style(run, medium), "label": None})
             first = runs[0]
-            for j in range(first.q.shape[1]):  # name each joint just below where its first run
-                ax_q.annotate(  # ends (the limit lines run above the ends)
+            for j in range(first.q.shape[1]):  # name each joint where its first run ends, on
+                end = float(first.q[-1, j])  # the side of 0: the limit lines and the time
+                ax_q.annotate(  # axis' ticks lie on the other
                     rf"$q_{j + 1}$",
-                    (float(first.t[-1]), float(first.q[-1, j])),
-                    xytext=(-1, -2),
+                    (float(first.t[-1]), end),
+                    xytext=(-1, -2 if end > 0 else 2),
                     textcoords="offset points",
                     ha="right",
-                    va="top",
+                    va="top" if end > 0 else "bottom",
                     fontsize=medium.tiny,
                 )
             ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))

@@ -76,7 +76,9 @@ class Solvers(StoryBase):
                     "; " if i < len(exact_free) - 1 else "",
                 )
             answer += (
-                sentence(", and ") + self.overruns(lab, exact_free, rows, named=False)
+                # (its times are Python's: the evaluations, not the times, compare methods)
+                sentence(", and, run from Python, ")
+                + self.overruns(lab, exact_free, rows, named=False)
                 if len(exact_free) == 1
                 else sentence("; ") + self.overruns(lab, exact_free, rows)
             )
@@ -247,7 +249,9 @@ class Solvers(StoryBase):
                 " programs (evenly spaced, with the least dexterous). ms: median time from "
                 "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
                 "evaluations; gap, viol.: "
-                "largest gap to the optimum, bound violation (0: below ",
+                "largest ",
+                Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
+                " and bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
