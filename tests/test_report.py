@@ -519,3 +519,35 @@ def test_the_whole_run_sweep_is_read_against_the_nominal_ratio(quick_report, tmp
     text = render_latex(said)
     assert ("levels off" in text) == (gain < 0.01)
     assert f"{100 * gain:+.1f}" in text
+
+
+def test_the_parameters_sentence_states_one_value_where_every_joint_shares_it():
+    """Section II gives one |q_j| bound, one damper (i_j, s_j, K_safe), one q_dot_max per task,
+    one K_p and one slack bound: true only while every joint (and axis) shares them."""
+    for task in ("task1", "task2"):
+        sc = emdm.load_scenario(task)
+        arm, damper, motion = sc.arm, sc.damper, sc.motion
+        for values in (
+            arm.q_max,
+            -arm.q_min,
+            arm.qd_max,
+            -arm.qd_min,
+            damper.influence,
+            damper.stop,
+            damper.gain,
+            motion.kp,
+            sc.slack.max,
+            -sc.slack.min,
+        ):
+            assert np.all(np.asarray(values) == np.asarray(values)[0]), (task, values)
+        if task == "task2":  # the bounds, the damper, K_p and the slack are both tasks' own
+            one = emdm.load_scenario("task1")
+            assert arm.q_max[0] == one.arm.q_max[0] and damper.stop[0] == one.damper.stop[0]
+            assert damper.influence[0] == one.damper.influence[0]
+            assert damper.gain[0] == one.damper.gain[0] and motion.kp[0] == one.motion.kp[0]
+            assert sc.slack.max[0] == one.slack.max[0] and sc.weights == one.weights
+            assert (motion.dt, motion.tolerance, motion.max_time) == (
+                one.motion.dt,
+                one.motion.tolerance,
+                one.motion.max_time,
+            )
