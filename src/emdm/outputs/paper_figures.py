@@ -301,7 +301,8 @@ def pair_figure(
             if 2 * qd_tick < 0.5 * (hi_qd - lo_qd):  # the two labels would touch: the limit on
                 qd_ticks = [qd_tick if high >= -low else -qd_tick]  # the peak's side alone
             for a, ticks in ((ax, [-q_tick, q_tick]), (qd_axes[j], qd_ticks)):
-                a.set_yticks(ticks, [f"{v:g}" for v in ticks])
+                # one tick for two symmetric limits says so: "±1"
+                a.set_yticks(ticks, [f"{v:g}" if len(ticks) > 1 else f"±{abs(v):g}" for v in ticks])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)

@@ -113,7 +113,7 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "Task scaling's only gain is a straighter path: in Task 1 a slack makes C-EMDM ",
+                "Here task scaling's only gain is a straighter path: in Task 1 a slack makes C-EMDM ",
                 listed(gains),
                 " (E2)",
                 ", and in Task 2 C-IVKC arrives with a free one (E4)"

@@ -192,7 +192,7 @@ class Solvers(StoryBase):
         else:
             p += sentence("every solver reaches the goal at the same time. ")
         p += sentence(  # how the lab's times were taken: Table III's caption
-            "In the compiled loop the warm-started active set solves in ",
+            "Compiled and warm-started, the active set takes ",
             self.d.us("data/task2/metrics.json", "controllers", "C-EMDM", "median_solve_time"),
         )
         p += sentence(".")
