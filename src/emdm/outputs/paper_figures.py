@@ -978,7 +978,7 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
     height = 2.3 if medium is SLIDE else 1.2
     width = medium.wide if medium is SLIDE else medium.column
     with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(1, 2 if medium is SLIDE else 4)
+        axes = fig.subplots(1, 2 if medium is SLIDE else 5)
         ax_e, ax_m = axes[0], axes[1]
         for run in runs:
             st = _style(run, medium)
@@ -1009,7 +1009,13 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
                     fontsize=medium.tiny,
                 )
             ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))
-            ax_gap = axes[3]  # what the slack gives up: the tracking gap, as Fig. 5's (d)
+            ax_qd = axes[3]  # the speeds the text quotes (peaks), against their limits
+            for bound in {*map(float, arm.qd_min), *map(float, arm.qd_max)}:
+                ax_qd.axhline(bound, color="black", linewidth=0.6, linestyle=":")
+            for run in runs:
+                ax_qd.plot(run.t[:-1], run.qd, **{**_style(run, medium), "label": None})
+            ax_qd.set_ylabel(r"$\dot q$ (rad/s)", labelpad=1)
+            ax_gap = axes[4]  # what the slack gives up: the tracking gap, as Fig. 5's (d)
             for run in runs:
                 ax_gap.semilogy(
                     run.t[:-1],
@@ -1022,7 +1028,7 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
             ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
             ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
             ax_q.set_ylabel(r"$q$ (rad)", labelpad=1)
-            for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)"), strict=True):  # as the pairs'
+            for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)", "(e)"), strict=True):
                 ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
             handles, labels = ax_e.get_legend_handles_labels()  # above: no panel has room
             fig.legend(handles, labels, loc="outside upper center", ncols=2, frameon=False)

@@ -386,7 +386,7 @@ class Task2(Claims):
             sec.figures.append(
                 self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
             )
-        # the paper's: what the slack changes, effort and m, in two compact panels
+        # the paper's: what the slack changes, in five compact panels
         shown = self.figure(
             "t2-uc-effort",
             "figures/task2-UC-effort",
@@ -395,7 +395,7 @@ class Task2(Claims):
                 Math("t", "<i>t</i>"),
                 ", (b) ",
                 M_SYM,
-                ", (c) joint positions and limits, (d) tracking gap as in ",
+                ", (c) joint positions, (d) joint speeds, limits drawn, (e) tracking gap as in ",
                 Ref("fig", "t2-c"),
                 "(d).",
             ),
