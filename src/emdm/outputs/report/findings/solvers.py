@@ -88,7 +88,7 @@ class Solvers(StoryBase):
                 answer += sentence(
                     f". SLSQP on that reduced program ({LIKE_FOR_LIKE}) needs ",
                     self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                    ": the gap is the method's, not the formulation's",
+                    ", so the many evaluations come from the method, not the reduced program",
                 )
             if inexact_free:
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]

@@ -450,7 +450,8 @@ class Task1(StoryBase):
                 ", the feasible point being the optimum",
             )
         p += sentence(
-            ". Those scaled steps, a single degenerate vertex, are Task 1's numerical challenge",
+            ". Those scaled steps are Task 1's numerical challenge: each admissible set is "
+            "one degenerate vertex",
         )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
