@@ -113,13 +113,13 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "Here task scaling's only gain is a straighter path: in Task 1 a slack makes C-EMDM ",
+                "Here task scaling's only gain is a straighter path. A slack makes C-EMDM ",
                 listed(gains),
-                " (E2)",
-                ", and in Task 2 C-IVKC arrives with a free one (E4)"
+                " in Task 1 (E2)",
+                ", and a free one lets C-IVKC arrive in Task 2 (E4)"
                 if self.ivkc_with_slack()
                 else "",
-                "; in these tasks, where the path does not matter, a slack was the better choice, "
+                ". Where the path does not matter, as here, a slack was the better choice, "
                 "though it turns the tip off ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",

@@ -80,10 +80,10 @@ class Task1(StoryBase):
         p = sentence(
             "Both programs impose ",
             Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so the end effector follows the same path (up to the Euler step's "
-            "second-order term); they differ in null-space motion alone: with ",
+            " exactly, so the end effector follows the same path, up to the Euler step's "
+            "second-order term. Only null-space motion differs: with ",
             W_M,
-            " = 0 (E1) ",
+            " = 0 (E1), ",
         )
         ref = self.evid("t1-uc-no-manip", "reference")
         if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
@@ -147,9 +147,10 @@ class Task1(StoryBase):
             " apart",
         )
         scaled = self.evv(t, emdm, "scaling")
-        if scaled:
+        times = [self.mv(t, c, "time_to_goal") for c in (*PAIRS["UC"], *PAIRS["C"])]
+        if scaled and None not in times and min(times[2:]) > max(times[:2]):
             answer += sentence(
-                ", later than the UC pair as the task is scaled for the first ",
+                ". Both trail the UC pair, because the task is scaled for the first ",
                 self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
             )
         answer += sentence(".")
@@ -165,13 +166,14 @@ class Task1(StoryBase):
             p = sentence(
                 "The first ",
                 self.pairn(t, "C", "coincide_steps", "d"),
-                " commands are identical (to ",
+                " commands, up to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                "): on each, the joints at their bounds and the task leave a single admissible "
-                "command, whatever the objective (",
+                ", are identical, and ",
+                self.pairn(t, "C", "coincide_scaled_steps", "d"),
+                " of them are scaled. On each, the joints at their bounds and the task admit only "
+                "one command, whatever the objective",
             )
-            p += sentence(self.pairn(t, "C", "coincide_scaled_steps", "d"), " of them scaled)")
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph's E2 says enough)
                 p += sentence(
@@ -294,9 +296,9 @@ class Task1(StoryBase):
                     *ks,
                     " every C-EMDM optimum has ",
                     MRATE,
-                    " < 0 (at most ",
+                    " < 0, at most ",
                     self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
-                    "): late in the run, within the joint bounds, ",
+                    ". Late in the run, within the joint bounds, ",
                     M_SYM,
                     " falls whatever the weights. ",
                 )
@@ -361,26 +363,31 @@ class Task1(StoryBase):
         gain = grid[best].mean_manipulability / grid[n].mean_manipulability - 1.0
         more: Sentence = (
             sentence(
-                "by at most ",
+                "add at most ",
                 self.d.pct(
                     (f, "runs", best, "mean_manipulability"),
                     (f, "runs", n, "mean_manipulability"),
                     fmt="+.1f",
                 ),
+                " to",
             )
             if gain > 0
-            else sentence("not at all")
+            else sentence("add nothing to")
         )
         return sentence(
             " Over whole runs (",
             Ref("fig", "pareto"),
             ", right) ",
-            *(("the mean ", M_SYM, " levels off at the nominal ratio: ") if gain < 0.01 else ()),
-            "larger ratios that still reach the goal raise UC-EMDM's mean ",
-            M_SYM,
-            " ",
+            *(
+                ("the mean ", M_SYM, " levels off at the nominal ratio. Larger")
+                if gain < 0.01
+                else ("larger",)
+            ),
+            " ratios that still arrive ",
             *more,
-            " but its effort from ",
+            " UC-EMDM's mean ",
+            M_SYM,
+            " but raise its effort from ",
             self.gridn("UC-EMDM", n, "total_effort", fmt=".3g"),
             " to ",
             self.gridn("UC-EMDM", dearest, "total_effort", fmt=".3g", unit="rad²/s"),
@@ -438,7 +445,7 @@ class Task1(StoryBase):
             ch = self.d.value(lab, "challenges", "solvers")
         if "median_iterations_scaled" in ch.get("active-set", {}):
             p += sentence(
-                "; on scaled steps it takes ",
+                ". Scaled steps take ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -447,7 +454,7 @@ class Task1(StoryBase):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
-                ", the feasible point being the optimum",
+                ", since the feasible point is the optimum",
             )
         p += sentence(
             ". Those scaled steps are Task 1's numerical challenge: each admissible set is "

@@ -25,7 +25,7 @@ from .records import EvidenceKey
 
 class Task2(Claims):
     def flip_delayed(self) -> tuple[Segment | str, ...]:
-        """``, a crossing the term delays (to t = B s from A s)``: the nominal C-EMDM flips its
+        """``, and the term delays that crossing from A to B s``: the nominal C-EMDM flips its
         elbow later than E6, which runs without the dexterity term (empty otherwise)."""
         key: EvidenceKey = "t2-c-emdm-no-manip"
         emdm = Name.C_EMDM
@@ -34,11 +34,10 @@ class Task2(Claims):
         if not mine or not e6 or e6[0] >= mine[0]:
             return ()
         return (
-            ", a crossing the term delays (to ",
-            self.ev("task2", emdm, "singular", "elbow_flips", 0, fmt=".2f"),
-            " from ",
+            ", and the term delays that crossing from ",
             self.evidn(key, "runs", emdm, "events", "singular", "elbow_flips", 0, fmt=".2f"),
-            " s)",
+            " to ",
+            self.ev("task2", emdm, "singular", "elbow_flips", 0, fmt=".2f", unit="s"),
         )
 
     # ------------------------------------------------------------------ Task 2
@@ -89,20 +88,21 @@ class Task2(Claims):
                     ": one can leave the straight line to the goal, the other cannot"
                 )
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
-                answer += sentence(". ") + cap(self.ivkc_with_slack())
                 key: EvidenceKey = "t2-c-slack-policy"
-                if self.ivkc_first_with_slack():  # the stall is the policy's: say so
-                    answer += sentence(
-                        f", before {emdm} with a free slack too (",
-                        self.evid_goal(key, emdm),
-                        ")",
-                    )
+                first = self.ivkc_first_with_slack()  # then the stall is the policy's: say so
+                answer += sentence(". Task scaling causes the stall. " if first else ". ")
+                answer += cap(self.ivkc_with_slack())
+                if first:
                     m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
                     if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
-                        answer += sentence(  # (both means are in Table II's rows)
-                            " and with a higher mean ", M_SYM, " (", Ref("tab", "evidence"), ")"
-                        )
-                    answer += sentence(": task scaling causes the stall")
+                        answer += sentence(" with a higher mean ", M_SYM)
+                    answer += sentence(  # (both rows are in Table II)
+                        f", before {emdm} with its own (",
+                        self.evid_goal(key, emdm),
+                        ", ",
+                        Ref("tab", "evidence"),
+                        ")",
+                    )
             answer += sentence(".")
         else:
             answer += sentence(".")
@@ -186,20 +186,11 @@ class Task2(Claims):
                 p += sentence(
                     "Scaled from the first step (",
                     *eq(ALPHA, self.ev(t, ivkc, "scaling", "initial_alpha", fmt=".2f")),
-                    ")",
-                )
-            pins = self.evv(t, ivkc, "pinned")
-            if pins:
-                p += sentence(
-                    ", joint ",
-                    self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
-                    f" runs on its {pins[0]['side']} {pins[0]['kind']} bound from ",
-                    self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
-                    " to the end",
+                    "), ",
                 )
             told = reached_e and not reached_i  # the answer above gives the stall's time
             p += sentence(  # (and its distance to the goal)
-                ", it freezes ",
+                f"{ivkc} freezes ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
                 " along the line",
                 *(
@@ -207,16 +198,22 @@ class Task2(Claims):
                     if told
                     else (" (", T_EQ, self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"), ")")
                 ),
-                *(  # (the joint already named as pinned needs no second mention)
-                    ()
-                    if pins and pins[0]["joint"] == self.evv(t, ivkc, "stall", "joint")
-                    else (
-                        ", joint ",
-                        self.ev(t, ivkc, "stall", "joint", fmt="d"),
-                        " at its stop zone",
-                    )
-                ),
             )
+            pins = self.evv(t, ivkc, "pinned")
+            if pins:
+                p += sentence(
+                    ", with joint ",
+                    self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
+                    f" on its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                    self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
+                    " on",
+                )
+            if not pins or pins[0]["joint"] != self.evv(t, ivkc, "stall", "joint"):
+                p += sentence(  # (a joint already named as pinned needs no second mention)
+                    ", joint ",
+                    self.ev(t, ivkc, "stall", "joint", fmt="d"),
+                    " at its stop zone",
+                )
             p += sentence(".")
             sec.paragraphs.append(p)
         if reached_e:
@@ -303,11 +300,11 @@ class Task2(Claims):
                             ),
                             " against ",
                             self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
-                            "): on this arm the term does not raise ",
+                            "). On this arm the term does not raise ",
                             M_SYM,
                             *(
                                 (
-                                    ", since every route into the admissible goal configuration "
+                                    ": every route into the admissible goal configuration "
                                     "flips the elbow through ",
                                     M_SYM,
                                     " = 0",
@@ -331,7 +328,7 @@ class Task2(Claims):
             e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
             if not e7.get("reached", True):
                 p += sentence(
-                    "; with ",
+                    ". With ",
                     Math(r"|\delta|\leq", "|δ| ≤ "),
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
                     " it stalls (E7)",
