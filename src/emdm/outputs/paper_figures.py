@@ -296,16 +296,16 @@ def pair_figure(
                 right.set_yticks(peaks, [f"{v:g}" for v in peaks])
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 right.tick_params(pad=1)
-            lo_qd, hi_qd = qd_axes[j].get_ylim()
-            qd_ticks = [-qd_tick, qd_tick]
-            if 2 * qd_tick < 0.5 * (hi_qd - lo_qd):  # the two labels would touch: the limit on
-                qd_ticks = [qd_tick if high >= -low else -qd_tick]  # the peak's side alone
-            for a, ticks in ((ax, [-q_tick, q_tick]), (qd_axes[j], qd_ticks)):
-                # one tick for two symmetric limits says so: "±1"
-                a.set_yticks(ticks, [f"{v:g}" if len(ticks) > 1 else f"±{abs(v):g}" for v in ticks])
+            for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
+                a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
+            lo_qd, hi_qd = qd_axes[j].get_ylim()
+            if 2 * qd_tick < 0.5 * (hi_qd - lo_qd):  # close limits: each label set off outwards
+                below, above = qd_axes[j].get_yticklabels()  # (so the two do not touch)
+                below.set_verticalalignment("top")
+                above.set_verticalalignment("bottom")
         end = time_end(runs)
         if end is not None:  # the stalled runs' flat tails add nothing: the arrivals get room
             for ax in (ax_m, q_axes[0], qd_axes[0]):  # each shares its time axis with others
@@ -1014,6 +1014,17 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
                 ax_qd.axhline(bound, color="black", linewidth=0.6, linestyle=":")
             for run in runs:
                 ax_qd.plot(run.t[:-1], run.qd, **{**_style(run, medium), "label": None})
+            for j in range(first.qd.shape[1]):  # each joint named beside its first run's peak
+                k = int(np.argmax(np.abs(first.qd[:, j])))
+                ax_qd.annotate(
+                    rf"$\dot q_{j + 1}$",
+                    (float(first.t[k]), float(first.qd[k, j])),
+                    xytext=(3, 0),
+                    textcoords="offset points",
+                    ha="left",
+                    va="center",
+                    fontsize=medium.tiny,
+                )
             ax_qd.set_ylabel(r"$\dot q$ (rad/s)", labelpad=1)
             ax_gap = axes[4]  # what the slack gives up: the tracking gap, as Fig. 5's (d)
             for run in runs:

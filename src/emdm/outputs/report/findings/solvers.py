@@ -255,7 +255,7 @@ class Solvers(StoryBase):
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: arrival in closed loop.",
+                " period; goal: arrival in closed loop, solve times not charged.",
             ),
             [
                 sentence("solver"),

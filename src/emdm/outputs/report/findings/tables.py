@@ -29,6 +29,15 @@ class Tables(Claims):
             sentence("max ", Math(r"|\dot q|", "|<i>q̇</i>|")),
             sentence("scaled"),
         ]
+        # a run that stalls reads "stall", as in Table II (the text gives its distance); one
+        # that ends elsewhere without arriving gives its final error
+        missed = [
+            (task, name)
+            for task in ("task1", "task2")
+            for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM)
+            if not self.mv(task, name, "reached")
+        ]
+        drifted = [m for m in missed if not self.evv(*m, "stall")]
         table = Table(
             "outcomes",
             sentence(
@@ -36,7 +45,10 @@ class Tables(Claims):
                 ERR,
                 " < ",
                 self.scn("task1", "motion", "tolerance", fmt=".0e", unit="m"),
-                ") or final error (m), mean ",
+                *(("; stall: never reached",) if len(drifted) < len(missed) else ()),
+                ")",
+                *((" or final error (m)",) if drifted else ()),
+                ", mean ",
                 M_SYM,
                 " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps.",
             ),
@@ -53,6 +65,8 @@ class Tables(Claims):
                 goal = (
                     sentence(bare(self.ttg(task, name)))
                     if self.mv(task, name, "reached")
+                    else sentence("stall")
+                    if self.evv(task, name, "stall")
                     else sentence("(", self.mt(task, name, "final_error", ".3f"), " m)")
                 )
                 table.rows.append(

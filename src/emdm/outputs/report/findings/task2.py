@@ -388,11 +388,11 @@ class Task2(Claims):
             "t2-uc-effort",
             "figures/task2-UC-effort",
             sentence(
-                f"{ivkc} (solid), {emdm} (dashed): (a) effort up to ",
+                f"{ivkc} (solid), {emdm} (dashed): (a) effort summed up to ",
                 Math("t", "<i>t</i>"),
                 ", (b) ",
                 M_SYM,
-                ", (c) joint positions, (d) joint speeds, limits drawn, (e) tracking gap as in ",
+                ", (c) joint positions, (d) joint speeds, (e) tracking gap as in ",
                 Ref("fig", "t2-c"),
                 "(d).",
             ),
