@@ -18,9 +18,9 @@ class Front(Claims):
         t2 = "task2"
         out = sentence(
             "We pose velocity control of planar arms as one quadratic program per step that tracks "
-            "a proportional controller's end-effector velocity, minimises joint-velocity effort "
-            "and maximises the manipulability rate (EMDM), and compare it with inverse velocity "
-            "kinematics (IVKC). On a redundant three-link arm EMDM tracks as IVKC does and ",
+            "a proportional controller's tip velocity, minimises joint-speed effort and maximises "
+            "the manipulability rate (EMDM), against inverse velocity kinematics (IVKC). On a "
+            "redundant three-link arm EMDM tracks as IVKC does and ",
             *self.dexterity_gain(),
             ". ",
         )
@@ -44,7 +44,7 @@ class Front(Claims):
                 out += sentence(
                     "On Task 2's programs gradient-based ",
                     grad,
-                    " reaches each exact optimum in a median ",
+                    " is exact in a median ",
                     self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
                     " evaluations",
                 )
@@ -56,7 +56,7 @@ class Front(Claims):
                         free,
                         ", needs ",
                         self.sn("task2-lab-C-EMDM", free, "median_evaluations", ".4g"),
-                        " evaluations.",
+                        ".",
                     )
                 else:
                     out += sentence("; every gradient-free method is inexact.")
