@@ -261,10 +261,10 @@ def pair_figure(
             ax = q_axes[j]
             infl, stop = sc.damper.influence[j], sc.damper.stop[j]
             for a, b, shade in (
-                (hi[j] - infl, hi[j], 0.12),
-                (lo[j], lo[j] + infl, 0.12),
-                (hi[j] - stop, hi[j], 0.40),
-                (lo[j], lo[j] + stop, 0.40),
+                (hi[j] - infl, hi[j], 0.2),
+                (lo[j], lo[j] + infl, 0.2),
+                (hi[j] - stop, hi[j], 0.55),
+                (lo[j], lo[j] + stop, 0.55),
             ):
                 ax.axhspan(a, b, color="#D55E00", alpha=shade, linewidth=0, zorder=0)
             for bound in (lo[j], hi[j]):
@@ -549,14 +549,21 @@ def _front_axes(
         note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
     elif info["saturated_from_ratio"] is not None:
         note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
-    if note:
+    if note:  # in the emptier of two corners (a front runs from lower left to upper right)
+        to_axes = ax.transData + ax.transAxes.inverted()
+        frac = to_axes.transform(np.column_stack((M, E)))
+        top_left = np.count_nonzero((frac[:, 0] < 0.65) & (frac[:, 1] > 0.5))
+        bottom_right = np.count_nonzero((frac[:, 0] > 0.35) & (frac[:, 1] < 0.5))
+        x, y, ha, va = (0.04, 0.95, "left", "top")
+        if bottom_right < top_left:
+            x, y, ha, va = (0.97, 0.05, "right", "bottom")
         ax.text(
-            0.97,
-            0.05,
+            x,
+            y,
             note,
             transform=ax.transAxes,
-            ha="right",
-            va="bottom",
+            ha=ha,
+            va=va,
             fontsize=medium.tiny,
             bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
         )
@@ -971,10 +978,11 @@ def manipulability_figure(
 
 
 def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
-    """The effort spent so far, sum E dt up to t (linear, so a saving shows as a gap that
-    stays), and the manipulability m(t) of a pair: two panels, large on a slide (where the pair
-    composite's five would be too small to read). In the paper (Task 2.2's figure) a third
-    panel, the joint positions against their limits, shows where the pair leaves them."""
+    """On a slide: the effort spent so far, sum E dt up to t (linear, so a saving shows as a gap
+    that stays), and the manipulability m(t) of a pair, two large panels (where the pair
+    composite's would be too small to read). In the paper (Task 2.2's figure): E(t) on a log axis
+    as in the pair figures, m(t), the joint positions and speeds against their limits (where the
+    pair leaves them) and the tracking gap, five panels at column width."""
     height = 2.3 if medium is SLIDE else 1.2
     width = medium.wide if medium is SLIDE else medium.column
     with _figure(stem, medium, width, height) as fig:
@@ -982,8 +990,11 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
         ax_e, ax_m = axes[0], axes[1]
         for run in runs:
             st = _style(run, medium)
-            spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
-            ax_e.plot(run.t, spent, **st)
+            if medium is SLIDE:  # the saving as a gap that stays
+                spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
+                ax_e.plot(run.t, spent, **st)
+            else:  # E(t) as in the pair figures' (b), so the figures read alike
+                ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             ax_m.plot(run.t, run.m, **st)
         if medium is SLIDE:
             ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
@@ -1036,7 +1047,9 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
             ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
             ax_gap.yaxis.set_major_locator(LogLocator(numticks=3))
             ax_gap.yaxis.set_minor_locator(NullLocator())
-            ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
+            ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
+            ax_e.yaxis.set_major_locator(LogLocator(numticks=3))
+            ax_e.yaxis.set_minor_locator(NullLocator())
             ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
             ax_q.set_ylabel(r"$q$ (rad)", labelpad=1)
             for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)", "(e)"), strict=True):

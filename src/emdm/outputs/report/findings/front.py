@@ -119,8 +119,8 @@ class Front(Claims):
                 ", and a free one lets C-IVKC arrive in Task 2 (E4)"
                 if self.ivkc_with_slack()
                 else "",
-                ". Where the path does not matter, as here, a slack was the better choice, "
-                "though it turns the tip off ",
+                ". Where the path does not matter, as here, a slack was the better choice; our "
+                "default, scaling, alone keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",
             )

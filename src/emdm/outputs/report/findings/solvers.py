@@ -248,14 +248,14 @@ class Solvers(StoryBase):
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, with the least dexterous). ms: median time from "
                 "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
-                "evaluations; gap, viol.: "
+                "evaluations (--: none); gap, viol.: "
                 "largest ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
                 " and bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: arrival in closed loop, solve times not charged.",
+                " period; goal: closed-loop arrival, solve time not charged.",
             ),
             [
                 sentence("solver"),

@@ -55,10 +55,6 @@ class Tables(Claims):
             header,
             align="lrrrrr",
         )
-        # the stall is our infeasibility policy's, not IVKC's: the run with a slack beside it
-        beside = bool(self.ivkc_with_slack()) and not self.mv("task2", Name.C_IVKC, "reached")
-        if beside:
-            table.caption += sentence(" C-IVKC, slack: run E4.")
         for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
             table.rows.append([sentence(title)])
             for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
@@ -79,19 +75,6 @@ class Tables(Claims):
                         sentence(self.mt(task, name, "scaled_steps", "d")),
                     ]
                 )
-                if beside and (task, name) == ("task2", Name.C_IVKC):
-                    e4: tuple[str, ...] = ("runs", Name.C_IVKC)
-                    key: EvidenceKey = "t2-c-slack-policy"
-                    table.rows.append(
-                        [
-                            sentence(name, ", slack"),
-                            sentence(bare(self.evid_goal(key, Name.C_IVKC))),
-                            sentence(self.evidn(key, *e4, "mean_manipulability", fmt=".3f")),
-                            sentence(self.evidn(key, *e4, "total_effort", fmt=".2f")),
-                            sentence(self.evidn(key, *e4, "max_abs_qd", fmt=".2f")),
-                            sentence(self.evidn(key, *e4, "scaled_steps", fmt="d")),
-                        ]
-                    )
         self.tables["outcomes"] = table
         for s in sections:
             if s.key == "task1":

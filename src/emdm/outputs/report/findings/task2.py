@@ -12,6 +12,7 @@ from .base import (
     C_S,
     COND_J,
     DELTA,
+    E_SYM,
     ERR,
     M_SYM,
     T_EQ,
@@ -357,7 +358,7 @@ class Task2(Claims):
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
             if [n.text for n in within] == [n.text for n in whole]:
                 p += sentence(
-                    ", also over their common first ",
+                    ", also over their first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
                 )
             else:
@@ -369,7 +370,7 @@ class Task2(Claims):
                     " against ",
                     Num(within[1].text, within[1].src, within[1].fmt, unit="m²"),
                 )
-            p += sentence(": its route crosses ", M_SYM, " = 0, while ", ivkc, " stands still")
+            p += sentence(": its route crosses ", M_SYM, " = 0")
         p += sentence(".")  # (the efforts are in Table I: the brief asks for m here)
         sec.paragraphs.append(p)
         sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
@@ -388,9 +389,9 @@ class Task2(Claims):
             "t2-uc-effort",
             "figures/task2-UC-effort",
             sentence(
-                f"{ivkc} (solid), {emdm} (dashed): (a) effort summed up to ",
-                Math("t", "<i>t</i>"),
-                ", (b) ",
+                f"{ivkc} (solid), {emdm} (dashed): (a) effort ",
+                E_SYM,
+                " (log), (b) ",
                 M_SYM,
                 ", (c) joint positions, (d) joint speeds, (e) tracking gap as in ",
                 Ref("fig", "t2-c"),
