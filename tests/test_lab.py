@@ -316,3 +316,26 @@ def test_slsqp_on_the_reduced_program_reaches_the_exact_optimum(task):
         ), k
         assert qp.violation(got.x) <= 1e-9, k
         assert 0 < got.evaluations == len(got.history), k
+
+
+def test_the_gradient_free_l1_penalty_is_exact_on_every_preset_program(preset_programs, small_lab):
+    """The penalised gradient-free methods (nelder-mead, powell, cma-es) minimise the exact
+    optimum only if rho exceeds every optimal multiplier of the bounds (the paper says the
+    penalty is exact, and by what margin): checked on every step of both presets."""
+    from emdm.solvers.base import multipliers
+    from emdm.solvers.nlp import PENALTY
+
+    for qp, x_star in preset_programs:
+        mult = multipliers(qp, x_star)
+        assert mult.report.stationarity < 1e-8  # real multipliers, certified at the optimum
+        largest = max(np.abs(mult.mu).max(initial=0.0), mult.nu.max(initial=0.0))
+        assert largest < PENALTY * (1.0 + np.abs(qp.P).max())
+    # the lab records the margin rho / largest multiplier of each re-solved program
+    lab = small_lab
+    for k, features in lab.features.items():
+        qp = program_at(lab.controller, lab.scenario, lab.reference.q[k]).qp
+        x_star = np.concatenate((lab.reference.qd[k], lab.reference.delta[k][: qp.n_slack]))
+        mult = multipliers(qp, x_star)
+        largest = max(np.abs(mult.mu).max(initial=0.0), mult.nu.max(initial=0.0))
+        rho = PENALTY * (1.0 + np.abs(qp.P).max())
+        assert features["penalty_margin"] == (rho / largest if largest > 0 else np.inf)

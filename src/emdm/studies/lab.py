@@ -37,6 +37,7 @@ from ..core.scenario import Scenario
 from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
+from ..solvers.base import multipliers
 from ..solvers.nlp import PENALTY
 
 DEFAULT_LAB_SOLVERS = (
@@ -170,7 +171,9 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
     ``c_S / ||e||``, growing near the goal; ``cond_J``: ``sigma_max / sigma_min`` of ``J`` (near
     singular arms); ``m``: manipulability (the gradient ``Jm`` is non-smooth at ``m = 0``);
     ``alpha``: task scale (``< 1``: the feasible set is a face, degenerate active sets);
-    ``active``: number of joint bounds active at the optimum.
+    ``active``: number of joint bounds active at the optimum; ``penalty_margin``: the l1
+    penalty weight of the gradient-free methods over the largest optimal multiplier of the
+    bounds and rows (the penalty is exact, its minimiser the program's, when this exceeds 1).
     """
     _, s, Vt = np.linalg.svd(qp.A)
     Z = Vt[int(np.sum(s > 1e-12 * s[0])) :].T
@@ -178,6 +181,10 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
     cond = float(np.linalg.cond(reduced)) if reduced.size else 1.0
     J = qp.A[:, : qp.n_joints]
     sj = np.linalg.svd(J, compute_uv=False)
+    x_star = np.concatenate((run.qd[k], run.delta[k][: qp.n_slack]))
+    mult = multipliers(qp, x_star)  # the reduced program's inequalities keep these multipliers
+    largest = max(float(np.abs(mult.mu).max(initial=0.0)), float(mult.nu.max(initial=0.0)))
+    rho = PENALTY * (1.0 + float(np.abs(qp.P).max()))
     return {
         "cond_reduced": cond,
         "w_slack": float(qp.P[-1, -1]) if qp.n_slack else 0.0,
@@ -185,6 +192,7 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
         "m": float(run.m[k]),
         "alpha": float(run.alpha[k]),
         "active": float(np.count_nonzero(run.active[k])),
+        "penalty_margin": rho / largest if largest > 0 else math.inf,
     }
 
 
@@ -414,13 +422,11 @@ def challenges(lab: LabResult) -> dict[str, Any]:
     steps = lab.steps
     cond = np.array([lab.features[k]["cond_reduced"] for k in steps])
     scaled = np.array([lab.features[k]["alpha"] < 1.0 for k in steps])
-    ranges = {
-        key: [
-            float(min(f[key] for f in lab.features.values())),
-            float(max(f[key] for f in lab.features.values())),
-        ]
-        for key in ("cond_reduced", "w_slack", "cond_J", "m", "alpha")
-    }
+    ranges = {}
+    for key in ("cond_reduced", "w_slack", "cond_J", "m", "alpha", "penalty_margin"):
+        # (a program with no active bound has no multiplier: its penalty margin is infinite)
+        values = [f[key] for f in lab.features.values() if math.isfinite(f[key])]
+        ranges[key] = [float(min(values)), float(max(values))] if values else []
     per_solver = {}
     for name, study in lab.studies.items():
         its = np.array([s.iterations for s in study.solves], dtype=float)

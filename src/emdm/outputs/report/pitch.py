@@ -218,7 +218,7 @@ class Pitch:
                     grad_best,
                     "); best of all an exact QP method (",
                     best_qp,
-                    ", whose times also gain from compiled code)",
+                    ", whose times also gain from compiled code: starred)",
                 )
             ]
             if best_qp and grad_best

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ....solvers.nlp import PENALISED
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, sentence
@@ -170,8 +171,17 @@ class Solvers(StoryBase):
             p += sentence(
                 f"{bad} also violates the bounds by up to ",
                 self.sn(lab, bad, "max_violation", ".2g"),
-                "; ",
             )
+            margin = self.d.value(f, "challenges", "feature_ranges", "penalty_margin")
+            if bad in PENALISED and margin and margin[0] > 1.0:  # its penalty is exact
+                p += sentence(
+                    ", short of its exact penalty's minimum (",
+                    Math(r"\rho", "ρ"),
+                    " exceeds every multiplier ",
+                    self.d.num(f, "challenges", "feature_ranges", "penalty_margin", 0, fmt=".2g"),
+                    "-fold)",
+                )
+            p += sentence("; ")
         p += sentence(
             "in closed loop ",
         )

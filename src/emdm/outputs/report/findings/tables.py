@@ -50,7 +50,8 @@ class Tables(Claims):
                 *((" or final error (m)",) if drifted else ()),
                 ", mean ",
                 M_SYM,
-                " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps.",
+                " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps. C-: task "
+                "scaling (Section II); with a free slack: E2, E4 in Table II.",
             ),
             header,
             align="lrrrrr",

@@ -30,15 +30,19 @@ class Task2(Claims):
         elbow later than E6, which runs without the dexterity term (empty otherwise)."""
         key: EvidenceKey = "t2-c-emdm-no-manip"
         emdm = Name.C_EMDM
-        mine = self.evv("task2", emdm, "singular", "elbow_flips")
-        e6 = self.evid(key, "runs", emdm, "events", "singular", "elbow_flips")
-        if not mine or not e6 or e6[0] >= mine[0]:
+        # the crossing's time is m's minimum, as the singular passage is told ("at t = 11.15 s
+        # it passes the singular stretched configuration"), not the flip's next sample
+        mine = self.evv("task2", emdm, "singular")
+        e6 = self.evid(key, "runs", emdm, "events", "singular")
+        if not (mine and e6 and mine.get("elbow_flips") and e6.get("elbow_flips")):
+            return ()
+        if e6["t"] >= mine["t"]:
             return ()
         return (
             ", and the term delays that crossing from ",
-            self.evidn(key, "runs", emdm, "events", "singular", "elbow_flips", 0, fmt=".2f"),
+            self.evidn(key, "runs", emdm, "events", "singular", "t", fmt=".2f"),
             " to ",
-            self.ev("task2", emdm, "singular", "elbow_flips", 0, fmt=".2f", unit="s"),
+            self.ev("task2", emdm, "singular", "t", fmt=".2f", unit="s"),
         )
 
     # ------------------------------------------------------------------ Task 2
