@@ -540,6 +540,7 @@ def test_the_parameters_sentence_states_one_value_where_every_joint_shares_it():
             -sc.slack.min,
         ):
             assert np.all(np.asarray(values) == np.asarray(values)[0]), (task, values)
+        assert sc.slack.max[0] == -sc.slack.min[0]  # "delta_max = -delta_min"
         if task == "task2":  # the bounds, the damper, K_p and the slack are both tasks' own
             one = emdm.load_scenario("task1")
             assert arm.q_max[0] == one.arm.q_max[0] and damper.stop[0] == one.damper.stop[0]

@@ -195,6 +195,18 @@ GAP_FLOOR = 1e-6
 exactly misses by rounding only (about 1e-16), drawn on the floor."""
 
 
+def _damper_zones(ax: Any, lo: float, hi: float, influence: float, stop: float) -> None:
+    """Shade a joint's damper zones against its position limits ``lo``, ``hi``: the influence
+    zone light, the stop zone dark (the pair figures' (d) and Fig. 7's (c))."""
+    for a, b, shade in (
+        (hi - influence, hi, 0.2),
+        (lo, lo + influence, 0.2),
+        (hi - stop, hi, 0.55),
+        (lo, lo + stop, 0.55),
+    ):
+        ax.axhspan(a, b, color="#D55E00", alpha=shade, linewidth=0, zorder=0)
+
+
 def tracking_gap(run: Run) -> np.ndarray:
     """Per command: how far the achieved tip velocity misses the desired one, ``||J(q_k) qd_k -
     v_d,k||`` (m/s), from the recorded states and commands (0 up to rounding for a run that
@@ -259,14 +271,7 @@ def pair_figure(
         lo, hi = sc.arm.q_min, sc.arm.q_max
         for j in range(n):
             ax = q_axes[j]
-            infl, stop = sc.damper.influence[j], sc.damper.stop[j]
-            for a, b, shade in (
-                (hi[j] - infl, hi[j], 0.2),
-                (lo[j], lo[j] + infl, 0.2),
-                (hi[j] - stop, hi[j], 0.55),
-                (lo[j], lo[j] + stop, 0.55),
-            ):
-                ax.axhspan(a, b, color="#D55E00", alpha=shade, linewidth=0, zorder=0)
+            _damper_zones(ax, lo[j], hi[j], sc.damper.influence[j], sc.damper.stop[j])
             for bound in (lo[j], hi[j]):
                 ax.axhline(bound, color="black", linewidth=0.6)
             ax.set_ylabel(rf"$q_{j + 1}$", labelpad=1)
@@ -290,10 +295,25 @@ def pair_figure(
             # rounder tick below it read as the axis' end, the curve "cut off")
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # the peaks beyond the limits, each signed as it was reached
-                peaks = [float(f"{v:.2g}") for v in (low, high) if abs(v) > FAR_BEYOND * limit]
+            if far:  # the peaks beyond the limits, each signed as it was reached, marked where
+                # it was reached and ticked in the colour of the run that reached it (a spike of
+                # a step or two reads as a clipped axis without the mark)
+                peaks, colours = [], []
+                for v in (low, high):
+                    if abs(v) <= FAR_BEYOND * limit:
+                        continue
+                    r = next(
+                        r for r in runs if r.steps and v in (r.qd[:, j].min(), r.qd[:, j].max())
+                    )
+                    k = int(np.argmax(r.qd[:, j] == v))
+                    colour = _style(r, medium)["color"]
+                    qd_axes[j].plot([r.t[k]], [v], "o", color=colour, markersize=2.5, zorder=3)
+                    peaks.append(float(f"{v:.2g}"))
+                    colours.append(colour)
                 right = qd_axes[j].secondary_yaxis("right")
                 right.set_yticks(peaks, [f"{v:g}" for v in peaks])
+                for label, colour in zip(right.get_yticklabels(), colours, strict=True):
+                    label.set_color(colour)
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 right.tick_params(pad=1)
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
@@ -1010,7 +1030,15 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
             ax_m.legend(loc="best", frameon=True, framealpha=0.9)
         else:
             ax_q = axes[2]
-            arm = runs[0].scenario.arm
+            arm, damper = runs[0].scenario.arm, runs[0].scenario.damper
+            zones = {  # one shade per distinct zone: joints that share their limits share it
+                (float(a), float(b), float(i), float(s))
+                for a, b, i, s in zip(
+                    arm.q_min, arm.q_max, damper.influence, damper.stop, strict=True
+                )
+            }
+            for zone in zones:
+                _damper_zones(ax_q, *zone)
             for bound in {*map(float, arm.q_min), *map(float, arm.q_max)}:
                 ax_q.axhline(bound, color="black", linewidth=0.6)
             for run in runs:
