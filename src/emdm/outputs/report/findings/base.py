@@ -383,7 +383,7 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                " (peaks beyond them marked in their run's colour)" if far else "",
+                " (largest peak marked in its run's colour)" if far else "",
             )
         )
 

@@ -166,9 +166,9 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); E3 (",
+                "brackets (stall: goal not reached); for E3 (",
                 Ref("fig", "pareto"),
-                "'s sweep): against the nominal weights at the same ",
+                "'s sweep), the nominal weights at ",
                 *self.e3_step(),
                 ".",
             ),
