@@ -36,6 +36,12 @@ PENALISED = ("nelder-mead", "powell", "cma-es")
 """The gradient-free methods that see the bounds as the exact l1 penalty (the others take them
 as constraints)."""
 
+
+def penalty_weight(qp: QP) -> float:
+    """``rho = PENALTY (1 + max|P|)``: the l1 penalty weight the :data:`PENALISED` methods use."""
+    return PENALTY * (1.0 + float(np.abs(qp.P).max()))
+
+
 DEFAULT_BUDGET = 2000
 """Default number of objective evaluations for the gradient-free methods."""
 
@@ -159,7 +165,8 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             rec = _Recorder(red, keep=history)
             rec(np.zeros(0))
             return _finish(red, np.zeros(0), "optimal", 0, rec, start)
-        penalty = PENALTY * (1.0 + float(np.abs(qp.P).max()))
+        # the exact l1 penalty for the methods that cannot take the bounds themselves
+        penalty = penalty_weight(qp) if method in PENALISED else 0.0
         t0 = np.zeros(red.dim)
         cons = LinearConstraint(red.G, -np.inf, red.h) if red.h.size else None
         status, iterations = "optimal", 0
@@ -176,7 +183,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             )
             t, iterations, ok = res.x, int(res.get("nit", 0)), bool(res.success)
         elif method in ("cobyqa", "cobyla"):
-            rec = _Recorder(red, keep=history)
+            rec = _Recorder(red, penalty=penalty, keep=history)
             opts = (
                 {"maxfev": budget, "final_tr_radius": 1e-10}
                 if method == "cobyqa"
@@ -187,7 +194,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             )
             t, iterations, ok = res.x, int(res.get("nit", res.nfev)), bool(res.success)
         elif method == "differential-evolution":
-            rec = _Recorder(red, keep=history)
+            rec = _Recorder(red, penalty=penalty, keep=history)
             lo, hi = red.box()
             popsize = 15
             res = differential_evolution(

@@ -38,7 +38,7 @@ from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 from ..solvers.base import multipliers
-from ..solvers.nlp import PENALTY
+from ..solvers.nlp import PENALTY, penalty_weight
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",
@@ -184,7 +184,7 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
     x_star = np.concatenate((run.qd[k], run.delta[k][: qp.n_slack]))
     mult = multipliers(qp, x_star)  # the reduced program's inequalities keep these multipliers
     largest = max(float(np.abs(mult.mu).max(initial=0.0)), float(mult.nu.max(initial=0.0)))
-    rho = PENALTY * (1.0 + float(np.abs(qp.P).max()))
+    rho = penalty_weight(qp)
     return {
         "cond_reduced": cond,
         "w_slack": float(qp.P[-1, -1]) if qp.n_slack else 0.0,

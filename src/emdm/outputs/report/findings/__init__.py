@@ -14,7 +14,6 @@ from ..config import BYLINE
 from ..document import Document, Section
 from .base import (
     ALPHA,
-    ALPHA_LT1,
     C_S,
     COND_J,
     DELTA,
@@ -84,7 +83,6 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
 
 __all__ = [
     "ALPHA",
-    "ALPHA_LT1",
     "COND_J",
     "C_S",
     "DELTA",

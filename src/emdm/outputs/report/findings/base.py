@@ -46,7 +46,6 @@ GAP_FLOOR_EXP = round(math.log10(GAP_FLOOR))
 
 # ---------------------------------------------------------------------------- inline math
 ALPHA = Math(r"\alpha", "α")
-ALPHA_LT1 = Math(r"\alpha<1", "α&nbsp;&lt;&nbsp;1")
 W_M = Math("w_M", "<i>w</i><sub>M</sub>")
 W_E = Math("w_E", "<i>w</i><sub>E</sub>")
 W_S = Math(r"w_S=c_S/\|e\|", "<i>w</i><sub>S</sub>&nbsp;=&nbsp;<i>c</i><sub>S</sub>/‖<i>e</i>‖")
