@@ -39,6 +39,7 @@ from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
+from ..solvers.base import Family
 from ..studies.lab import exact_answer
 from .animate import ellipse_points
 from .style import CONTROLLER_STYLE, FAMILY_COLOR, OKABE_ITO, RC
@@ -681,12 +682,6 @@ def pareto_figure(
     return stem
 
 
-FAMILY_LABEL = {
-    "exact": "QP methods",
-    "gradient": "gradient-based",
-    "gradient-free": "gradient-free",
-}
-"""A solver family as a legend names it (filled or hollow says whether an answer is exact)."""
 FAMILY_MARKER = {"exact": "s", "gradient": "o", "gradient-free": "^"}
 
 
@@ -699,7 +694,7 @@ def _family_handles(rows: Mapping[str, Any], order: Sequence[str]) -> list[Artis
             marker=FAMILY_MARKER[f],
             color=FAMILY_COLOR[f],
             linestyle="none",
-            label=FAMILY_LABEL[f],
+            label=Family(f).label,
         )
         for f in ("exact", "gradient", "gradient-free")
         if any(rows[k]["family"] == f for k in order)

@@ -134,6 +134,15 @@ class Family(StrEnum):
     GRADIENT = "gradient"
     GRADIENT_FREE = "gradient-free"
 
+    @property
+    def label(self) -> str:
+        """The family as a table or legend names it (ADMM is first-order, not an NLP method)."""
+        return {
+            Family.EXACT: "exact QP methods",
+            Family.GRADIENT: "first-order (admm) and gradient-based",
+            Family.GRADIENT_FREE: "gradient-free",
+        }[self]
+
 
 class Loop(StrEnum):
     """Where a solver's loop runs: wholly in compiled code, or with Python in it (a Python

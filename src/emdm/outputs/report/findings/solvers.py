@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ....solvers.base import Family
 from ....solvers.nlp import PENALISED
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ..document import Section, Table
@@ -280,15 +281,11 @@ class Solvers(StoryBase):
             font="scriptsize" if len(rows) > 8 else "footnotesize",  # 7 pt fits a column
             colsep=2.0,  # the widest cells: a 3.4e-8 gap and a 0.099 violation
         )
-        for family, title in (
-            ("exact", "QP methods"),
-            ("gradient", "gradient-based and first-order (ADMM)"),
-            ("gradient-free", "gradient-free"),
-        ):
+        for family in Family:
             names = [k for k, r in rows.items() if r.family == family]
             if not names:
                 continue
-            table.rows.append([sentence(title)])
+            table.rows.append([sentence(family.label)])
             for k in names:
                 r = rows[k]
                 goal = (

@@ -184,7 +184,9 @@ class Tables(Claims):
             font="scriptsize",
             colsep=2.3,  # six columns of two numbers each at column width
         )
-        for label, key, ctrl, change, _kind in items:
+        for i, (label, key, ctrl, change, _kind) in enumerate(items):
+            # a pair's second row leaves the label blank: one run, two controllers
+            shown = "" if i and items[i - 1][0] == label else label
             entry = self.evid(key)
             task = entry["task"]
             run = entry["runs"].get(ctrl, {})
@@ -212,7 +214,7 @@ class Tables(Claims):
                 cells.append(new + sentence(" (") + old + sentence(")"))
             table.rows.append(
                 [
-                    sentence(label),
+                    sentence(shown),
                     sentence("1" if task == "task1" else "2", ", ", ctrl),
                     change,
                     *cells,
