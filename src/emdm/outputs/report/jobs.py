@@ -230,7 +230,7 @@ def _job_pareto(task: str, controller: str, cfg: ReportConfig, data_dir: Path) -
     sweep = np.unique(np.append(ratios(per_decade=cfg.pareto_per_decade), nominal))
     data, _ = pareto_study(scenario, controller, sweep=sweep)
     grid = weight_grid(scenario, controller, default_grid(scenario, cfg.grid))
-    control: dict[str, Any] | None = None  # the nominal weights at the finer step (E3's brackets)
+    control: dict[str, Any] | None = None  # nominal weights at the finer step (Table II brackets)
     for row in grid:
         if row.get("reached", False):
             continue

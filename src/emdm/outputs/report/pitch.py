@@ -276,7 +276,7 @@ class Pitch:
         )
 
     def policy(self) -> list[Sentence]:
-        """The take-away on task scaling, from its evidence (E2): what the slack does better."""
+        """The take-away on task scaling, from the free-slack runs: what the slack does better."""
         gains = self.s.slack_gains()
         if not gains:
             return [sentence("Task scaling keeps the tip on its line at no cost we could measure")]

@@ -93,6 +93,26 @@ def _flat(*parts: Any) -> Sentence:
     return sentence(*out)
 
 
+FINER_STEP = "t1-uc-finer-step"
+"""Table II's run from the weight grid (its first setting that misses the goal, at a finer step)."""
+
+ABLATIONS: tuple[str, ...] = (
+    "t1-uc-no-manip",
+    FINER_STEP,
+    "t2-c-ivkc-wide-limits",
+    "t2-c-emdm-no-manip",
+    "t2-c-emdm-tight-slack",
+    "t2-uc-emdm-stiff-slack",
+)
+"""Table II's runs in order, each changing one thing in a nominal run; :func:`run_label` names
+them E1, E2, ... (the free-slack policy runs are Table I's rows, not ablations)."""
+
+
+def run_label(key: str) -> str:
+    """Table II's label of an ablation: ``E1`` for the first of :data:`ABLATIONS`."""
+    return f"E{ABLATIONS.index(key) + 1}"
+
+
 def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
     """``node[path[0]][path[1]]...`` (an index into a list, a key into an object)."""
     for key in path:
@@ -157,8 +177,8 @@ class StoryBase:
         return sentence(*eq(W_M, self.override(key, "weights.manipulability", fmt="g")))
 
     def limits_widened(self, text: bool = False) -> Sentence:
-        """E5's joint limits: ``|q| <= 3 rad`` in a table cell, ``±3 rad`` in a sentence
-        (``text``); the interval where they are not symmetric."""
+        """The widened joint limits of Table II's run: ``|q| <= 3 rad`` in a table cell, ``±3 rad``
+        in a sentence (``text``); the interval where they are not symmetric."""
         key: EvidenceKey = "t2-c-ivkc-wide-limits"
         lo, hi = (self.evid(key, "overrides", f) for f in ("arm.q_min", "arm.q_max"))
         top = self.override(key, "arm.q_max", fmt=".3g", unit="rad")
@@ -314,7 +334,7 @@ class StoryBase:
         return min(exact, key=lambda k: rows[k].median_time) if exact else None
 
     def _policy_terms(self) -> list[tuple[MetricKey, bool]]:
-        """Task 1's C-EMDM under the slack policy (E2) against scaling, per outcome: (metric,
+        """Task 1's C-EMDM under the slack policy (Table I) against scaling, per outcome: (metric,
         whether the slack run is better on it)."""
         run = self.evid("t1-c-slack-policy", "runs", Name.C_EMDM)
         out = []
@@ -329,7 +349,7 @@ class StoryBase:
         return out
 
     def policy_weighed(self) -> Sentence:
-        """Task scaling, the paper's own choice, weighed against its evidence (E2, E4)."""
+        """Task scaling, the paper's own choice, weighed against the free slack (Table I)."""
         e2: EvidenceKey = "t1-c-slack-policy"
         emdm = Name.C_EMDM
         words = {
@@ -341,8 +361,8 @@ class StoryBase:
             ),
         }
         p = sentence(
-            "Scaling has a price: with a slack (E2, ",
-            Ref("tab", "evidence"),
+            "Scaling has a price: with a free slack (",
+            Ref("tab", "outcomes"),
             ") C-EMDM ",
         )
         for metric, better in self._policy_terms():

@@ -8,8 +8,8 @@ and put it into their own sentence, so its words and numbers cannot drift apart 
 from __future__ import annotations
 
 from ....core.controllers import Name
-from ..trace import Sentence, Text, sentence
-from .base import M_SYM, StoryBase
+from ..trace import Ref, Sentence, Text, sentence
+from .base import M_SYM, StoryBase, run_label
 from .records import EvidenceKey
 
 
@@ -43,19 +43,19 @@ class Claims(StoryBase):
         )
 
     def ivkc_with_slack(self, label: bool = True) -> Sentence:
-        """E4, the like-for-like Task 2 comparison: C-IVKC given a free slack instead of scaling
-        (empty when that run did not arrive; ``label``: name the evidence run)."""
+        """The like-for-like Task 2 comparison: C-IVKC given a free slack instead of scaling
+        (empty when that run did not arrive; ``label``: cite Table I, where its row is)."""
         key: EvidenceKey = "t2-c-slack-policy"
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
         return sentence(  # free: unbounded (Section II), as C-EMDM's is in the same run
             "with a free slack, C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
-            " (E4)" if label else "",
+            *((" (", Ref("tab", "outcomes"), ")") if label else ()),
         )
 
     def ivkc_first_with_slack(self) -> bool:
-        """In E4, where both have a free slack, C-IVKC arrives before C-EMDM."""
+        """With a free slack each, C-IVKC arrives before C-EMDM."""
         key: EvidenceKey = "t2-c-slack-policy"
         i, e = (self.evid(key, "runs", c) for c in (Name.C_IVKC, Name.C_EMDM))
         if not i.get("reached"):
@@ -63,7 +63,7 @@ class Claims(StoryBase):
         return not e.get("reached") or i["time_to_goal"] < e["time_to_goal"]
 
     def emdm_without_term(self, label: bool = True) -> Sentence:
-        """E6: Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner)."""
+        """Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner)."""
         key: EvidenceKey = "t2-c-emdm-no-manip"
         run = self.evid(key, "runs", Name.C_EMDM)
         if not run.get("reached") or run["time_to_goal"] >= self.mv(
@@ -73,11 +73,11 @@ class Claims(StoryBase):
         return sentence(
             "without the dexterity term C-EMDM arrives sooner, in ",
             self.evid_goal(key, Name.C_EMDM),
-            " (E6)" if label else "",
+            *((" (", run_label(key), ")") if label else ()),
         )
 
     def slack_gains(self) -> list[str]:
-        """What Task 1's C-EMDM gains with a slack instead of task scaling (E2): ``faster``,
+        """What Task 1's C-EMDM gains with a free slack instead of task scaling: ``faster``,
         ``cheaper``, ``more dexterous``, those that hold."""
         adjectives = {
             "time_to_goal": "faster",

@@ -124,14 +124,14 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "Here task scaling's only gain is a straighter path. A slack makes C-EMDM ",
+                "Here task scaling's only gain is a straighter path. A free slack makes C-EMDM ",
                 listed(gains),
-                " in Task 1 (E2)",
-                ", and a free one lets C-IVKC arrive in Task 2 (E4)"
-                if self.ivkc_with_slack()
-                else "",
-                ". Where the path does not matter, as here, a slack was the better choice; our "
-                "default, scaling, alone keeps the tip on ",
+                " in Task 1",
+                " and lets C-IVKC arrive in Task 2" if self.ivkc_with_slack() else "",
+                " (",
+                Ref("tab", "outcomes"),
+                "). Where the path does not matter a slack is the better choice; where "
+                "it does, our default, scaling, alone keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",
             )

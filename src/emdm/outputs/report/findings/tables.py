@@ -9,16 +9,26 @@ from .base import (
     C_S,
     DT,
     ERR,
+    FINER_STEP,
     M_SYM,
     W_M,
     bare,
     eq,
+    run_label,
 )
 from .claims import Claims
 from .records import EvidenceKey, MetricKey
 
 
 class Tables(Claims):
+    OUTCOME_COLUMNS: tuple[tuple[MetricKey, str], ...] = (
+        ("mean_manipulability", ".3f"),
+        ("total_effort", ".2f"),
+        ("max_abs_qd", ".2f"),
+        ("scaled_steps", "d"),
+    )
+    """Table I's outcome columns after the time to goal, with their formats."""
+
     # ------------------------------------------------------------------ tables
     def outcome_table(self, sections: list[Section]) -> None:
         header = [
@@ -51,11 +61,16 @@ class Tables(Claims):
                 ", mean ",
                 M_SYM,
                 " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps. C-: task "
-                "scaling (Section II); with a free slack: E2, E4 in Table II.",
+                "scaling; slack: a free slack (Section II).",
             ),
             header,
             align="lrrrrr",
+            font="scriptsize",  # as Tables II and III: fourteen rows
         )
+        policy: dict[str, EvidenceKey] = {
+            "task1": "t1-c-slack-policy",
+            "task2": "t2-c-slack-policy",
+        }
         for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
             table.rows.append([sentence(title)])
             for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
@@ -70,10 +85,26 @@ class Tables(Claims):
                     [
                         sentence(name),
                         goal,
-                        sentence(self.mt(task, name, "mean_manipulability", ".3f")),
-                        sentence(self.mt(task, name, "total_effort", ".2f")),
-                        sentence(self.mt(task, name, "max_abs_qd", ".2f")),
-                        sentence(self.mt(task, name, "scaled_steps", "d")),
+                        *(
+                            sentence(self.mt(task, name, metric, fmt))
+                            for metric, fmt in self.OUTCOME_COLUMNS
+                        ),
+                    ]
+                )
+            # the constrained pair again under the other infeasibility policy: a free slack
+            key = policy[task]
+            for name in (Name.C_IVKC, Name.C_EMDM):
+                run = self.evid(key, "runs", name)
+                table.rows.append(
+                    [
+                        sentence(name, ", slack"),
+                        sentence(bare(self.evid_goal(key, name)))
+                        if run["reached"]
+                        else sentence("stall"),
+                        *(
+                            sentence(self.evidn(key, "runs", name, metric, fmt=fmt))
+                            for metric, fmt in self.OUTCOME_COLUMNS
+                        ),
                     ]
                 )
         self.tables["outcomes"] = table
@@ -82,7 +113,7 @@ class Tables(Claims):
                 s.tables.append("outcomes")
 
     def e3_step(self) -> Sentence:
-        """E3's time step, as its row writes it (``Δt/5``)."""
+        """The finer-step run's time step, as its row writes it (``Δt/5``)."""
         runs = self.rec.grids.get("UC-EMDM", [])
         finer = next((r.finer_dt for r in runs if not r.reached and r.finer_dt), None)
         if not finer or "dt" not in finer:
@@ -90,7 +121,7 @@ class Tables(Claims):
         return sentence(DT, f"/{self.rec.scenarios['task1'].motion.dt / finer['dt']:.0f}")
 
     def e3_row(self) -> list[Sentence] | None:
-        """Table II's E3: the first weight setting of the grid that misses the goal, re-run with
+        """Table II's finer-step run: the first weight setting of the grid that misses the goal, re-run with
         a five times smaller time step, against itself at the nominal step (Section III-B)."""
         runs = self.rec.grids.get("UC-EMDM", [])
         missed = [i for i, r in enumerate(runs) if not r.reached]
@@ -123,50 +154,36 @@ class Tables(Claims):
         change = sentence(
             *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")), " at ", *self.e3_step()
         )
-        return [sentence("E3"), sentence("1, ", Name.UC_EMDM), change, *cells]
+        return [sentence(run_label(FINER_STEP)), sentence("1, ", Name.UC_EMDM), change, *cells]
 
     def evidence_table(self, sections: list[Section]) -> None:
-        items: list[tuple[str, EvidenceKey, str, Sentence, str | None]] = [
-            ("E1", "t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip"), "reference"),
-            ("E2", "t1-c-slack-policy", Name.C_EMDM, sentence("free slack"), "pair"),
-            # E2 runs the pair: both rows are E2's
-            ("E2", "t1-c-slack-policy", Name.C_IVKC, sentence("free slack"), "pair"),
-            # E4 runs the pair too: C-EMDM's bounded slack freed
-            ("E4", "t2-c-slack-policy", Name.C_IVKC, sentence("free slack"), "pair"),
-            ("E4", "t2-c-slack-policy", Name.C_EMDM, sentence("free slack"), "pair"),
+        items: list[tuple[EvidenceKey, str, Sentence]] = [
+            ("t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip")),
+            ("t2-c-ivkc-wide-limits", Name.C_IVKC, self.limits_widened()),
+            ("t2-c-emdm-no-manip", Name.C_EMDM, self.weight_off("t2-c-emdm-no-manip")),
             (
-                "E5",
-                "t2-c-ivkc-wide-limits",
-                Name.C_IVKC,
-                self.limits_widened(),
-                None,
-            ),
-            ("E6", "t2-c-emdm-no-manip", Name.C_EMDM, self.weight_off("t2-c-emdm-no-manip"), None),
-            (
-                "E7",
                 "t2-c-emdm-tight-slack",
                 Name.C_EMDM,
                 sentence(
                     Math(r"|\delta|\leq", "|δ| ≤ "),
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
                 ),
-                None,
             ),
             (
-                "E8",
                 "t2-uc-emdm-stiff-slack",
                 Name.UC_EMDM,
                 sentence(
                     *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e"))
                 ),
-                None,
             ),
         ]
         table = Table(
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); for E3 (",
+                "brackets (stall: goal not reached); for ",
+                run_label(FINER_STEP),
+                " (",
                 Ref("fig", "pareto"),
                 "'s sweep), the nominal weights at ",
                 *self.e3_step(),
@@ -184,9 +201,7 @@ class Tables(Claims):
             font="scriptsize",
             colsep=2.3,  # six columns of two numbers each at column width
         )
-        for i, (label, key, ctrl, change, _kind) in enumerate(items):
-            # a pair's second row leaves the label blank: one run, two controllers
-            shown = "" if i and items[i - 1][0] == label else label
+        for key, ctrl, change in items:
             entry = self.evid(key)
             task = entry["task"]
             run = entry["runs"].get(ctrl, {})
@@ -214,15 +229,15 @@ class Tables(Claims):
                 cells.append(new + sentence(" (") + old + sentence(")"))
             table.rows.append(
                 [
-                    sentence(shown),
+                    sentence(run_label(key)),
                     sentence("1" if task == "task1" else "2", ", ", ctrl),
                     change,
                     *cells,
                 ]
             )
-            if (key, ctrl) == ("t1-c-slack-policy", Name.C_IVKC) and (e3 := self.e3_row()):
+            if key == "t1-uc-no-manip" and (e3 := self.e3_row()):
                 table.rows.append(e3)
         self.tables["evidence"] = table
-        for s in sections:  # with Task 1.2, whose answer first cites E2
+        for s in sections:  # with Task 1.2: it floats to the top of the page Task 1 ends on
             if s.key == "t1-c":
                 s.tables.append("evidence")

@@ -15,6 +15,7 @@ from .base import (
     COND_J,
     DT,
     E_SYM,
+    FINER_STEP,
     K_EQ,
     M_SYM,
     MRATE,
@@ -23,6 +24,7 @@ from .base import (
     W_M,
     StoryBase,
     eq,
+    run_label,
 )
 
 KKT_EXP = round(math.log10(KKT_TOL))
@@ -83,7 +85,9 @@ class Task1(StoryBase):
             " exactly, so the end effector follows the same path, up to the Euler step's "
             "second-order term. Only null-space motion differs: with ",
             W_M,
-            " = 0 (E1), ",
+            " = 0 (",
+            run_label("t1-uc-no-manip"),
+            "), ",
         )
         ref = self.evid("t1-uc-no-manip", "reference")
         if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
@@ -175,10 +179,11 @@ class Task1(StoryBase):
                 "one command, whatever the objective",
             )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
-            if coincide:  # (with none in common, the next paragraph's E2 says enough)
+            if coincide:  # (with none in common, the next paragraph says enough)
                 p += sentence(
-                    ". With the slack policy instead of scaling (E2) the commands coincide for "
-                    "only ",
+                    ". With a free slack instead of scaling (",
+                    Ref("tab", "outcomes"),
+                    ") the commands coincide for only ",
                     self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"),
                     " steps",
                 )
@@ -328,7 +333,9 @@ class Task1(StoryBase):
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " it arrives in ",
                     self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
-                    " (E3) but spends ",
+                    " (",
+                    run_label(FINER_STEP),
+                    ") but spends ",
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
                     " of effort against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),

@@ -19,6 +19,7 @@ from .base import (
     W_S,
     eq,
     q,
+    run_label,
 )
 from .claims import Claims, cap
 from .records import EvidenceKey
@@ -27,7 +28,7 @@ from .records import EvidenceKey
 class Task2(Claims):
     def flip_delayed(self) -> tuple[Segment | str, ...]:
         """``, and the term delays that crossing from A to B s``: the nominal C-EMDM flips its
-        elbow later than E6, which runs without the dexterity term (empty otherwise)."""
+        elbow later than the ablation that runs without the dexterity term (empty otherwise)."""
         key: EvidenceKey = "t2-c-emdm-no-manip"
         emdm = Name.C_EMDM
         # the crossing's time is m's minimum, as the singular passage is told ("at t = 11.15 s
@@ -101,12 +102,8 @@ class Task2(Claims):
                     m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
                     if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
                         answer += sentence(" with a higher mean ", M_SYM)
-                    answer += sentence(  # (both rows are in Table II)
-                        f", before {emdm} with its own (",
-                        self.evid_goal(key, emdm),
-                        ", ",
-                        Ref("tab", "evidence"),
-                        ")",
+                    answer += sentence(  # (both rows are in Table I, cited just before)
+                        f", before {emdm} with its own (", self.evid_goal(key, emdm), ")"
                     )
             answer += sentence(".")
         else:
@@ -262,11 +259,13 @@ class Task2(Claims):
         e4 = self.evid("t2-c-slack-policy", "runs", ivkc)
         e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
         told = bool(self.ivkc_with_slack()) and self.ivkc_first_with_slack()
-        if not reached_i and told and e5.get("reached"):  # E4 and the stall's cause are answered
+        if not reached_i and told and e5.get("reached"):  # the slack run and the stall's cause told
             p += sentence(
                 "With the joint limits widened to ",
                 *self.limits_widened(text=True),
-                " (E5, ",
+                " (",
+                run_label("t2-c-ivkc-wide-limits"),
+                ", ",
                 Ref("tab", "evidence"),
                 f") {ivkc} arrives too, in ",
                 self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
@@ -275,12 +274,16 @@ class Task2(Claims):
         elif not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
             if e4.get("reached"):  # (its time is in the answer)
-                p += sentence("with a slack (E4, ", Ref("tab", "evidence"), ")")
+                p += sentence("with a free slack (", Ref("tab", "outcomes"), ")")
             if e4.get("reached") and e5.get("reached"):
                 p += sentence(" and ")
             if e5.get("reached"):
                 p += sentence(
-                    "with the joint limits widened to ", *self.limits_widened(text=True), " (E5)"
+                    "with the joint limits widened to ",
+                    *self.limits_widened(text=True),
+                    " (",
+                    run_label("t2-c-ivkc-wide-limits"),
+                    ")",
                 )
             p += sentence(
                 ": the stall comes from keeping the task direction under the limits, not from "
@@ -328,7 +331,9 @@ class Task2(Claims):
                 )
             else:
                 p += sentence(
-                    f"Without the dexterity term {emdm} still arrives (E6): the slack carries it"
+                    f"Without the dexterity term {emdm} still arrives (",
+                    run_label("t2-c-emdm-no-manip"),
+                    "): the slack carries it",
                 )
             e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
             if not e7.get("reached", True):
@@ -336,7 +341,9 @@ class Task2(Claims):
                     ". With ",
                     Math(r"|\delta|\leq", "|δ| ≤ "),
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
-                    " it stalls (E7)",
+                    " it stalls (",
+                    run_label("t2-c-emdm-tight-slack"),
+                    ")",
                 )
             p += sentence(".")
         sec.paragraphs.append(p)
@@ -477,7 +484,9 @@ class Task2(Claims):
                 ERR,
                 " is large. With ",
                 *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
-                " (E8) it peaks at ",
+                " (",
+                run_label("t2-uc-emdm-stiff-slack"),
+                ") it peaks at ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "max_abs_slack", fmt=".0e", unit="m/s"
                 ),
