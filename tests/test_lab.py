@@ -16,7 +16,7 @@ from emdm import QP
 from emdm.cli import main
 from emdm.core.controllers import program_at
 from emdm.solvers import available_solvers, get_solver, kkt_report
-from emdm.studies.lab import lab_json, run_lab
+from emdm.studies.lab import lab_json, merge_labs, run_lab
 
 # solvers whose answers are exact to 1e-8 (measured; piqp and highs reach about 1e-7, osqp 1e-2)
 EXACT = [
@@ -191,6 +191,38 @@ def test_lab_is_parallel_and_serial_alike():
         a = [s.x for s in serial.studies[name].solves]
         b = [s.x for s in parallel.studies[name].solves]
         assert all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+
+
+def test_a_search_its_budget_ends_says_so(small_lab):
+    """A gradient-free search stopped by its evaluation budget reports ``max_iter`` (the lab
+    counts these as ``limit_stops``), differential evolution's budget counted in generations."""
+    lab = small_lab
+    qp = program_at(lab.controller, lab.scenario, lab.reference.q[0]).qp
+    for name in ("nelder-mead", "differential-evolution"):
+        short = get_solver(name).solve(qp, budget=40)
+        assert short.status == "max_iter", name
+        assert short.evaluations <= 40 + 2 * qp.n  # a last simplex or population at most
+    long = get_solver("nelder-mead").solve(qp, budget=100_000)
+    assert long.status == "optimal" and long.evaluations < 100_000
+
+
+def test_the_lab_records_its_budget_and_the_searches_it_ended(small_lab):
+    record = lab_json(small_lab)
+    assert record["budget"] == 200
+    for name in ("nelder-mead", "cobyla"):
+        study = small_lab.studies[name]
+        ended = sum(s.evaluations >= 200 for s in study.solves)  # nelder-mead, cobyla: by count
+        assert record["solvers"][name]["limit_stops"] == ended
+    assert record["solvers"]["active-set"]["limit_stops"] == 0
+
+
+def test_merged_labs_keep_their_budget_and_refuse_another(small_lab):
+    import dataclasses
+
+    merged = merge_labs([small_lab, small_lab])
+    assert merged.budget == small_lab.budget == 200
+    with pytest.raises(ValueError, match="budget"):
+        merge_labs([small_lab, dataclasses.replace(small_lab, budget=100)])
 
 
 def test_solvers_command_writes_the_files(tmp_path, capsys):

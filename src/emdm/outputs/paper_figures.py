@@ -312,13 +312,13 @@ def pair_figure(
                     peaks.append(float(f"{v:.2g}"))
                     colours.append(colour)
                 right = qd_axes[j].secondary_yaxis("right")
-                right.set_yticks(peaks, [f"{v:g}" for v in peaks])
+                right.set_yticks(peaks, [_plain(v) for v in peaks])
                 for label, colour in zip(right.get_yticklabels(), colours, strict=True):
                     label.set_color(colour)
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 right.tick_params(pad=1)
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
-                a.set_yticks([-tick, tick], [f"{-tick:g}", f"{tick:g}"])
+                a.set_yticks([-tick, tick], [_plain(-tick), _plain(tick)])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
@@ -496,6 +496,12 @@ def workspace_figure(
             labelspacing=0.35,
         )
     return stem
+
+
+def _plain(v: float) -> str:
+    """A tick label in shortest form with a true minus sign, as matplotlib's own ticks have
+    (a fixed label is written as given: ``f"{-2:g}"`` would print a hyphen)."""
+    return f"{v:g}".replace("-", "\N{MINUS SIGN}")
 
 
 def _ratio_tex(ratio: float) -> str:

@@ -169,7 +169,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
         penalty = penalty_weight(qp) if method in PENALISED else 0.0
         t0 = np.zeros(red.dim)
         cons = LinearConstraint(red.G, -np.inf, red.h) if red.h.size else None
-        status, iterations = "optimal", 0
+        status, iterations, limited = "optimal", 0, False
         if method in ("nelder-mead", "powell"):
             rec = _Recorder(red, penalty=penalty, keep=history)
             options: dict[str, Any] = {"maxfev": budget, "xatol": 1e-12, "fatol": 1e-14}
@@ -197,6 +197,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             rec = _Recorder(red, penalty=penalty, keep=history)
             lo, hi = red.box()
             popsize = 15
+            generations = max(1, budget // (popsize * red.dim) - 1)  # within the budget
             res = differential_evolution(
                 rec,
                 Bounds(lo, hi),
@@ -206,9 +207,10 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                 atol=1e-14,
                 popsize=popsize,
                 polish=False,
-                maxiter=max(1, budget // (popsize * red.dim) - 1),
+                maxiter=generations,
             )
             t, iterations, ok = res.x, int(res.nit), bool(res.success)
+            limited = res.nit >= generations  # its budget is counted in generations
         elif method == "cma-es":
             import cma
 
@@ -234,7 +236,8 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
         else:  # pragma: no cover - guarded by the registry
             raise ValueError(method)
         if not ok:
-            status = "max_iter" if rec.evaluations >= budget else "not converged"
+            limited = limited or rec.evaluations >= budget
+            status = "max_iter" if limited else "not converged"
         return _finish(red, t, status, iterations, rec, start)
 
     solve.__name__ = f"solve_{method.replace('-', '_')}"

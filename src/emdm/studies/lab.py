@@ -38,7 +38,7 @@ from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 from ..solvers.base import multipliers
-from ..solvers.nlp import PENALTY, penalty_weight
+from ..solvers.nlp import DEFAULT_BUDGET, PENALTY, penalty_weight
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",
@@ -138,6 +138,9 @@ class SolverStudy:
             "over_period": int(np.sum(times > period)),
             "median_iterations": float(np.median([s.iterations for s in self.solves])),
             "median_evaluations": float(np.median([s.evaluations for s in self.solves])),
+            # the searches an iteration or evaluation limit ended (a gradient-free method's
+            # budget: :attr:`LabResult.budget`), not a convergence test
+            "limit_stops": sum(s.status == "max_iter" for s in self.solves),
             "max_gap": float(gaps.max()),
             "max_abs_gap": float(np.abs(gaps).max()),
             "max_violation": float(max((s.violation for s in found), default=math.nan)),
@@ -210,6 +213,8 @@ class LabResult:
     features: dict[int, dict[str, float]] = field(default_factory=dict)
     repeats: int = 1
     """Each call is timed as the median of up to this many (one above :data:`SLOW_CALL`)."""
+    budget: int = DEFAULT_BUDGET
+    """The gradient-free methods' evaluation budget per program."""
 
 
 def sample_steps(run: Run, sample: int | None) -> list[int]:
@@ -335,7 +340,16 @@ def run_lab(
         studies[spec.name] = SolverStudy(spec, solves, histories, run, error)
     features = {k: step_features(reference, k, qp) for k, qp in programs.items()}
     return LabResult(
-        scenario, ctrl, reference, steps, reps, studies, optimum, features, repeats=repeats
+        scenario,
+        ctrl,
+        reference,
+        steps,
+        reps,
+        studies,
+        optimum,
+        features,
+        repeats=repeats,
+        budget=DEFAULT_BUDGET if budget is None else budget,
     )
 
 
@@ -403,6 +417,7 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
         # the gradient-free methods' exact l1 penalty: rho = penalty_weight (1 + max|P|)
         "penalty_weight": PENALTY,
         "repeats": lab.repeats,
+        "budget": lab.budget,
         "solvers": {
             name: study.summary(lab.scenario.motion.dt) for name, study in lab.studies.items()
         },
@@ -507,8 +522,12 @@ def merge_labs(parts: Sequence[LabResult]) -> LabResult:
     """One lab from labs of the same scenario, controller and steps run for different solvers."""
     first = parts[0]
     for part in parts[1:]:
-        if part.steps != first.steps or part.controller != first.controller:
-            raise ValueError("only labs of the same controller and steps can be merged")
+        if (part.steps, part.controller, part.budget) != (
+            first.steps,
+            first.controller,
+            first.budget,
+        ):
+            raise ValueError("only labs of the same controller, steps and budget can be merged")
     studies: dict[str, SolverStudy] = {}
     for part in parts:
         studies.update(part.studies)
@@ -522,4 +541,5 @@ def merge_labs(parts: Sequence[LabResult]) -> LabResult:
         first.optimum,
         first.features,
         repeats=first.repeats,
+        budget=first.budget,
     )

@@ -92,7 +92,7 @@ class Front(Claims):
         if anims:
             last = anims[-1]
             p = sentence(
-                "Animations of every pair lie in animations/ beside this paper (e.g. ",
+                "Animations of every pair are in the report's animations/ folder (e.g. ",
                 f"{last['task']}/{last['files'][-1]}",
             )
             if last["speedup"] != 1.0:

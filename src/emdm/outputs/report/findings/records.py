@@ -201,6 +201,7 @@ SolverKey = Literal[
     "over_period",
     "median_iterations",
     "median_evaluations",
+    "limit_stops",
     "max_gap",
     "max_abs_gap",
     "max_violation",
@@ -228,6 +229,8 @@ class SolverRow:
     """How many of its programs took longer than the control period."""
     median_iterations: float
     median_evaluations: float
+    limit_stops: int
+    """How many of its searches an iteration or evaluation limit ended."""
     max_gap: float
     max_abs_gap: float
     max_violation: float
@@ -245,6 +248,7 @@ LabKey = Literal[
     "representative_steps",
     "penalty_weight",
     "repeats",
+    "budget",
     "challenges",
     "notes",
 ]
@@ -263,6 +267,8 @@ class LabRecord:
     representative_steps: dict[str, Any]
     penalty_weight: float
     repeats: int
+    budget: int
+    """The gradient-free methods' evaluation budget per program."""
     challenges: dict[str, Any]
     notes: dict[str, Any]
     solvers: dict[str, SolverRow]

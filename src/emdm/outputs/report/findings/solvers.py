@@ -21,6 +21,29 @@ SHOWN_ZERO_EXP = -12
 
 
 class Solvers(StoryBase):
+    def budget_stops(self, lab: LabName, free: list[str], rows: dict[str, SolverRow]) -> Sentence:
+        """``; the budget of 600 evaluations per program ends all 41 searches of A, 2 of B's``:
+        the gradient-free searches their budget ended (empty when it ended none)."""
+        stopped = sorted(
+            (k for k in free if rows[k].limit_stops), key=lambda k: -rows[k].limit_stops
+        )
+        if not stopped:
+            return []
+        out = sentence(
+            "; the budget of ",
+            self.d.num(f"data/{lab}/solvers.json", "budget", fmt="d"),
+            " evaluations per program ends ",
+        )
+        for i, k in enumerate(stopped):
+            every = rows[k].limit_stops == rows[k].resolved_steps
+            out += sentence(
+                "all " if every else "",
+                self.sn(lab, k, "limit_stops", "d"),
+                f" of {k}'s searches" if i == 0 else f" of {k}'s",
+                "" if i == len(stopped) - 1 else " and " if i == len(stopped) - 2 else ", ",
+            )
+        return out
+
     def task2_solvers(self) -> Section:
         f = "data/task2-lab-C-EMDM/solvers.json"
         sec = Section(
@@ -111,6 +134,7 @@ class Solvers(StoryBase):
                     if max(gaps) > min(gaps)
                     else sentence(". The others are inexact")
                 )
+                answer += self.budget_stops(lab, free, rows)
                 answer += sentence(".")
             else:
                 answer += sentence(".")

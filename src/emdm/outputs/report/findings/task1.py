@@ -63,9 +63,9 @@ class Task1(StoryBase):
                 f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
             )
         answer += sentence(
-            "; their end-effector paths differ by at most ",
+            "; at every step their end effectors are at most ",
             gap,
-            ", so their distances to the goal coincide in ",
+            " apart, so their distances to the goal coincide in ",
             Ref("fig", "t1-uc"),
             "(c).",
         )
@@ -146,9 +146,9 @@ class Task1(StoryBase):
                 if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
                 else self.outcome(t, ivkc)
             ),
-            ", on paths at most ",
+            ", the end effectors at most ",
             self.pairn(t, "C", "max_path_gap", ".4f", "m"),
-            " apart",
+            " apart at equal times",
         )
         scaled = self.evv(t, emdm, "scaling")
         times = [self.mv(t, c, "time_to_goal") for c in (*PAIRS["UC"], *PAIRS["C"])]
