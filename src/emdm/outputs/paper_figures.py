@@ -388,9 +388,17 @@ def workspace_figure(
         )
         p0 = runs[0].p[0]
         goal = np.asarray(sc.motion.goal)
-        ax.plot([p0[0], goal[0]], [p0[1], goal[1]], color="grey", linestyle=":", linewidth=0.9)
+        # the line C-IVKC keeps to: on top of every path, or the stalled one hides it
+        line_style: dict[str, Any] = {
+            "color": "black",
+            "linestyle": (0, (1, 1.2)),
+            "linewidth": 1.0,
+        }
+        ax.plot([p0[0], goal[0]], [p0[1], goal[1]], **line_style, zorder=4)
+        drawn = [runs[0].p[:1], goal[None, :], *(r.p[:, :2] for r in runs)]
         for sol in geometry["solutions"]:
             pts = _arm_points(runs[0], np.array([sol["q1"], sol["q2"]]))
+            drawn.append(pts[:, :2])
             ax.plot(
                 pts[:, 0],
                 pts[:, 1],
@@ -401,6 +409,7 @@ def workspace_figure(
                 markersize=2.5,
             )
         start = _arm_points(runs[0], runs[0].q[0])
+        drawn.append(start[:, :2])
         ax.plot(
             start[:, 0],
             start[:, 1],
@@ -445,21 +454,26 @@ def workspace_figure(
             linestyle="none",
         )
         ax.set_aspect("equal")
-        ax.set_xlim(-reach * 1.04, reach * 1.04)
-        ax.set_ylim(-reach * 1.04, reach * 1.04)
+        # the view fits what is drawn (arms, paths, goal), not the whole reachable disc: at
+        # column width every millimetre of the square goes to the paths
+        box = np.concatenate(drawn)
+        pad = 0.08 * reach
+        ax.set_xlim(box[:, 0].min() - pad, box[:, 0].max() + pad)
+        ax.set_ylim(box[:, 1].min() - pad, box[:, 1].max() + pad)
         ax.set_xlabel(r"$x$ (m)")
         ax.set_ylabel(r"$y$ (m)")
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         handles += [
             Patch(color="#BBBBBB", alpha=0.25, label="reachable"),
-            Line2D([], [], color="grey", linestyle=":", label="straight line"),
+            Line2D([], [], **line_style, label="straight line"),
             Patch(
                 facecolor="none",
                 edgecolor="#D55E00",
                 hatch="////",
                 label=rf"$\|p\|<{inner:.3f}$ m",
             ),
-            Line2D([], [], color="black", marker="o", markersize=2.5, label="start, goal"),
+            Line2D([], [], color="black", marker="o", markersize=2.5, label="arm: start, goal"),
+            Line2D([], [], color="black", marker="*", markersize=6, linestyle="none", label="goal"),
             Line2D(
                 [],
                 [],
@@ -1045,15 +1059,15 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
             for run in runs:
                 ax_q.plot(run.t, run.q, **{**_style(run, medium), "label": None})
             first = runs[0]
-            for j in range(first.q.shape[1]):  # name each joint where its first run ends, on
-                end = float(first.q[-1, j])  # the side of 0: the limit lines and the time
-                ax_q.annotate(  # axis' ticks lie on the other
+            for j in range(first.q.shape[1]):  # each joint named beyond the right edge, at the
+                ax_q.annotate(  # height its first run ends at: on no curve and no limit line
                     rf"$q_{j + 1}$",
-                    (float(first.t[-1]), end),
-                    xytext=(-1, -2 if end > 0 else 2),
+                    (1.0, float(first.q[-1, j])),
+                    xycoords=("axes fraction", "data"),
+                    xytext=(1.5, 0),
                     textcoords="offset points",
-                    ha="right",
-                    va="top" if end > 0 else "bottom",
+                    ha="left",
+                    va="center",
                     fontsize=medium.tiny,
                 )
             ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))
@@ -1062,12 +1076,13 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
                 ax_qd.axhline(bound, color="black", linewidth=0.6, linestyle=":")
             for run in runs:
                 ax_qd.plot(run.t[:-1], run.qd, **{**_style(run, medium), "label": None})
-            for j in range(first.qd.shape[1]):  # each joint named beside its first run's peak
-                k = int(np.argmax(np.abs(first.qd[:, j])))
+            for j in range(first.qd.shape[1]):  # each joint named beyond the right edge, at
+                k = int(np.argmax(np.abs(first.qd[:, j])))  # the height of its first run's peak
                 ax_qd.annotate(
                     rf"$\dot q_{j + 1}$",
-                    (float(first.t[k]), float(first.qd[k, j])),
-                    xytext=(3, 0),
+                    (1.0, float(first.qd[k, j])),
+                    xycoords=("axes fraction", "data"),
+                    xytext=(1.5, 0),
                     textcoords="offset points",
                     ha="left",
                     va="center",
