@@ -198,10 +198,13 @@ def test_a_search_its_budget_ends_says_so(small_lab):
     counts these as ``limit_stops``), differential evolution's budget counted in generations."""
     lab = small_lab
     qp = program_at(lab.controller, lab.scenario, lab.reference.q[0]).qp
-    for name in ("nelder-mead", "differential-evolution"):
-        short = get_solver(name).solve(qp, budget=40)
+    for name, budget in (("nelder-mead", 40), ("differential-evolution", 200)):
+        short = get_solver(name).solve(qp, budget=budget)
         assert short.status == "max_iter", name
-        assert short.evaluations <= 40 + 2 * qp.n  # a last simplex or population at most
+        # within the budget: a simplex's last shrink may pass it by n + 1 points, a generation
+        # of differential evolution may not (it stops at the last whole one within it)
+        slack = qp.n + 1 if name == "nelder-mead" else 0
+        assert budget / 2 < short.evaluations <= budget + slack, name
     long = get_solver("nelder-mead").solve(qp, budget=100_000)
     assert long.status == "optimal" and long.evaluations < 100_000
 

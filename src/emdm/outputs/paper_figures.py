@@ -870,10 +870,10 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         ax.set_xlim(min(times) / 3, 3 * max(max(times), dt * 1e3))
         ax.set_ylim(-0.6, len(order) - 0.4)
         ax.grid(axis="y", visible=False)
-        fig.legend(
+        fig.legend(  # two columns: three family names in one row overrun the figure
             handles=_family_handles(rows, order),
             loc="outside lower center",
-            ncols=3,
+            ncols=2,
             fontsize=medium.tiny,
             frameon=False,
             handletextpad=0.2,

@@ -197,7 +197,12 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             rec = _Recorder(red, penalty=penalty, keep=history)
             lo, hi = red.box()
             popsize = 15
-            generations = max(1, budget // (popsize * red.dim) - 1)  # within the budget
+            generation = popsize * red.dim  # trial points; only feasible ones are evaluated
+
+            def last_whole_generation(intermediate_result: Any) -> bool:
+                """Stop where another generation could overrun the evaluation budget."""
+                return rec.evaluations + generation > budget
+
             res = differential_evolution(
                 rec,
                 Bounds(lo, hi),
@@ -207,10 +212,11 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                 atol=1e-14,
                 popsize=popsize,
                 polish=False,
-                maxiter=generations,
+                maxiter=budget,  # the callback stops it first
+                callback=last_whole_generation,
             )
             t, iterations, ok = res.x, int(res.nit), bool(res.success)
-            limited = res.nit >= generations  # its budget is counted in generations
+            limited = rec.evaluations + generation > budget
         elif method == "cma-es":
             import cma
 

@@ -124,10 +124,12 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "Here task scaling's only gain is a straighter path. A free slack makes C-EMDM ",
+                "In Task 1 task scaling's only gain is a straighter path: "
+                if len(gains) == len(self._policy_terms())  # the slack wins on every other
+                else "In Task 1 task scaling keeps a straighter path, but ",
+                "a free slack makes C-EMDM ",
                 listed(gains),
-                " in Task 1",
-                " and lets C-IVKC arrive in Task 2" if self.ivkc_with_slack() else "",
+                ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 " (",
                 Ref("tab", "outcomes"),
                 "). Where the path does not matter a slack is the better choice; where "

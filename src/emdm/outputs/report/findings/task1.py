@@ -409,17 +409,18 @@ class Task1(StoryBase):
         fallbacks = self.mv(t, Name.UC_EMDM, "fallback_steps") + self.mv(
             t, Name.C_EMDM, "fallback_steps"
         )
-        worst = max((Name.UC_EMDM, Name.C_EMDM), key=lambda c: self.mv(t, c, "max_kkt_residual"))
         answer = sentence(
             "The custom active-set solver returned a certified optimum at every step of UC-EMDM (",
             self.mt(t, Name.UC_EMDM, "steps", "d"),
+            " steps, largest relative KKT residual ",
+            self.mt(t, Name.UC_EMDM, "max_kkt_residual", ".2g"),
             ") and C-EMDM (",
             self.mt(t, Name.C_EMDM, "steps", "d"),
-            "; largest relative KKT residual ",
-            self.mt(t, worst, "max_kkt_residual", ".2g"),
-            ", accepted up to ",
+            ", ",
+            self.mt(t, Name.C_EMDM, "max_kkt_residual", ".2g"),
+            "), accepted up to ",
             Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
-            "), so the fallback (daqp, then quadprog) ",
+            ", so the fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
             answer += sentence("was never used.")
