@@ -908,7 +908,7 @@ def convergence_figure(
     against objective evaluations (``curves``: name -> (family, evaluations, error)), each
     solver in its own colour and marker, solid for gradient-based and dashed for gradient-free
     (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
-    height = 1.15 if medium is PAPER else 2.7
+    height = 1.0 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     marks = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<")
     with _figure(stem, medium, width, height) as fig:
@@ -945,7 +945,7 @@ def convergence_figure(
             fontsize=medium.tiny,
             frameon=False,
             handlelength=2.2,
-            labelspacing=0.25 if medium is PAPER else 0.5,
+            labelspacing=0.15 if medium is PAPER else 0.5,
         )
     return stem
 
@@ -1021,94 +1021,20 @@ def manipulability_figure(
 
 
 def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
-    """On a slide: the effort spent so far, sum E dt up to t (linear, so a saving shows as a gap
-    that stays), and the manipulability m(t) of a pair, two large panels (where the pair
-    composite's would be too small to read). In the paper (Task 2.2's figure): E(t) on a log axis
-    as in the pair figures, m(t), the joint positions and speeds against their limits (where the
-    pair leaves them) and the tracking gap, five panels at column width."""
-    height = 2.3 if medium is SLIDE else 1.2
-    width = medium.wide if medium is SLIDE else medium.column
-    with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(1, 2 if medium is SLIDE else 5)
-        ax_e, ax_m = axes[0], axes[1]
+    """The pitch's Task 2.2 slide: the effort spent so far, sum E dt up to t (linear, so a saving
+    shows as a gap that stays), and the manipulability m(t) of a pair, two large panels (where the
+    pair composite's would be too small to read)."""
+    with _figure(stem, medium, medium.wide, 2.3) as fig:
+        ax_e, ax_m = fig.subplots(1, 2)
         for run in runs:
             st = _style(run, medium)
-            if medium is SLIDE:  # the saving as a gap that stays
-                spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
-                ax_e.plot(run.t, spent, **st)
-            else:  # E(t) as in the pair figures' (b), so the figures read alike
-                ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
+            spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
+            ax_e.plot(run.t, spent, **st)
             ax_m.plot(run.t, run.m, **st)
-        if medium is SLIDE:
-            ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
-            ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
-            ax_m.legend(loc="best", frameon=True, framealpha=0.9)
-        else:
-            ax_q = axes[2]
-            arm, damper = runs[0].scenario.arm, runs[0].scenario.damper
-            zones = {  # one shade per distinct zone: joints that share their limits share it
-                (float(a), float(b), float(i), float(s))
-                for a, b, i, s in zip(
-                    arm.q_min, arm.q_max, damper.influence, damper.stop, strict=True
-                )
-            }
-            for zone in zones:
-                _damper_zones(ax_q, *zone)
-            for bound in {*map(float, arm.q_min), *map(float, arm.q_max)}:
-                ax_q.axhline(bound, color="black", linewidth=0.6)
-            for run in runs:
-                ax_q.plot(run.t, run.q, **{**_style(run, medium), "label": None})
-            first = runs[0]
-            for j in range(first.q.shape[1]):  # each joint named beyond the right edge, at the
-                ax_q.annotate(  # height its first run ends at: on no curve and no limit line
-                    rf"$q_{j + 1}$",
-                    (1.0, float(first.q[-1, j])),
-                    xycoords=("axes fraction", "data"),
-                    xytext=(1.5, 0),
-                    textcoords="offset points",
-                    ha="left",
-                    va="center",
-                    fontsize=medium.tiny,
-                )
-            ax_q.set_yticks(sorted({0.0, *map(float, arm.q_min), *map(float, arm.q_max)}))
-            ax_qd = axes[3]  # the speeds the text quotes (peaks), against their limits
-            for bound in {*map(float, arm.qd_min), *map(float, arm.qd_max)}:
-                ax_qd.axhline(bound, color="black", linewidth=0.6, linestyle=":")
-            for run in runs:
-                ax_qd.plot(run.t[:-1], run.qd, **{**_style(run, medium), "label": None})
-            for j in range(first.qd.shape[1]):  # each joint named beyond the right edge, at
-                k = int(np.argmax(np.abs(first.qd[:, j])))  # the height of its first run's peak
-                ax_qd.annotate(
-                    rf"$\dot q_{j + 1}$",
-                    (1.0, float(first.qd[k, j])),
-                    xycoords=("axes fraction", "data"),
-                    xytext=(1.5, 0),
-                    textcoords="offset points",
-                    ha="left",
-                    va="center",
-                    fontsize=medium.tiny,
-                )
-            ax_qd.set_ylabel(r"$\dot q$ (rad/s)", labelpad=1)
-            ax_gap = axes[4]  # what the slack gives up: the tracking gap, as Fig. 5's (d)
-            for run in runs:
-                ax_gap.semilogy(
-                    run.t[:-1],
-                    np.maximum(tracking_gap(run), GAP_FLOOR),
-                    **{**_style(run, medium), "label": None},
-                )
-            ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
-            ax_gap.yaxis.set_major_locator(LogLocator(numticks=3))
-            ax_gap.yaxis.set_minor_locator(NullLocator())
-            ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
-            ax_e.yaxis.set_major_locator(LogLocator(numticks=3))
-            ax_e.yaxis.set_minor_locator(NullLocator())
-            ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-            ax_q.set_ylabel(r"$q$ (rad)", labelpad=1)
-            for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)", "(e)"), strict=True):
-                ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
-            handles, labels = ax_e.get_legend_handles_labels()  # above: no panel has room
-            fig.legend(handles, labels, loc="outside upper center", ncols=2, frameon=False)
-        for ax in axes:
+        ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
+        ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
+        ax_m.legend(loc="best", frameon=True, framealpha=0.9)
+        for ax in (ax_e, ax_m):
             ax.set_xlabel(r"$t$ (s)")
     return stem
 

@@ -291,13 +291,9 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
     ivkc, emdm = PAIRS[group]
     pair = [runs[ivkc], runs[emdm]]
     with pf.png_only(cfg.quick):
-        # Task 2's constrained pair also shows the tracking gap: the slack, the scaled-off part
-        gap = (task, group) == ("task2", "C")
+        # Task 2's pairs also show the tracking gap: the slack, or the scaled-off part
+        gap = task == "task2"
         out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}", gap=gap))]
-        if (task, group) == ("task2", "UC"):  # the paper's Task 2.2 figure: two compact panels
-            out.append(
-                str(pf.effort_figure(pair, stage / PAPER_FIGURES / "task2-UC-effort", pf.PAPER))
-            )
         if not cfg.quick:
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))

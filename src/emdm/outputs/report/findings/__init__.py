@@ -56,9 +56,8 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
             self.task1_solver(),
             Section("task2", "Task 2: the non-redundant two-link arm"),
             self.task2_c(),
-            self.task2_solvers(),
+            self.task2_challenges(self.task2_solvers()),
             self.task2_uc(),
-            self.task2_challenges(),
             self.conclusion(),
             self.beyond(),
         ]

@@ -439,13 +439,15 @@ class StoryBase:
         out = sentence(f"{ivkc} (solid), {emdm} (dashed)")
         if (task, group) == ("task1", "UC"):
             out += sentence(": ") + self.panels(far=self.far_beyond(task, PAIRS[group]))
+        elif (task, group) == ("task2", "UC"):  # the same five panels as Task 2.1's, the gap too
+            out += sentence(", as in ", Ref("fig", "t2-c"))
         else:
             out += sentence(", as in ", Ref("fig", "t1-uc"))
         if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
             out += sentence(
                 " with (d) the tracking gap ",
                 Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
-                " (the slack, or the scaled-off ",
+                " (slack or scaled-off ",
                 Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
                 "; log, floored at ",
                 Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),

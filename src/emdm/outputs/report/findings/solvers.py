@@ -41,9 +41,7 @@ class Solvers(StoryBase):
                 self.sn(lab, k, "limit_stops", "d"),
                 f" of {k}'s searches" if i == 0 else f" of {k}'s",
                 # a population method stops short of the budget: say why its count is lower
-                " (at the last whole generation within it)"
-                if k == "differential-evolution"
-                else "",
+                " (in whole generations)" if k == "differential-evolution" else "",
                 "" if i == len(stopped) - 1 else " and " if i == len(stopped) - 2 else ", ",
             )
         return out
@@ -115,9 +113,9 @@ class Solvers(StoryBase):
             if twin and exact_answer(twin.max_abs_gap, twin.max_violation):
                 # the same formulation, a gradient-based method: the gap is the method's
                 answer += sentence(
-                    f". SLSQP on that reduced program ({LIKE_FOR_LIKE}) needs ",
+                    f". SLSQP on it ({LIKE_FOR_LIKE}) needs ",
                     self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                    ", so the many evaluations come from the method, not the reduced program",
+                    ": the many evaluations come from the method, not the program",
                 )
             if inexact_free:
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]
@@ -285,7 +283,7 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " programs (evenly spaced, with the least dexterous). ms: median time from "
+                " programs (evenly spaced, least dexterous included). ms: median time from "
                 "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
                 "evaluations (--: none); gap, viol.: "
                 "largest ",

@@ -26,6 +26,7 @@ from .base import (
     eq,
     run_label,
 )
+from .claims import cap as capitalised
 
 KKT_EXP = round(math.log10(KKT_TOL))
 """The exponent of the KKT check's acceptance threshold, as the paper writes it."""
@@ -80,10 +81,10 @@ class Task1(StoryBase):
         sec.figures.append(self.figure("t1-uc", "figures/task1-UC", self.pair_caption(t, "UC")))
         # why the tracking is the same
         p = sentence(
-            "Both programs impose ",
+            "Both impose ",
             Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so the end effector follows the same path, up to the Euler step's "
-            "second-order term. Only null-space motion differs: with ",
+            " exactly, so the tip follows the same path up to the Euler step's second-order "
+            "term. Only null-space motion differs: with ",
             W_M,
             " = 0 (",
             run_label("t1-uc-no-manip"),
@@ -170,13 +171,13 @@ class Task1(StoryBase):
             p = sentence(
                 "The first ",
                 self.pairn(t, "C", "coincide_steps", "d"),
-                " commands, up to ",
+                " commands (to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                ", are identical, and ",
+                ", ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of them are scaled. On each, the joints at their bounds and the task admit only "
-                "one command, whatever the objective",
+                " of them scaled) are identical: on each the bounds and the task admit only one "
+                "command",
             )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph says enough)
@@ -261,32 +262,37 @@ class Task1(StoryBase):
         answer += self.whole_runs_levelled()
         sec.answer = answer
         self.answers.append(("Task 1: Pareto front between E and M at t = 0, T/3, 2T/3, T", answer))
-        # degenerate and saturated fronts of C-EMDM
+        # degenerate and saturated fronts of C-EMDM, one clause each
         p: Sentence = []
         if "C-EMDM" in self.rec.fronts:
             csteps = self.rec.fronts["C-EMDM"]
+            clauses: list[Sentence] = []
             for i, info in enumerate(csteps):
                 if info.degenerate:
-                    p += sentence(
-                        "C-EMDM's front at ",
-                        K_EQ,
-                        self.frontn("C-EMDM", i, "k", "d"),
-                        " is a single point no weight can move (the task-scaled step, ",
-                        *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
-                        "). ",
+                    clauses.append(
+                        sentence(
+                            "C-EMDM's front at ",
+                            K_EQ,
+                            self.frontn("C-EMDM", i, "k", "d"),
+                            " is one point (the scaled step, ",
+                            *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
+                            ")",
+                        )
                     )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
                 i, _ = sat[0]
-                p += sentence(
-                    "At ",
-                    K_EQ,
-                    self.frontn("C-EMDM", i, "k", "d"),
-                    " the front saturates: every ",
-                    RATIO,
-                    " from ",
-                    self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
-                    " on gives the same optimum, a vertex of the joint bounds. ",
+                clauses.append(
+                    sentence(
+                        "at ",
+                        K_EQ,
+                        self.frontn("C-EMDM", i, "k", "d"),
+                        " every ",
+                        RATIO,
+                        " from ",
+                        self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
+                        " on gives one optimum, a vertex of the joint bounds",
+                    )
                 )
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
             if late and late == list(range(late[0], len(csteps))):  # m falls, whatever w_M
@@ -295,18 +301,24 @@ class Task1(StoryBase):
                 for j, i in enumerate(late):  # the fronts computed, not the steps between them
                     sep = "" if j == 0 else (" and " if j == len(late) - 1 else ", ")
                     ks += sentence(sep, self.frontn("C-EMDM", i, "k", "d"))
-                p += sentence(
-                    "At ",
-                    K_EQ,
-                    *ks,
-                    " every C-EMDM optimum has ",
-                    MRATE,
-                    " < 0, at most ",
-                    self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
-                    ". Late in the run, within the joint bounds, ",
-                    M_SYM,
-                    " falls whatever the weights. ",
+                clauses.append(
+                    sentence(
+                        "at ",
+                        K_EQ,
+                        *ks,
+                        " every optimum has ",
+                        MRATE,
+                        " < 0 (at most ",
+                        self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
+                        "): late in the run, within the joint bounds, ",
+                        M_SYM,
+                        " falls whatever the weights",
+                    )
                 )
+            for c, clause in enumerate(clauses):
+                p += capitalised(clause) if c == 0 else sentence("; ") + clause
+            if clauses:
+                p += sentence(". ")
         # the weight grid: failures
         for i, r in enumerate(self.rec.grids.get("UC-EMDM", [])):
             if r.reached or r.finer_dt is None:
@@ -410,7 +422,7 @@ class Task1(StoryBase):
             t, Name.C_EMDM, "fallback_steps"
         )
         answer = sentence(
-            "The custom active-set solver returned a certified optimum at every step of UC-EMDM (",
+            "The custom active-set solver certified its optimum at every step of UC-EMDM (",
             self.mt(t, Name.UC_EMDM, "steps", "d"),
             " steps, largest relative KKT residual ",
             self.mt(t, Name.UC_EMDM, "max_kkt_residual", ".2g"),
@@ -418,9 +430,9 @@ class Task1(StoryBase):
             self.mt(t, Name.C_EMDM, "steps", "d"),
             ", ",
             self.mt(t, Name.C_EMDM, "max_kkt_residual", ".2g"),
-            "), accepted up to ",
+            "; accepted up to ",
             Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
-            ", so the fallback (daqp, then quadprog) ",
+            "): the fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
             answer += sentence("was never used.")

@@ -12,7 +12,6 @@ from .base import (
     C_S,
     COND_J,
     DELTA,
-    E_SYM,
     ERR,
     M_SYM,
     T_EQ,
@@ -391,24 +390,7 @@ class Task2(Claims):
         t = "task2"
         ivkc, emdm = PAIRS["UC"]
         sec = Section("t2-uc", "Task 2.2: UC-EMDM against UC-IVKC", level=2, brief="2.2")
-        if self.d.exists("paper/figures/task2-UC.png"):  # the page's, all five panels
-            sec.figures.append(
-                self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"), paper=False)
-            )
-        # the paper's: what the slack changes, in five compact panels
-        shown = self.figure(
-            "t2-uc-effort",
-            "figures/task2-UC-effort",
-            sentence(
-                f"{ivkc} (solid), {emdm} (dashed): (a) effort ",
-                E_SYM,
-                " (log), (b) ",
-                M_SYM,
-                ", (c) joint positions, (d) joint speeds, (e) tracking gap as in ",
-                Ref("fig", "t2-c"),
-                "(d).",
-            ),
-        )
+        shown = self.figure("t2-uc", "figures/task2-UC", self.pair_caption(t, "UC"))
         if self.has_figure(shown):
             sec.figures.append(shown)
         answer = (
@@ -505,13 +487,12 @@ class Task2(Claims):
         sec.paragraphs.append(p)
         return sec
 
-    def task2_challenges(self) -> Section:
+    def task2_challenges(self, sec: Section) -> Section:
+        """Task 2's numerical challenges, told in its solver section ``sec`` (where the solvers
+        that meet them are compared): a paragraph, then the active set's answer to them."""
         t = "task2"
         emdm = Name.C_EMDM
         f = "data/task2-lab-C-EMDM/solvers.json"
-        sec = Section(
-            "t2-challenges", "Task 2: convergence and numerical challenges", level=2, brief="2.1"
-        )
         answer = sentence(
             "Two things make Task 2's programs harder than Task 1's: the slack weight ",
             W_S,
@@ -528,7 +509,6 @@ class Task2(Claims):
             self.ev(t, emdm, "conditioning", "t_cond_J_max", fmt=".2f", unit="s"),
             ".",
         )
-        sec.answer = answer
         self.answers.append(("Task 2.1: convergence behaviour and numerical challenges", answer))
         sec.figures.append(
             self.figure(
@@ -545,10 +525,10 @@ class Task2(Claims):
                 paper=False,
             )
         )
-        p = sentence()
+        p = answer  # one paragraph: the challenges, then how the active set meets them
         if self.d.exists(f):
             p += sentence(
-                "The reduced Hessian's condition number reaches ",
+                " The reduced Hessian's condition number reaches ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
                 ", yet the active set needs ",
                 "no fallback and, " if self.mv(t, emdm, "fallback_steps") == 0 else "",
@@ -562,30 +542,5 @@ class Task2(Claims):
                 Ref("tab", "solvers"),
                 ").",
             )
-            ch = self.d.value(f, "challenges", "solvers")
-            if "admm" in ch and ch["admm"].get("iterations_vs_cond_spearman") is not None:
-                p += sentence(
-                    " ADMM's iterations follow the conditioning more closely: their rank "
-                    "correlation with it is ",
-                    self.d.num(
-                        f, "challenges", "solvers", "admm", "iterations_vs_cond_spearman", fmt=".2f"
-                    ),
-                    *(
-                        (
-                            ", the active set's ",
-                            self.d.num(
-                                f,
-                                "challenges",
-                                "solvers",
-                                "active-set",
-                                "iterations_vs_cond_spearman",
-                                fmt=".2f",
-                            ),
-                        )
-                        if ch.get("active-set", {}).get("iterations_vs_cond_spearman") is not None
-                        else ()
-                    ),
-                    ".",
-                )
         sec.paragraphs.append(p)
         return sec
