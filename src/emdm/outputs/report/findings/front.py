@@ -84,9 +84,9 @@ class Front(Claims):
             "in",
             Cite("haviland"),
             ", we write each control step as a strictly convex quadratic program (QP), solve it "
-            "with a custom active-set method whose every answer is certified by its KKT "
-            "conditions, and compare this EMDM controller with IVKC, each unconstrained (UC-) "
-            "or constrained by joint limits (C-).",
+            "with a custom active-set method, certified by its KKT conditions, and compare this "
+            "EMDM controller with IVKC, each unconstrained (UC-) or constrained by joint limits "
+            "(C-).",
         )
         anims = [a for a in (self.anim(t, g) for t in ("task1", "task2") for g in PAIRS) if a]
         if anims:
