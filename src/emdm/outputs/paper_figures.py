@@ -370,7 +370,7 @@ def workspace_figure(
     sc = runs[0].scenario
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
-    width = medium.column if medium is PAPER else 3.3  # on a slide: half its width
+    width = medium.column if medium is PAPER else 3.9  # on a slide: 0.62 of its width
     height = 1.42 if medium is PAPER else 2.7
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
