@@ -322,11 +322,6 @@ def pair_figure(
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
                 if j < n - 1:
                     a.tick_params(labelbottom=False)
-            lo_qd, hi_qd = qd_axes[j].get_ylim()
-            if 2 * qd_tick < 0.5 * (hi_qd - lo_qd):  # close limits: each label set off outwards
-                below, above = qd_axes[j].get_yticklabels()  # (so the two do not touch)
-                below.set_verticalalignment("top")
-                above.set_verticalalignment("bottom")
         end = time_end(runs)
         if end is not None:  # the stalled runs' flat tails add nothing: the arrivals get room
             for ax in (ax_m, q_axes[0], qd_axes[0]):  # each shares its time axis with others
@@ -355,7 +350,25 @@ def pair_figure(
             frameon=False,
             columnspacing=1.0,
         )
+        fig.canvas.draw()  # the strips' final heights: do the two limit labels fit apart?
+        for ax in qd_axes:
+            _label_closer_limit(ax, fig)
     return stem
+
+
+def _label_closer_limit(ax: Axes, fig: Figure) -> None:
+    """Each speed strip's ticks sit on its two limit lines; where the peaks squeeze the lines
+    closer than a label is tall, only the limit farther from the frame keeps its label (a label
+    set off from its line was read as a limit elsewhere), the other line dotted alone."""
+    lo, hi = ax.get_ylim()
+    ticks = list(ax.get_yticks())
+    labels = ax.get_yticklabels()
+    height_pt = ax.get_window_extent().height * 72.0 / fig.dpi
+    apart_pt = abs(ticks[1] - ticks[0]) / (hi - lo) * height_pt
+    if apart_pt >= 1.1 * float(labels[0].get_fontsize()):
+        return
+    keep = max(range(2), key=lambda i: min(ticks[i] - lo, hi - ticks[i]))
+    ax.set_yticks(ticks, [t.get_text() if i == keep else "" for i, t in enumerate(labels)])
 
 
 def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:

@@ -32,6 +32,10 @@ from .base import SolverResult, infeasible
 PENALTY = 1e4
 """The l1 penalty weight of the penalised gradient-free methods, per unit of ``1 + max|P|``."""
 
+SEEDED = ("differential-evolution", "cma-es")
+"""The stochastic methods: each runs once per program with a fixed seed (reproducible, one
+sample of their spread)."""
+
 PENALISED = ("nelder-mead", "powell", "cma-es")
 """The gradient-free methods that see the bounds as the exact l1 penalty (the others take them
 as constraints)."""

@@ -402,7 +402,7 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                " (largest peak marked in its run's colour)" if far else "",
+                " (extremes beyond them marked in their run's colour)" if far else "",
             )
         )
 

@@ -132,8 +132,8 @@ class Front(Claims):
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 " (",
                 Ref("tab", "outcomes"),
-                "). Where the path does not matter a slack is the better choice; where "
-                "it does, our default, scaling, alone keeps the tip on ",
+                "). Where the path does not matter a slack is the better choice; where it "
+                "does, only task scaling, our default, keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",
             )

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ....solvers.base import Family
-from ....solvers.nlp import PENALISED
+from ....solvers.nlp import PENALISED, SEEDED
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, sentence
@@ -292,7 +292,13 @@ class Solvers(StoryBase):
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: closed-loop arrival, solve time not charged.",
+                " period; goal: closed-loop arrival, solve time not charged",
+                *(
+                    ("; ", ", ".join(seeded), ": one seeded run each")
+                    if (seeded := [k for k in rows if k in SEEDED])
+                    else ()
+                ),
+                ".",
             ),
             [
                 sentence("solver"),

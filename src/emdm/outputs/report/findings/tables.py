@@ -51,7 +51,7 @@ class Tables(Claims):
         table = Table(
             "outcomes",
             sentence(
-                "Closed-loop outcomes: time to goal (s; ",
+                "Outcomes: time to goal (s; ",
                 ERR,
                 " < ",
                 self.scn("task1", "motion", "tolerance", fmt=".0e", unit="m"),
@@ -60,8 +60,8 @@ class Tables(Claims):
                 *((" or final error (m)",) if drifted else ()),
                 ", mean ",
                 M_SYM,
-                " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps. C-: task "
-                "scaling; slack: a free slack (Section II).",
+                " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps; C-: task "
+                "scaling, slack: a free slack.",
             ),
             header,
             align="lrrrrr",

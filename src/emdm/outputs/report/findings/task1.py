@@ -176,8 +176,7 @@ class Task1(StoryBase):
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
                 ", ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of them scaled) are identical: on each the bounds and the task admit only one "
-                "command",
+                " of them scaled) are identical: on each, bounds and task admit one command",
             )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph says enough)

@@ -352,7 +352,7 @@ class Task2(Claims):
             M_SYM,
             " is ",
             self.mt(t, emdm, "mean_manipulability", ".3f"),
-            " against ",
+            f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
             " (",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
@@ -368,7 +368,7 @@ class Task2(Claims):
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
             if [n.text for n in within] == [n.text for n in whole]:
                 p += sentence(
-                    ", also over their first ",
+                    ", also averaged over the first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
                 )
             else:
