@@ -187,8 +187,13 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 
 FAR_BEYOND = 1.5
-"""A joint whose speeds go beyond this multiple of its limit has its peaks beyond the limits
-ticked on the right (:func:`pair_figure`)."""
+"""A joint whose speeds go beyond this multiple of its limit has its speed strip clipped at
+:data:`SPEED_VIEW` times the limit, each off-scale extreme marked at the edge with its value on
+the right (:func:`pair_figure`)."""
+
+SPEED_VIEW = 1.3
+"""A clipped speed strip shows this multiple of the joint's speed limit on each side: the
+limits and the motion within them readable, not squashed by a spike of a step or two."""
 
 
 GAP_FLOOR = 1e-6
@@ -284,8 +289,14 @@ def pair_figure(
             top = max(high, -low)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             far = top > FAR_BEYOND * limit
-            # linear throughout: the limits dotted, a run beyond them seen as far as it goes
-            qd_axes[j].set_ylim(1.15 * min(low, -limit), 1.15 * max(high, limit))
+            # linear, the limits dotted; a run far beyond them is clipped at the view's edge,
+            # where a triangle and the value on the right say how far it went
+            view = SPEED_VIEW * limit
+            beyond = FAR_BEYOND * limit  # a side clipped only where its extreme is far beyond
+            qd_axes[j].set_ylim(
+                -view if low < -beyond else 1.15 * min(low, -limit),
+                view if high > beyond else 1.15 * max(high, limit),
+            )
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
@@ -296,23 +307,32 @@ def pair_figure(
             # rounder tick below it read as the axis' end, the curve "cut off")
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # the peaks beyond the limits, each signed as it was reached, marked where
-                # it was reached and ticked in the colour of the run that reached it (a spike of
-                # a step or two reads as a clipped axis without the mark)
-                peaks, colours = [], []
+            if far:  # each off-scale extreme: a triangle at the edge where it was reached and
+                # its value at that edge on the right, in the colour of the run that reached it
+                edges, values, colours = [], [], []
                 for v in (low, high):
-                    if abs(v) <= FAR_BEYOND * limit:
+                    if abs(v) <= beyond:
                         continue
                     r = next(
                         r for r in runs if r.steps and v in (r.qd[:, j].min(), r.qd[:, j].max())
                     )
                     k = int(np.argmax(r.qd[:, j] == v))
                     colour = _style(r, medium)["color"]
-                    qd_axes[j].plot([r.t[k]], [v], "o", color=colour, markersize=2.5, zorder=3)
-                    peaks.append(float(f"{v:.2g}"))
+                    edge = view if v > 0 else -view
+                    qd_axes[j].plot(
+                        [r.t[k]],
+                        [edge],
+                        "^" if v > 0 else "v",
+                        color=colour,
+                        markersize=3.5,
+                        clip_on=False,
+                        zorder=4,
+                    )
+                    edges.append(edge)
+                    values.append(float(f"{v:.2g}"))
                     colours.append(colour)
                 right = qd_axes[j].secondary_yaxis("right")
-                right.set_yticks(peaks, [_plain(v) for v in peaks])
+                right.set_yticks(edges, [_plain(v) for v in values])
                 for label, colour in zip(right.get_yticklabels(), colours, strict=True):
                     label.set_color(colour)
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
@@ -350,25 +370,7 @@ def pair_figure(
             frameon=False,
             columnspacing=1.0,
         )
-        fig.canvas.draw()  # the strips' final heights: do the two limit labels fit apart?
-        for ax in qd_axes:
-            _label_closer_limit(ax, fig)
     return stem
-
-
-def _label_closer_limit(ax: Axes, fig: Figure) -> None:
-    """Each speed strip's ticks sit on its two limit lines; where the peaks squeeze the lines
-    closer than a label is tall, only the limit farther from the frame keeps its label (a label
-    set off from its line was read as a limit elsewhere), the other line dotted alone."""
-    lo, hi = ax.get_ylim()
-    ticks = list(ax.get_yticks())
-    labels = ax.get_yticklabels()
-    height_pt = ax.get_window_extent().height * 72.0 / fig.dpi
-    apart_pt = abs(ticks[1] - ticks[0]) / (hi - lo) * height_pt
-    if apart_pt >= 1.1 * float(labels[0].get_fontsize()):
-        return
-    keep = max(range(2), key=lambda i: min(ticks[i] - lo, hi - ticks[i]))
-    ax.set_yticks(ticks, [t.get_text() if i == keep else "" for i, t in enumerate(labels)])
 
 
 def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:
@@ -620,6 +622,7 @@ def _front_axes(
             va=va,
             fontsize=medium.tiny,
             bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
+            zorder=1.5,  # under the front's points (zorder 2): a note never hides one
         )
     if info["degenerate"]:
         x, y = M[0], E[0]

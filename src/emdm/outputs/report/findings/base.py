@@ -402,7 +402,7 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                " (extremes beyond them marked in their run's colour)" if far else "",
+                " (off-scale extremes: triangles, values on the right)" if far else "",
             )
         )
 

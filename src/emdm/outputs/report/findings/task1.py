@@ -155,8 +155,11 @@ class Task1(StoryBase):
         times = [self.mv(t, c, "time_to_goal") for c in (*PAIRS["UC"], *PAIRS["C"])]
         if scaled and None not in times and min(times[2:]) > max(times[:2]):
             answer += sentence(
-                ". Both trail the UC pair, because the task is scaled for the first ",
+                ". Both trail the UC pair: the ",
+                self.scn(t, "arm", "qd_max", 0, fmt="g", unit="rad/s"),
+                " speed limit slows the tip (the task is scaled for the first ",
                 self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
+                ")",
             )
         answer += sentence(".")
         sec.answer = answer

@@ -368,7 +368,7 @@ class Task2(Claims):
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
             if [n.text for n in within] == [n.text for n in whole]:
                 p += sentence(
-                    ", also averaged over the first ",
+                    ", also over the first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
                 )
             else:
