@@ -572,6 +572,7 @@ def _ring(ax: Any, x: float, y: float, medium: Medium) -> None:
         edgecolors="#D55E00",
         linewidths=1.1,
         zorder=3,
+        clip_on=False,  # whole even where the nominal point lies on the axes' edge
     )
 
 

@@ -402,7 +402,7 @@ class StoryBase:
             + sentence(
                 ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
                 "limits dotted",
-                " (off-scale extremes: triangles, values on the right)" if far else "",
+                " (off-scale: triangles, farther run's value at right)" if far else "",
             )
         )
 

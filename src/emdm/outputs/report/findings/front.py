@@ -32,7 +32,7 @@ class Front(Claims):
             )
             if self.ivkc_with_slack():
                 out += sentence(
-                    "; with a free slack each, C-IVKC arrives",
+                    "; if both get an unbounded slack instead, C-IVKC arrives",
                     " before C-EMDM" if self.ivkc_first_with_slack() else " too",
                 )
             out += sentence(". ")
