@@ -1177,12 +1177,13 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_ylim(-reach * 1.05, reach * 1.05)
             ax.set_xticks([])
             ax.set_yticks([])
-            ax.set_xlabel(  # below the workspace, where no arm can cover it
-                r"arm at $t$ = "
-                + ", ".join(f"{run.t[k]:.2f}".rstrip("0").rstrip(".") for k in drawn)
+            ax.set_xlabel(  # below the workspace, where no arm can cover it; short enough to
+                # be set large (the list of every instant was unreadable from a room)
+                f"arm at {len(drawn)} instants, darker later\n"
+                + rf"$t$ = 0 to {run.t[drawn[-1]]:.2f}".rstrip("0").rstrip(".")
                 + " s"
                 + (", then still" if last < run.steps else ""),
-                fontsize=medium.small,
+                fontsize=medium.font,
                 color="#444444",
             )
     return stem
