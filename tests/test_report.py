@@ -552,3 +552,12 @@ def test_the_parameters_sentence_states_one_value_where_every_joint_shares_it():
                 one.motion.tolerance,
                 one.motion.max_time,
             )
+
+
+def test_units_stay_lower_case_in_small_caps_captions():
+    """IEEE sets table captions in small caps: a unit is wrapped in \\textnormal, or the metre
+    reads as the manipulability rate M (and ms as MS)."""
+    from emdm.outputs.report.trace import Num, Unit, sentence
+
+    assert render_latex(sentence("(", Unit("m²"), ")")) == r"(\textnormal{m\textsuperscript{2}})"
+    assert render_latex([Num("0.05", "f", ("a",), ".2f", unit="s")]).endswith(r"~\textnormal{s}")

@@ -403,13 +403,14 @@ def workspace_figure(
         )
         p0 = runs[0].p[0]
         goal = np.asarray(sc.motion.goal)
-        # the line C-IVKC keeps to: on top of every path, or the stalled one hides it
+        # the line C-IVKC keeps to: dark, above the hatching, under the paths (the stalled run
+        # drawn along it stays visible, and the line beyond its stall too)
         line_style: dict[str, Any] = {
             "color": "black",
             "linestyle": (0, (1, 1.2)),
             "linewidth": 1.0,
         }
-        ax.plot([p0[0], goal[0]], [p0[1], goal[1]], **line_style, zorder=4)
+        ax.plot([p0[0], goal[0]], [p0[1], goal[1]], **line_style, zorder=2.5)
         drawn = [runs[0].p[:1], goal[None, :], *(r.p[:, :2] for r in runs)]
         for sol in geometry["solutions"]:
             pts = _arm_points(runs[0], np.array([sol["q1"], sol["q2"]]))

@@ -175,8 +175,25 @@ UNITS_LATEX = {
 
 
 def latex_unit(unit: str) -> str:
-    """A unit in LaTeX text mode."""
-    return UNITS_LATEX.get(unit, latex_escape(unit))
+    """A unit in LaTeX text mode, upright and lower-case even in IEEE's small-caps table
+    captions (where a metre read as the manipulability rate M)."""
+    return rf"\textnormal{{{UNITS_LATEX.get(unit, latex_escape(unit))}}}"
+
+
+@dataclass(frozen=True)
+class Unit(Segment):
+    """A unit standing alone in a sentence, ``(m²)``: as a number's unit would be written."""
+
+    unit: str
+
+    def html(self) -> str:
+        return html.escape(self.unit)
+
+    def latex(self) -> str:
+        return latex_unit(self.unit)
+
+    def plain(self) -> str:
+        return self.unit
 
 
 @dataclass(frozen=True)

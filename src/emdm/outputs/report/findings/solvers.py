@@ -6,7 +6,7 @@ from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, Text, sentence
+from ..trace import Math, Ref, Sentence, Text, Unit, sentence
 from .base import (
     DT,
     StoryBase,
@@ -283,7 +283,9 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " programs (evenly spaced, least dexterous included). ms: median time from "
+                " programs (evenly spaced, least dexterous included). ",
+                Unit("ms"),
+                ": median time from "
                 "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
                 "evaluations (--: none); gap, viol.: "
                 "largest ",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, sentence
+from ..trace import Math, Ref, Sentence, Unit, sentence
 from .base import (
     C_S,
     DT,
@@ -51,7 +51,9 @@ class Tables(Claims):
         table = Table(
             "outcomes",
             sentence(
-                "Outcomes: time to goal (s; ",
+                "Outcomes: time to goal (",
+                Unit("s"),
+                "; ",
                 ERR,
                 " < ",
                 self.scn("task1", "motion", "tolerance", fmt=".0e", unit="m"),
@@ -60,8 +62,13 @@ class Tables(Claims):
                 *((" or final error (m)",) if drifted else ()),
                 ", mean ",
                 M_SYM,
-                " (m²), effort (rad²/s), peak joint speed (rad/s), task-scaled steps; C-: task "
-                "scaling, slack: a free slack.",
+                " (",
+                Unit("m²"),
+                "), effort (",
+                Unit("rad²/s"),
+                "), peak joint speed (",
+                Unit("rad/s"),
+                "), task-scaled steps; C-: task scaling, slack: a free slack.",
             ),
             header,
             align="lrrrrr",

@@ -468,7 +468,9 @@ class Task2(Claims):
                 *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
                 " (",
                 run_label("t2-uc-emdm-stiff-slack"),
-                ") it peaks at ",
+                ") its ",
+                Math(r"|\delta_i|", "|δ<sub>i</sub>|"),
+                " peaks at ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "max_abs_slack", fmt=".0e", unit="m/s"
                 ),
