@@ -382,6 +382,7 @@ def test_the_story_reads_typed_records_that_the_producers_write():
     assert set(typing.get_args(r.GeometryKey)) == names(r.Geometry)
     assert set(typing.get_args(r.MmcKey)) == names(r.MmcRow)
     assert set(typing.get_args(r.PaperKey)) == names(r.PaperRow)
+    assert set(typing.get_args(r.RunOutcome)) <= names(r.Outcomes) & names(r.GridRun)
     sc = emdm.load_scenario("task2", {"motion.max_time": 2.0})
     a, b = emdm.simulate(sc, "C-EMDM"), emdm.simulate(sc, "C-IVKC")
     assert names(r.Outcomes) <= set(emdm.metrics(a))
@@ -561,3 +562,18 @@ def test_units_stay_lower_case_in_small_caps_captions():
 
     assert render_latex(sentence("(", Unit("m²"), ")")) == r"(\textnormal{m\textsuperscript{2}})"
     assert render_latex([Num("0.05", "f", ("a",), ".2f", unit="s")]).endswith(r"~\textnormal{s}")
+
+
+def test_run_labels_keep_their_case_in_captions():
+    """Table II's paired runs are E2a and E2b: in a caption their letters stay lower-case, and each
+    label names exactly one run of the table's list."""
+    from emdm.outputs.report.findings.base import ABLATIONS, FINER_STEP, GRID_MISS, run_label
+    from emdm.outputs.report.trace import Upright, sentence
+
+    assert render_latex(sentence(Upright(run_label(GRID_MISS)))) == r"\textnormal{E2a}"
+    assert run_label(FINER_STEP) == "E2b" and run_label("t1-uc-no-manip") == "E1"
+    flat = [k for e in ABLATIONS for k in (e if isinstance(e, tuple) else (e,))]
+    labels = [run_label(k) for k in flat]
+    assert len(set(labels)) == len(flat)
+    with pytest.raises(KeyError):
+        run_label("no-such-run")

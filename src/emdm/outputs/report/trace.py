@@ -197,6 +197,23 @@ class Unit(Segment):
 
 
 @dataclass(frozen=True)
+class Upright(Segment):
+    """Text kept upright and in its own case in IEEE's small-caps captions: a run label, ``E2a``,
+    whose ``a`` would otherwise read as a capital."""
+
+    text: str
+
+    def html(self) -> str:
+        return html.escape(self.text)
+
+    def latex(self) -> str:
+        return rf"\textnormal{{{latex_escape(self.text)}}}"
+
+    def plain(self) -> str:
+        return self.text
+
+
+@dataclass(frozen=True)
 class Math(Segment):
     """Inline math, given once for each output (LaTeX source and HTML)."""
 

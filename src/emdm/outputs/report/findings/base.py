@@ -93,24 +93,34 @@ def _flat(*parts: Any) -> Sentence:
     return sentence(*out)
 
 
-FINER_STEP = "t1-uc-finer-step"
-"""Table II's run from the weight grid (its first setting that misses the goal, at a finer step)."""
+GRID_MISS = "t1-uc-grid-miss"
+"""Table II's run from the weight grid: its first setting that misses the goal (Fig. 2, right)."""
 
-ABLATIONS: tuple[str, ...] = (
+FINER_STEP = "t1-uc-finer-step"
+"""Table II's run of :data:`GRID_MISS`'s weights at a five times finer time step."""
+
+ABLATIONS: tuple[str | tuple[str, ...], ...] = (
     "t1-uc-no-manip",
-    FINER_STEP,
+    (GRID_MISS, FINER_STEP),
     "t2-c-ivkc-wide-limits",
     "t2-c-emdm-no-manip",
     "t2-c-emdm-tight-slack",
     "t2-uc-emdm-stiff-slack",
 )
 """Table II's runs in order, each changing one thing in a nominal run; :func:`run_label` names
-them E1, E2, ... (the free-slack policy runs are Table I's rows, not ablations)."""
+them E1, E2, ..., and the runs of a group E2a, E2b, ... (the free-slack policy runs are Table
+I's rows, not ablations)."""
 
 
 def run_label(key: str) -> str:
-    """Table II's label of an ablation: ``E1`` for the first of :data:`ABLATIONS`."""
-    return f"E{ABLATIONS.index(key) + 1}"
+    """Table II's label of an ablation: ``E1`` for the first of :data:`ABLATIONS`, ``E2b`` for
+    the second run of the second entry when that entry is a group."""
+    for n, entry in enumerate(ABLATIONS, 1):
+        if entry == key:
+            return f"E{n}"
+        if isinstance(entry, tuple) and key in entry:
+            return f"E{n}{'abcdefgh'[entry.index(key)]}"
+    raise KeyError(f"{key!r} is not one of Table II's runs")
 
 
 def _dig(node: Any, path: tuple[str | int, ...]) -> Any:

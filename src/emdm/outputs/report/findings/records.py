@@ -342,6 +342,10 @@ GridKey = Literal[
 ]
 """The fields of :class:`GridRun`."""
 
+RunOutcome = Literal["time_to_goal", "mean_manipulability", "total_effort"]
+"""The outcomes both a nominal run (:data:`MetricKey`) and a weight-grid run (:data:`GridKey`)
+keep, which Table II compares."""
+
 
 @dataclass(frozen=True)
 class GridRun:

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, Unit, sentence
+from ..trace import Math, Ref, Sentence, Unit, Upright, sentence
 from .base import (
     C_S,
     DT,
     ERR,
     FINER_STEP,
+    GRID_MISS,
     M_SYM,
     W_M,
     bare,
@@ -17,7 +20,7 @@ from .base import (
     run_label,
 )
 from .claims import Claims
-from .records import EvidenceKey, MetricKey
+from .records import EvidenceKey, MetricKey, RunOutcome
 
 
 class Tables(Claims):
@@ -127,41 +130,62 @@ class Tables(Claims):
             return sentence(DT)
         return sentence(DT, f"/{self.rec.scenarios['task1'].motion.dt / finer['dt']:.0f}")
 
-    def e3_row(self) -> list[Sentence] | None:
-        """Table II's finer-step run: the first weight setting of the grid that misses the goal, re-run with
-        a five times smaller time step, against itself at the nominal step (Section III-B)."""
+    def grid_rows(self) -> list[list[Sentence]]:
+        """Table II's two runs from the weight grid (Section III-B): its first setting that misses
+        the goal, against the nominal run (E2a); the same weights at a five times smaller time
+        step, against the nominal weights at that step (E2b), so that each row changes one thing."""
         runs = self.rec.grids.get("UC-EMDM", [])
         missed = [i for i, r in enumerate(runs) if not r.reached]
-        if not missed or "nominal" not in (runs[missed[0]].finer_dt or {}):
-            return None
+        if not missed:
+            return []
         i = missed[0]
+        ctrl = Name.UC_EMDM
         finer = runs[i].finer_dt or {}
-        control = finer.get("nominal") or {}
-
-        def goal(*path: str) -> Sentence:
-            done = finer if not path else control
-            if not done.get("reached"):
-                return sentence("stall")
-            return sentence(
-                self.gridn(Name.UC_EMDM, i, "finer_dt", *path, "time_to_goal", fmt=".2f")
-            )
-
-        # the one change (w_M) in a nominal run at the finer step: the brackets are the nominal
-        # weights at that step, as every other row's are its nominal run
-        cells = [goal() + sentence(" (") + goal("nominal") + sentence(")")]
-        for metric, fmt in (("mean_manipulability", ".3f"), ("total_effort", ".3g")):
-            cells.append(
-                sentence(
-                    self.gridn(Name.UC_EMDM, i, "finer_dt", metric, fmt=fmt),
-                    " (",
-                    self.gridn(Name.UC_EMDM, i, "finer_dt", "nominal", metric, fmt=fmt),
-                    ")",
-                )
-            )
-        change = sentence(
-            *eq(W_M, self.gridn(Name.UC_EMDM, i, "w_manip", fmt=".4g")), " at ", *self.e3_step()
+        columns: tuple[tuple[RunOutcome, str], ...] = (
+            ("time_to_goal", ".2f"),
+            ("mean_manipulability", ".3f"),
+            ("total_effort", ".3g"),
         )
-        return [sentence(run_label(FINER_STEP)), sentence("1, ", Name.UC_EMDM), change, *cells]
+
+        def stall(metric: RunOutcome, reached: Any) -> bool:
+            return metric == "time_to_goal" and not reached
+
+        def pair(new: Sentence, old: Sentence) -> Sentence:
+            return new + sentence(" (") + old + sentence(")")
+
+        def plain(fmt: str, metric: RunOutcome) -> str:
+            """Whole numbers from 1000 on (a power of ten does not fit the column)."""
+            value = self.grid(ctrl, i, metric)
+            return ".0f" if fmt.endswith("g") and abs(value) >= 1e3 else fmt
+
+        w_m = sentence(*eq(W_M, self.gridn(ctrl, i, "w_manip", fmt=".4g")))
+        miss = [
+            pair(
+                sentence("stall")
+                if stall(metric, runs[i].reached)
+                else sentence(self.gridn(ctrl, i, metric, fmt=plain(fmt, metric))),
+                sentence("stall")
+                if stall(metric, self.mv("task1", ctrl, "reached"))
+                else sentence(self.mt("task1", ctrl, metric, fmt)),
+            )
+            for metric, fmt in columns
+        ]
+        out = [[sentence(run_label(GRID_MISS)), sentence("1, ", ctrl), w_m, *miss]]
+        if "nominal" not in finer:
+            return out
+        cells = [
+            pair(
+                sentence("stall")
+                if stall(metric, finer.get("reached"))
+                else sentence(self.gridn(ctrl, i, "finer_dt", metric, fmt=fmt)),
+                sentence("stall")
+                if stall(metric, finer["nominal"].get("reached"))
+                else sentence(self.gridn(ctrl, i, "finer_dt", "nominal", metric, fmt=fmt)),
+            )
+            for metric, fmt in columns
+        ]
+        change = w_m + sentence(" at ") + self.e3_step()
+        return [*out, [sentence(run_label(FINER_STEP)), sentence("1, ", ctrl), change, *cells]]
 
     def evidence_table(self, sections: list[Section]) -> None:
         items: list[tuple[EvidenceKey, str, Sentence]] = [
@@ -188,11 +212,13 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); for ",
-                run_label(FINER_STEP),
-                " (",
+                "brackets (stall: goal not reached); ",
+                Upright(run_label(GRID_MISS)),
+                " is from ",
                 Ref("fig", "pareto"),
-                "'s sweep), the nominal weights at ",
+                "'s sweep; for ",
+                Upright(run_label(FINER_STEP)),
+                ", the nominal weights at ",
                 *self.e3_step(),
                 ".",
             ),
@@ -242,8 +268,8 @@ class Tables(Claims):
                     *cells,
                 ]
             )
-            if key == "t1-uc-no-manip" and (e3 := self.e3_row()):
-                table.rows.append(e3)
+            if key == "t1-uc-no-manip":
+                table.rows.extend(self.grid_rows())
         self.tables["evidence"] = table
         for s in sections:  # with Task 1.2: it floats to the top of the page Task 1 ends on
             if s.key == "t1-c":

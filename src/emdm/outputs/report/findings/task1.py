@@ -16,6 +16,7 @@ from .base import (
     DT,
     E_SYM,
     FINER_STEP,
+    GRID_MISS,
     K_EQ,
     M_SYM,
     MRATE,
@@ -330,7 +331,9 @@ class Task1(StoryBase):
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                " UC-EMDM fails to reach the goal (final error ",
+                " UC-EMDM fails to reach the goal (",
+                run_label(GRID_MISS),
+                ", final error ",
                 self.gridn("UC-EMDM", i, "final_error", fmt=".3f", unit="m"),
                 "): its joint speeds reach ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
@@ -455,7 +458,7 @@ class Task1(StoryBase):
             )
         )
         p = sentence(
-            "Warm-started from the previous working set, it takes a median of ",
+            "Warm-started, it takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
@@ -467,7 +470,7 @@ class Task1(StoryBase):
             ch = self.d.value(lab, "challenges", "solvers")
         if "median_iterations_scaled" in ch.get("active-set", {}):
             p += sentence(
-                ". Scaled steps take ",
+                "; scaled steps take ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -476,10 +479,10 @@ class Task1(StoryBase):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
-                ", since the feasible point is the optimum",
+                " (the feasible point is the optimum)",
             )
         p += sentence(
-            ". Those scaled steps are Task 1's numerical challenge: each admissible set is "
+            ". These are Task 1's numerical challenge: each admissible set is "
             "one degenerate vertex",
         )
         if "median_iterations_scaled" in ch.get("admm", {}):
