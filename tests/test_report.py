@@ -151,7 +151,14 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert e4["overrides"]["slack.max"] == [FREE_SLACK, FREE_SLACK]
     assert 0 < e4["runs"]["C-EMDM"]["max_abs_slack"] < 0.01 * FREE_SLACK
     assert evidence["t1-uc-no-manip"]["reference"]["max_abs_qd_difference"] < 1e-12
-    assert evidence["t1-c-slack-policy"]["pair"]["coincide_steps"] == 0
+    # the identical commands are scaling's (one admissible command): a free slack has fewer
+    t1 = json.loads((root / "data" / "task1" / "events.json").read_text())["pairs"]["C"]
+    assert evidence["t1-c-slack-policy"]["pair"]["coincide_steps"] < t1["coincide_steps"]
+    # like for like: IVKC's effort has weight 1, so its slack weight is divided by w_E
+    for key in ("t1-c-slack-policy", "t2-c-slack-policy"):
+        w = emdm.load_scenario(evidence[key]["task"]).weights
+        own = evidence[key]["controller_overrides"]
+        assert own == {"C-IVKC": {"weights.slack": w.slack / w.effort}}, key
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
     text = (root / "index.html").read_text(encoding="utf-8")
     assert "cannot, and never reaches it: from" in text and " on it stalls " in text

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ...core.controllers import Name
+from ...core.loading import load_scenario
 from ...errors import ScenarioError
 from ...studies.lab import DEFAULT_LAB_SOLVERS
 
@@ -140,6 +141,16 @@ class Evidence:
     controllers: tuple[str, ...]
     overrides: dict[str, Any] = field(default_factory=dict)
     reference: str | None = None
+    like_for_like_slack: bool = False
+    """IVKC's slack weight ``c_S / w_E``: IVKC's effort has weight 1 and EMDM's ``w_E``, so with
+    the same ``c_S`` IVKC's slack would cost ``w_E`` times less against its effort than EMDM's."""
+
+    def controller_overrides(self, name: str) -> dict[str, Any]:
+        """What ``name`` runs with besides :attr:`overrides` (its like-for-like slack weight)."""
+        if not (self.like_for_like_slack and name in (Name.UC_IVKC, Name.C_IVKC)):
+            return {}
+        weights = load_scenario(self.task, self.overrides).weights
+        return {"weights.slack": weights.slack / weights.effort}
 
 
 FREE_SLACK = 1e3
@@ -155,6 +166,7 @@ EVIDENCE = (
         "task1",
         (Name.C_IVKC, Name.C_EMDM),
         {"controller.on_infeasible": "slack"},
+        like_for_like_slack=True,
     ),
     Evidence(  # both with a free slack: C-EMDM's bound lifted to one no run comes near
         "t2-c-slack-policy",
@@ -165,6 +177,7 @@ EVIDENCE = (
             "slack.min": [-FREE_SLACK, -FREE_SLACK],
             "slack.max": [FREE_SLACK, FREE_SLACK],
         },
+        like_for_like_slack=True,
     ),
     Evidence(
         "t2-c-ivkc-wide-limits", "task2", (Name.C_IVKC,), {"arm.q_min": -3.0, "arm.q_max": 3.0}

@@ -65,17 +65,20 @@ SLIDE_FIGURES = "paper/slides"
 
 # ------------------------------------------------------------------------ in-process runs
 def _evidence_run(ev: Evidence, nominal: dict[str, Run]) -> dict[str, Any]:
-    scenario = load_scenario(ev.task, ev.overrides)
     entry: dict[str, Any] = {
         "task": ev.task,
         "controllers": list(ev.controllers),
         "overrides": ev.overrides,
+        "controller_overrides": {},
         "runs": {},
     }
     runs: dict[str, Run] = {}
     for name in ev.controllers:
+        own = ev.controller_overrides(name)
+        if own:
+            entry["controller_overrides"][name] = own
         try:
-            run = simulate(scenario, name)
+            run = simulate(load_scenario(ev.task, {**ev.overrides, **own}), name)
         except NoSolution as exc:
             entry["runs"][name] = {"error": str(exc)}
             continue

@@ -363,7 +363,7 @@ class StoryBase:
         e2: EvidenceKey = "t1-c-slack-policy"
         emdm = Name.C_EMDM
         words = {
-            "time_to_goal": ("reaches the goal sooner", "reaches the goal later"),
+            "time_to_goal": ("arrives sooner", "arrives later"),
             "total_effort": (", with less effort", ", with more effort"),
             "mean_manipulability": (
                 " and a higher mean manipulability",
@@ -378,16 +378,15 @@ class StoryBase:
         for metric, better in self._policy_terms():
             p += sentence(words[metric][0 if better else 1])
         p += sentence(
-            ". Scaling keeps a straighter path: ",
+            ". Scaling keeps a straighter path (",
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
-            ", where the slack (",
+            "): the slack (",
             Math(r"|\delta_i|\leq", "|δ<sub>i</sub>| ≤ "),
             " ",
             self.evidn(e2, "runs", emdm, "max_abs_slack", fmt=".2f", unit="m/s"),
-            ")",
-            ", turns the tip off ",
+            ") turns the tip off ",
             Math("v_d", "<i>v</i><sub>d</sub>"),
             ".",
         )

@@ -180,6 +180,8 @@ class EvidenceRun:
     controllers: list[Any]
     overrides: dict[str, Any]
     runs: dict[str, Any]
+    controller_overrides: dict[str, Any]
+    """What a controller ran with besides ``overrides`` (IVKC's like-for-like slack weight)."""
     reference: dict[str, Any] | None = None
     """With a reference controller: the first controller's commands against its nominal run."""
     pair: dict[str, Any] | None = None

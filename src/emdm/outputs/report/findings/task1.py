@@ -185,14 +185,13 @@ class Task1(StoryBase):
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph says enough)
                 p += sentence(
-                    ". With a free slack instead of scaling (",
-                    Ref("tab", "outcomes"),
-                    ") the commands coincide for only ",
+                    " (",
                     self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"),
-                    " steps",
+                    " with a free slack)",
                 )
-            p += sentence(".")
-            sec.paragraphs.append(p)
+            # one paragraph with the policy weighed: both tell what scaling does to the pair
+            sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
+        else:
             sec.paragraphs.append(self.policy_weighed())
         return sec
 
