@@ -584,3 +584,24 @@ def test_run_labels_keep_their_case_in_captions():
     assert len(set(labels)) == len(flat)
     with pytest.raises(KeyError):
         run_label("no-such-run")
+
+
+def test_table_one_names_each_rows_program_by_its_equations(report):
+    """Table I's "eqs." column cites the formulation's displays by number: the numbers are those
+    of the LaTeX labels' order and of the page's displays, and each row's program is the one its
+    controller solves (objective, C- bounds, infeasibility policy)."""
+    from emdm.outputs.report.trace import EQUATIONS
+
+    folder = Path(emdm.outputs.report.__file__).parent / "templates"
+    tex = (folder / "formulation.tex.j2").read_text(encoding="utf-8")
+    assert tuple(re.findall(r"\\label\{eq:(\w+)\}", tex)) == EQUATIONS
+    html = (folder / "formulation.html.j2").read_text(encoding="utf-8")
+    assert re.findall(r'<div class="eq">\((\d)\)', html) == [
+        str(i + 1) for i in range(len(EQUATIONS))
+    ]
+    _, page = report
+    rows = {r[0]: r[1] for r in page.tables["tab-outcomes"][1:] if len(r) > 1}
+    # Task 2's rows come last and overwrite Task 1's: the two-link arm's EMDM is the slack program
+    assert rows["UC-IVKC"] == "1" and rows["UC-EMDM"] == "3"
+    assert rows["C-IVKC"] == "1, 4, 5" and rows["C-EMDM"] == "3, 4, 5"
+    assert rows["C-IVKC, slack"] == "1, 4, 6" and rows["C-EMDM, slack"] == "3, 4, 6"

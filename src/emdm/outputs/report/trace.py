@@ -250,6 +250,27 @@ class Ref(Segment):
         return f"{self.kind} {self.key}"
 
 
+EQUATIONS = ("ivkc", "emdm", "slack", "bounds", "scale", "free")
+"""The formulation's displayed equations in their order (``\\label{eq:KEY}`` in
+``templates/formulation.tex.j2``, numbered alike in ``formulation.html.j2``)."""
+
+
+@dataclass(frozen=True)
+class Eqs(Segment):
+    """The numbers of some of the formulation's equations, ``1, 4, 5``: what a program solves."""
+
+    keys: tuple[str, ...]
+
+    def html(self) -> str:
+        return ", ".join(str(EQUATIONS.index(k) + 1) for k in self.keys)
+
+    def latex(self) -> str:
+        return ", ".join(f"\\ref{{eq:{k}}}" for k in self.keys)
+
+    def plain(self) -> str:
+        return self.html()
+
+
 REFERENCES = ("yoshikawa", "flacco", "haviland", "nocedal")
 """The bibliography, in the order of ``templates/references.tex.j2``."""
 

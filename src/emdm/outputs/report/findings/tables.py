@@ -6,7 +6,7 @@ from typing import Any
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, Unit, Upright, sentence
+from ..trace import Eqs, Math, Ref, Sentence, Unit, Upright, sentence
 from .base import (
     C_S,
     DT,
@@ -33,9 +33,21 @@ class Tables(Claims):
     """Table I's outcome columns after the time to goal, with their formats."""
 
     # ------------------------------------------------------------------ tables
+    def program(self, task: str, name: str, slack: bool = False) -> Eqs:
+        """The equations of the program ``name`` solves on ``task``: its objective ((1), (2), or
+        (3) on a non-redundant arm), the C- bounds (4), and the infeasibility policy, task
+        scaling (5) or, in Table I's slack rows, the free slack (6)."""
+        emdm = name in (Name.UC_EMDM, Name.C_EMDM)
+        redundant = self.rec.scenarios[task].n > self.rec.scenarios[task].nt
+        keys = ["ivkc" if not emdm else "emdm" if redundant else "slack"]
+        if name in (Name.C_IVKC, Name.C_EMDM):
+            keys += ["bounds", "free" if slack else "scale"]
+        return Eqs(tuple(keys))
+
     def outcome_table(self, sections: list[Section]) -> None:
         header = [
             sentence("controller"),
+            sentence("eqs."),
             sentence("goal"),
             sentence("mean ", M_SYM),
             sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
@@ -54,7 +66,7 @@ class Tables(Claims):
         table = Table(
             "outcomes",
             sentence(
-                "Outcomes: time to goal (",
+                "Outcomes: the program's equations, time to goal (",
                 Unit("s"),
                 "; ",
                 ERR,
@@ -71,11 +83,12 @@ class Tables(Claims):
                 Unit("rad²/s"),
                 "), peak joint speed (",
                 Unit("rad/s"),
-                "), task-scaled steps; C-: task scaling, slack: a free slack.",
+                "), task-scaled steps.",
             ),
             header,
-            align="lrrrrr",
+            align="llrrrrr",
             font="scriptsize",  # as Tables II and III: fourteen rows
+            paper_only=(1,),  # the equations' numbers
         )
         policy: dict[str, EvidenceKey] = {
             "task1": "t1-c-slack-policy",
@@ -94,6 +107,7 @@ class Tables(Claims):
                 table.rows.append(
                     [
                         sentence(name),
+                        sentence(self.program(task, name)),
                         goal,
                         *(
                             sentence(self.mt(task, name, metric, fmt))
@@ -108,6 +122,7 @@ class Tables(Claims):
                 table.rows.append(
                     [
                         sentence(name, ", slack"),
+                        sentence(self.program(task, name, slack=True)),
                         sentence(bare(self.evid_goal(key, name)))
                         if run["reached"]
                         else sentence("stall"),
