@@ -605,3 +605,17 @@ def test_table_one_names_each_rows_program_by_its_equations(report):
     assert rows["UC-IVKC"] == "1" and rows["UC-EMDM"] == "3"
     assert rows["C-IVKC"] == "1, 4, 5" and rows["C-EMDM"] == "3, 4, 5"
     assert rows["C-IVKC, slack"] == "1, 4, 6" and rows["C-EMDM, slack"] == "3, 4, 6"
+
+
+def test_references_are_numbered_alike_in_the_paper_and_the_page():
+    """The bibliography's order (IEEE: order of first citation) is one list, REFERENCES: the
+    LaTeX bibliography and the page's list give the same order, so [n] means one work in both."""
+    from emdm.outputs.report.trace import REFERENCES
+
+    folder = Path(emdm.outputs.report.__file__).parent / "templates"
+    tex = (folder / "references.tex.j2").read_text(encoding="utf-8")
+    assert tuple(re.findall(r"\\bibitem\{(\w+)\}", tex)) == REFERENCES
+    html = (folder / "index.html.j2").read_text(encoding="utf-8")
+    assert tuple(re.findall(r'<li id="ref-(\w+)">', html)) == REFERENCES
+    # the page's formulation cites through the same list, never by a typed number
+    assert not re.search(r"\[\d\]", (folder / "formulation.html.j2").read_text(encoding="utf-8"))

@@ -23,6 +23,7 @@ from .document import Document, roman
 from .findings import Story
 from .pitch import Pitch
 from .trace import (
+    Cite,
     Data,
     Segment,
     Text,
@@ -90,6 +91,7 @@ def html_environment() -> jinja2.Environment:
     env.filters["h"] = lambda v: markupsafe.Markup(_html(v))
     env.filters["plain"] = _plain
     env.globals["kkt_tol"] = markupsafe.Markup(number_html(format(KKT_TOL, ".0e")))
+    env.globals["cite"] = lambda key: markupsafe.Markup(Cite(key).html().removeprefix("&nbsp;"))
     return env
 
 

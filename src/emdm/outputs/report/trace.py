@@ -271,8 +271,9 @@ class Eqs(Segment):
         return self.html()
 
 
-REFERENCES = ("yoshikawa", "flacco", "haviland", "nocedal")
-"""The bibliography, in the order of ``templates/references.tex.j2``."""
+REFERENCES = ("yoshikawa", "whitney", "liegeois", "flacco", "haviland", "nocedal")
+"""The bibliography in the order of first citation, as ``templates/references.tex.j2`` and the
+page's list give it."""
 
 
 @dataclass(frozen=True)

@@ -77,12 +77,22 @@ class Front(Claims):
             "A planar arm must bring its end effector to a goal while spending little "
             "joint-velocity effort and staying dexterous, i.e. keeping a large manipulability ",
             M_SYM,
-            ". A redundant arm (three joints for a planar task) can do both; a non-redundant "
-            "arm (two joints) can only trade tracking for dexterity through a task slack. As "
-            "in",
+            Cite("yoshikawa"),
+            ". Resolved-rate control",
+            Cite("whitney"),
+            " follows the goal through the Jacobian's pseudoinverse (IVKC); on a redundant arm "
+            "(three joints for a planar task) a gradient step in its null space can also raise ",
+            M_SYM,
+            Cite("liegeois"),
+            ", and later controllers keep joint limits as hard constraints",
+            Cite("flacco"),
+            ",",
             Cite("haviland"),
-            ", we write each control step as a strictly convex quadratic program (QP), solve it "
-            "with a custom active-set method certified by KKT conditions, and compare this "
+            ". A non-redundant arm (two joints) can only trade tracking for dexterity through a "
+            "task slack. As in",
+            Cite("haviland"),
+            ", we solve one strictly convex quadratic program (QP) per step, with a custom "
+            "active-set method certified by KKT conditions, and compare this "
             "EMDM controller with IVKC, each unconstrained (UC-) or constrained by joint limits "
             "(C-).",
         )

@@ -191,7 +191,7 @@ class Task2(Claims):
                 )
             told = reached_e and not reached_i  # the answer above gives the stall's time
             p += sentence(  # (and its distance to the goal)
-                f"{ivkc} freezes ",
+                "it freezes " if sc else f"{ivkc} freezes ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
                 " along the line",
                 *(
@@ -502,7 +502,7 @@ class Task2(Claims):
             self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
             " to ",
             self.ev(t, emdm, "conditioning", "w_slack_max_solved", fmt=".3g"),
-            " over the solved steps as the error shrinks, and the singular passage drives ",
+            " over the solved steps, and the singular passage drives ",
             COND_J,
             " to ",
             self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
