@@ -386,6 +386,7 @@ def test_the_story_reads_typed_records_that_the_producers_write():
     assert set(typing.get_args(r.EvidenceKey)) == {ev.key for ev in EVIDENCE}
     assert set(typing.get_args(r.FrontKey)) == names(r.FrontStep)
     assert set(typing.get_args(r.GridKey)) == names(r.GridRun)
+    assert set(typing.get_args(r.SeedKey)) == names(r.SeedRun)
     assert set(typing.get_args(r.GeometryKey)) == names(r.Geometry)
     assert set(typing.get_args(r.MmcKey)) == names(r.MmcRow)
     assert set(typing.get_args(r.PaperKey)) == names(r.PaperRow)

@@ -13,7 +13,7 @@ Either way only the linear inequalities ``G t <= h`` (from the bounds) remain. `
 and ``differential-evolution`` take them natively; ``nelder-mead``, ``powell`` and ``cma-es`` see an
 exact l1 penalty ``rho * sum(max(0, G t - h))`` with ``rho = PENALTY (1 + max|P|)``. Nothing is
 projected or clipped afterwards: the returned point's constraint violation is measured by the lab.
-Random methods are seeded (seed 0) so every run is reproducible.
+Random methods are seeded (``seed``, 0 by default) so every run is reproducible.
 """
 
 from __future__ import annotations
@@ -33,8 +33,8 @@ PENALTY = 1e4
 """The l1 penalty weight of the penalised gradient-free methods, per unit of ``1 + max|P|``."""
 
 SEEDED = ("differential-evolution", "cma-es")
-"""The stochastic methods: each runs once per program with a fixed seed (reproducible, one
-sample of their spread)."""
+"""The stochastic methods: each takes a ``seed`` (0 by default), so a run is reproducible and
+their spread is sampled by running seeds 0, 1, ... (:data:`emdm.studies.lab.SEEDS`)."""
 
 PENALISED = ("nelder-mead", "powell", "cma-es")
 """The gradient-free methods that see the bounds as the exact l1 penalty (the others take them
@@ -158,7 +158,10 @@ def _finish(
 def gradient_free(method: str) -> Callable[..., SolverResult]:
     """A solver function running the gradient-free ``method`` on the reduced program."""
 
-    def solve(qp: QP, *, budget: int = DEFAULT_BUDGET, history: bool = False) -> SolverResult:
+    def solve(
+        qp: QP, *, budget: int = DEFAULT_BUDGET, history: bool = False, seed: int = 0
+    ) -> SolverResult:
+        """``seed`` is used by the :data:`SEEDED` methods only (an integer >= 0)."""
         from scipy.optimize import Bounds, LinearConstraint, differential_evolution, minimize
 
         start = time.perf_counter()
@@ -211,7 +214,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                 rec,
                 Bounds(lo, hi),
                 constraints=cons if cons else (),
-                seed=0,
+                seed=seed,
                 tol=1e-12,
                 atol=1e-14,
                 popsize=popsize,
@@ -233,7 +236,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                 {
                     "bounds": [list(lo), list(hi)],
                     "maxfevals": budget,
-                    "seed": 1,
+                    "seed": seed + 1,  # (cma's seed 0 would draw one from the clock)
                     "verbose": -9,
                     "tolfun": 1e-14,
                     "tolx": 1e-13,

@@ -38,7 +38,7 @@ from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 from ..solvers.base import multipliers
-from ..solvers.nlp import DEFAULT_BUDGET, PENALTY, penalty_weight
+from ..solvers.nlp import DEFAULT_BUDGET, PENALTY, SEEDED, penalty_weight
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",
@@ -64,6 +64,11 @@ method from the formulation, reported beside them, never a family's fastest."""
 
 SLOW_CALL = 0.02
 """A call slower than this (s) is timed once: its time is already far above timer noise."""
+
+SEEDS = 5
+"""Seeds 0, 1, ... run by each stochastic method (:data:`~emdm.solvers.nlp.SEEDED`): the timed
+solves, histories and closed loop are seed 0's; every seed solves every program once more for the
+spread of its evaluations, gaps, violations and overruns (``seeds`` in ``solvers.json``)."""
 
 EXACT = 1e-9
 """A solver is exact on the lab's programs when its largest gap to the optimum and its largest
@@ -112,6 +117,8 @@ class SolverStudy:
     histories: dict[Representative, tuple[dict[str, float], ...]] = field(default_factory=dict)
     closed_loop: Run | None = None
     closed_loop_error: str | None = None
+    seeds: list[dict[str, Any]] = field(default_factory=list)
+    """A stochastic method's summary per seed (:func:`seed_summary`); empty for the others."""
 
     def __getstate__(self) -> dict[str, Any]:
         # solver functions may be closures: pickle the solver by name (the registry restores it)
@@ -146,6 +153,8 @@ class SolverStudy:
             "max_violation": float(max((s.violation for s in found), default=math.nan)),
             "optimal_claims": sum(s.status == "optimal" for s in self.solves),
         }
+        if self.seeds:
+            out["seeds"] = self.seeds
         run = self.closed_loop
         if run is not None:
             out.update(
@@ -253,15 +262,19 @@ def representative_steps(run: Run) -> dict[Representative, int]:
     return reps
 
 
-def _call(spec: SolverSpec, qp: QP, budget: int | None, history: bool = False) -> SolverResult:
+def _call(
+    spec: SolverSpec, qp: QP, budget: int | None, history: bool = False, seed: int | None = None
+) -> SolverResult:
     kwargs: dict[str, Any] = {"history": history}
     if budget is not None and spec.family == "gradient-free":
         kwargs["budget"] = budget
+    if seed is not None:
+        kwargs["seed"] = seed
     return spec.solve(qp, **kwargs)
 
 
 def _timed(
-    spec: SolverSpec, qp: QP, budget: int | None, repeats: int
+    spec: SolverSpec, qp: QP, budget: int | None, repeats: int, seed: int | None = None
 ) -> tuple[SolverResult, float]:
     """The solver's result and the median wall time of up to ``repeats`` solves (>= 1)."""
     times = []
@@ -269,7 +282,7 @@ def _timed(
     for _ in range(max(1, repeats)):
         start = time.perf_counter()
         try:
-            result = _call(spec, qp, budget)
+            result = _call(spec, qp, budget, seed=seed)
         except Exception as exc:  # a raising solver is a measured failure
             result = SolverResult(None, f"error: {type(exc).__name__}: {exc}", 0, 0.0)
         times.append(time.perf_counter() - start)
@@ -336,8 +349,8 @@ def run_lab(
             parts.append(_study(*job))
             if progress is not None:
                 progress(job[2])
-    for spec, (solves, histories, run, error) in zip(specs, parts, strict=True):
-        studies[spec.name] = SolverStudy(spec, solves, histories, run, error)
+    for spec, (solves, histories, run, error, seeds) in zip(specs, parts, strict=True):
+        studies[spec.name] = SolverStudy(spec, solves, histories, run, error, seeds)
     features = {k: step_features(reference, k, qp) for k, qp in programs.items()}
     return LabResult(
         scenario,
@@ -364,17 +377,53 @@ def _study(
     repeats: int,
     closed_loop: bool,
 ) -> tuple[
-    list[StepSolve], dict[Representative, tuple[dict[str, float], ...]], Run | None, str | None
+    list[StepSolve],
+    dict[Representative, tuple[dict[str, float], ...]],
+    Run | None,
+    str | None,
+    list[dict[str, Any]],
 ]:
     """One solver's measurements (runs in a worker process when the lab is parallel)."""
     spec = get_solver(name)
     steps = sorted(programs)
-    solves = []
     if steps:
         _timed(spec, programs[steps[0]], budget, 1)  # warm-up, not measured
-    for k in steps:
+    solves = _solves(spec, programs, optimum, budget, repeats)
+    seeds: list[dict[str, Any]] = []
+    if name in SEEDED:  # the spread of a stochastic method: every program again per seed
+        period = scenario.motion.dt
+        seeds.append(seed_summary(0, solves, period))
+        for seed in range(1, SEEDS):
+            again = _solves(spec, programs, optimum, budget, 1, seed)
+            seeds.append(seed_summary(seed, again, period))
+    histories: dict[Representative, tuple[dict[str, float], ...]] = {}
+    for label, k in reps.items():
+        try:
+            histories[label] = _call(spec, programs[k], budget, history=True).history
+        except Exception:  # a raising solver simply has no history to show
+            histories[label] = ()
+    run, error = None, None
+    if closed_loop:
+        try:
+            run = simulate(scenario, ctrl, solver=name, fallback=("active-set",), certify=False)
+        except NoSolution as exc:
+            error = str(exc)
+    return solves, histories, run, error, seeds
+
+
+def _solves(
+    spec: SolverSpec,
+    programs: dict[int, QP],
+    optimum: dict[int, tuple[Vector, float]],
+    budget: int | None,
+    repeats: int,
+    seed: int | None = None,
+) -> list[StepSolve]:
+    """``spec``'s answer to every program, each timed (median of up to ``repeats`` solves)."""
+    solves = []
+    for k in sorted(programs):
         qp = programs[k]
-        result, elapsed = _timed(spec, qp, budget, repeats)
+        result, elapsed = _timed(spec, qp, budget, repeats, seed)
         x = result.x if result.x is not None and np.all(np.isfinite(result.x)) else None
         objective = qp.objective(x) if x is not None else math.nan
         solves.append(
@@ -390,19 +439,22 @@ def _study(
                 status=result.status,
             )
         )
-    histories: dict[Representative, tuple[dict[str, float], ...]] = {}
-    for label, k in reps.items():
-        try:
-            histories[label] = _call(spec, programs[k], budget, history=True).history
-        except Exception:  # a raising solver simply has no history to show
-            histories[label] = ()
-    run, error = None, None
-    if closed_loop:
-        try:
-            run = simulate(scenario, ctrl, solver=name, fallback=("active-set",), certify=False)
-        except NoSolution as exc:
-            error = str(exc)
-    return solves, histories, run, error
+    return solves
+
+
+def seed_summary(seed: int, solves: Sequence[StepSolve], period: float) -> dict[str, Any]:
+    """One seed's run of a stochastic method over the lab's programs: its median evaluations,
+    largest |gap| and bound violation over the answers found, failures, and the programs it took
+    longer than the control ``period`` (s) to solve."""
+    found = [s for s in solves if s.x is not None]
+    return {
+        "seed": seed,
+        "median_evaluations": float(np.median([s.evaluations for s in solves])),
+        "max_abs_gap": float(max((abs(s.gap) for s in found), default=math.nan)),
+        "max_violation": float(max((s.violation for s in found), default=math.nan)),
+        "failures": len(solves) - len(found),
+        "over_period": sum(s.time > period for s in solves),
+    }
 
 
 def lab_json(lab: LabResult) -> dict[str, Any]:

@@ -122,8 +122,8 @@ class Front(Claims):
     def conclusion(self) -> Section:
         sec = Section("conclusion", "Conclusion")
         p = sentence(
-            "On the redundant arm EMDM is IVKC plus a null-space motion towards dexterity: it "
-            "tracks as IVKC does and trades effort for manipulability (",
+            "On the redundant arm EMDM is IVKC plus null-space motion towards dexterity, "
+            "trading effort for manipulability (",
             Ref("tab", "outcomes"),
             "). On the non-redundant arm the slack, not the dexterity term, decides: it lets "
             "C-EMDM leave a straight line that the joint limits block, where task scaling "

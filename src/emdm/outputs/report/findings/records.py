@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import types
 import typing
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal, Union
 
 from ....core.scenario import Scenario, scenario_from_dict
@@ -210,8 +210,27 @@ SolverKey = Literal[
     "optimal_claims",
     "reached",
     "time_to_goal",
+    "seeds",
 ]
 """The fields of :class:`SolverRow`."""
+
+SeedKey = Literal[
+    "seed", "median_evaluations", "max_abs_gap", "max_violation", "failures", "over_period"
+]
+"""The fields of :class:`SeedRun`."""
+
+
+@dataclass(frozen=True)
+class SeedRun:
+    """One seed of a stochastic solver over a lab's programs: ``.../solvers/NAME/seeds/I``
+    (:func:`emdm.studies.lab.seed_summary`)."""
+
+    seed: int
+    median_evaluations: float
+    max_abs_gap: float
+    max_violation: float
+    failures: int
+    over_period: int
 
 
 @dataclass(frozen=True)
@@ -240,6 +259,8 @@ class SolverRow:
     reached: bool | None = None
     """Alone in the closed loop: whether the run reached the goal (absent: not run)."""
     time_to_goal: float | None = None
+    seeds: list[SeedRun] = field(default_factory=list)
+    """A stochastic method's runs over seeds 0, 1, ... (empty for the others)."""
 
 
 LabKey = Literal[
@@ -575,12 +596,13 @@ def load_record(cls: type[Any], data: Data, file: str, *path: str | int) -> Any:
     hints = typing.get_type_hints(cls)
     values = {}
     for f in dataclasses.fields(cls):
+        optional = not (f.default is f.default_factory is dataclasses.MISSING)
+        if f.name not in node and optional:
+            continue  # an optional field (the dataclass' default)
         if _holds_records(hints[f.name]):
             # records inside a record (a lab's rows, a geometry's solutions): typed in turn
             values[f.name] = _build(hints[f.name], data, file, (*path, f.name), node[f.name])
             continue
-        if f.name not in node and f.default is not dataclasses.MISSING:
-            continue  # an optional field
         if f.name not in node:
             raise RecordError(f"{where}: no field {f.name!r} (the report reads it)")
         if not _accepts(hints[f.name], node[f.name]):

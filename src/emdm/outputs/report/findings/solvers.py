@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED
-from ....studies.lab import LIKE_FOR_LIKE, exact_answer
+from ....studies.lab import LIKE_FOR_LIKE, SEEDS, exact_answer
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, Unit, sentence
 from .base import (
@@ -22,7 +24,7 @@ SHOWN_ZERO_EXP = -12
 
 class Solvers(StoryBase):
     def budget_stops(self, lab: LabName, free: list[str], rows: dict[str, SolverRow]) -> Sentence:
-        """``; the budget of 600 evaluations per program ends all 41 searches of A, 2 of B's``:
+        """``; the 600-evaluation budget ends all 41 of A's searches, 2 of B's``:
         the gradient-free searches their budget ended (empty when it ended none)."""
         stopped = sorted(
             (k for k in free if rows[k].limit_stops), key=lambda k: -rows[k].limit_stops
@@ -30,9 +32,9 @@ class Solvers(StoryBase):
         if not stopped:
             return []
         out = sentence(
-            "; the budget of ",
+            "; the ",
             self.d.num(f"data/{lab}/solvers.json", "budget", fmt="d"),
-            " evaluations per program ends ",
+            "-evaluation budget ends ",
         )
         for i, k in enumerate(stopped):
             every = rows[k].limit_stops == rows[k].resolved_steps
@@ -137,9 +139,7 @@ class Solvers(StoryBase):
                     else sentence(". The others are inexact")
                 )
                 answer += self.budget_stops(lab, free, rows)
-                answer += sentence(".")
-            else:
-                answer += sentence(".")
+            answer += self.seed_spread(lab, rows) + sentence(".")
         elif inexact_free:
             answer += sentence("Every gradient-free method is inexact (")
             for i, k in enumerate(inexact_free):
@@ -202,12 +202,8 @@ class Solvers(StoryBase):
             )
             margin = self.d.value(f, "challenges", "feature_ranges", "penalty_margin")
             if bad in PENALISED and margin and margin[0] > 1.0:  # its penalty is exact
-                p += sentence(
-                    ", short of its exact penalty's minimum (",
-                    Math(r"\rho", "ρ"),
-                    " exceeds the largest multiplier ",
-                    self.d.num(f, "challenges", "feature_ranges", "penalty_margin", 0, fmt=".2g"),
-                    "-fold)",
+                p += sentence(  # (exact: rho exceeds the largest multiplier, data-checked)
+                    ", short of its exact penalty's minimum",
                 )
             p += sentence("; ")
         p += sentence("in closed loop " if violators else "In closed loop ")
@@ -230,6 +226,37 @@ class Solvers(StoryBase):
 
         sec.answer = answer + p  # the recommendation closes the paper (conclusion)
         return sec
+
+    def seed_spread(self, lab: LabName, rows: dict[str, SolverRow]) -> Sentence:
+        """What seeds 0, 1, ... change for the stochastic methods: whether each stays exact, and
+        the range of its median evaluations (exact) or of its largest gap (inexact)."""
+        seeded = [k for k in rows if rows[k].seeds]
+        if not seeded:
+            return []
+        f = f"data/{lab}/solvers.json"
+        runs = rows[seeded[0]].seeds
+        out = sentence(f". Over seeds {runs[0].seed}–{runs[-1].seed}, ")
+        for i, k in enumerate(seeded):
+            seeds = rows[k].seeds
+            exact = [exact_answer(r.max_abs_gap, r.max_violation) for r in seeds]
+            key = "median_evaluations" if all(exact) else "max_abs_gap"
+            fmt = ".4g" if all(exact) else ".1e"
+            values = [getattr(r, key) for r in seeds]
+            ends = [
+                self.d.num(f, "solvers", k, "seeds", j, key, fmt=fmt)
+                for j in (int(np.argmin(values)), int(np.argmax(values)))
+            ]
+            span = sentence(ends[0], "–", ends[1]) if min(values) < max(values) else [ends[0]]
+            if all(exact):
+                out += sentence(k, " stays exact (median ", *span, " evaluations)")
+            elif not any(exact):
+                out += sentence(k, "'s largest gap is ", *span)
+            else:
+                out += sentence(k, " is exact with ", f"{sum(exact)} of {len(seeds)} seeds")
+            out += sentence(
+                "; " if i < len(seeded) - 2 else " and " if i == len(seeded) - 2 else ""
+            )
+        return out
 
     def overruns(
         self, lab: LabName, names: list[str], rows: dict[str, SolverRow], named: bool = True
@@ -291,7 +318,7 @@ class Solvers(StoryBase):
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
                 " period; goal: closed-loop arrival, solve time not charged",
                 *(
-                    ("; ", ", ".join(seeded), ": one seeded run each")
+                    ("; ", ", ".join(seeded), f": seed 0 (seeds 0–{SEEDS - 1}: text)")
                     if (seeded := [k for k in rows if k in SEEDED])
                     else ()
                 ),

@@ -148,9 +148,7 @@ class Task2(Claims):
                     self.geon(t, "solutions", i, "q2", fmt=".2f"),
                     ") rad; the elbow-",
                     sols[o].elbow,
-                    " one",
-                    " (the side the arm starts on)" if geo.start_elbow == sols[o].elbow else "",
-                    " needs ",
+                    " one needs ",
                     q(joint),
                     " = ",
                     self.geon(t, "solutions", o, f"q{joint}", fmt=".2f", unit="rad"),
@@ -166,9 +164,9 @@ class Task2(Claims):
                     self.geon(t, "max_fold", fmt=".3f", unit="rad"),
                     ") the end effector cannot come closer than ",
                     self.geon(t, "inner_reach", fmt=".3f", unit="m"),
-                    " to the base, yet the straight line to the goal passes ",
+                    " to the base, yet the straight line passes ",
                     self.geon(t, "line_min_distance", fmt=".3f", unit="m"),
-                    " from it and enters that disc ",
+                    " from it, entering that disc ",
                     self.geon(t, "line_enters_at", fmt=".3f", unit="m"),
                     " after the start (",
                     Ref("fig", "workspace"),
@@ -179,13 +177,13 @@ class Task2(Claims):
         stall = self.evv(t, ivkc, "stall")
         if stall:
             p = sentence(
-                "A non-redundant arm without slack has one command per task velocity, and scaling "
-                f"keeps its direction: {ivkc} can only slow down along the line. ",
+                "A two-link arm without slack has one command per task velocity, and scaling "
+                f"keeps its direction: {ivkc} can only slow down. ",
             )
             sc = self.evv(t, ivkc, "scaling")
             if sc:
                 p += sentence(
-                    "Scaled from the first step (",
+                    "Scaled from step 0 (",
                     *eq(ALPHA, self.ev(t, ivkc, "scaling", "initial_alpha", fmt=".2f")),
                     "), ",
                 )
@@ -203,7 +201,7 @@ class Task2(Claims):
             pins = self.evv(t, ivkc, "pinned")
             if pins:
                 p += sentence(
-                    ", with joint ",
+                    ", joint ",
                     self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
                     f" on its {pins[0]['side']} {pins[0]['kind']} bound from ",
                     self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
@@ -496,7 +494,7 @@ class Task2(Claims):
         emdm = Name.C_EMDM
         f = "data/task2-lab-C-EMDM/solvers.json"
         answer = sentence(
-            "Two things make Task 2's programs harder than Task 1's: the slack weight ",
+            "Two things make Task 2's programs harder: the slack weight ",
             W_S,
             " grows from ",
             self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
