@@ -327,3 +327,31 @@ def test_the_tracking_gap_is_the_slack_and_the_scaled_off_part(task2_runs):
         assert np.allclose(gap, given_up, rtol=1e-9, atol=1e-12), name
     assert tracking_gap(task2_runs["UC-IVKC"]).max() < 1e-12
     assert tracking_gap(task2_runs["UC-EMDM"]).max() > 0.1  # its slack at work
+
+
+def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, monkeypatch):
+    """Fig. 1(d): each run's recorded tip path, from its start (the dot) to the goal (the star),
+    beside the straight line; a figure has one fourth panel, the path or the gap."""
+    from emdm.outputs import paper_figures as pf
+
+    sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
+    runs = [emdm.simulate(sc, name) for name in ("UC-IVKC", "UC-EMDM")]
+    made = []
+
+    class Kept(pf.Figure):  # the figure drawn, kept to be looked at
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(pf, "Figure", Kept)
+    with formats((".png",)):
+        pf.pair_figure(runs, tmp_path / "pair", path=True)
+    panel = next(ax for ax in made[-1].axes if ax.get_title(loc="left") == "(d)")
+    lines = panel.get_lines()
+    for run in runs:
+        assert any(np.array_equal(line.get_xydata(), run.p[:, :2]) for line in lines)
+    goal = runs[0].p[0] + runs[0].e[0]
+    assert any(np.allclose(line.get_xydata(), [goal]) for line in lines)
+    assert any(np.allclose(line.get_xydata(), [runs[0].p[0]]) for line in lines)
+    with pytest.raises(ValueError, match="one fourth panel"):
+        pf.pair_figure(runs, tmp_path / "both", gap=True, path=True)

@@ -225,12 +225,20 @@ def tracking_gap(run: Run) -> np.ndarray:
 
 
 def pair_figure(
-    runs: Sequence[Run], stem: Path, medium: Medium = PAPER, *, gap: bool = False
+    runs: Sequence[Run],
+    stem: Path,
+    medium: Medium = PAPER,
+    *,
+    gap: bool = False,
+    path: bool = False,
 ) -> Path:
     """A pair in one composite: (a) m(t), (b) E(t), (c) the distance to the goal ||e||(t)
-    above, (d) q(t) and (e) qd(t) below, one strip per joint; ``gap``: a fourth panel above,
-    (d) the velocity-tracking gap of :func:`tracking_gap` (the slack at work), the joints then
-    (e) and (f)."""
+    above, (d) q(t) and (e) qd(t) below, one strip per joint. A fourth panel above, the joints
+    then (e) and (f): ``gap``, (d) the velocity-tracking gap of :func:`tracking_gap` (the slack
+    at work); ``path``, (d) the tip paths in the plane, start and goal marked (the tracking
+    overlaid where it is exact)."""
+    if gap and path:
+        raise ValueError("pair_figure: one fourth panel, the gap or the path")
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
@@ -240,12 +248,13 @@ def pair_figure(
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
-        upper = outer[0].subgridspec(1, 4 if gap else 3)
+        upper = outer[0].subgridspec(1, 4 if gap or path else 3)
         lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
         ax_gap = fig.add_subplot(upper[0, 3], sharex=ax_m) if gap else None
+        ax_path = fig.add_subplot(upper[0, 3]) if path else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
         for run in runs:
@@ -255,12 +264,26 @@ def pair_figure(
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             if ax_gap is not None:
                 ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
+            if ax_path is not None:
+                ax_path.plot(run.p[:, 0], run.p[:, 1], **st)
             for j in range(n):
                 q_axes[j].plot(run.t, run.q[:, j], **st)
                 qd_axes[j].plot(run.t[:-1], run.qd[:, j], **st)
         upper_axes = [ax_m, ax_e, ax_err, *([ax_gap] if ax_gap is not None else [])]
         for ax in (*upper_axes, *q_axes, *qd_axes):
             _shade(ax, spans)
+        if ax_path is not None:  # in the plane, not in time: start (circle) and goal (star)
+            start, goal = runs[0].p[0], runs[0].p[0] + runs[0].e[0]
+            # the straight line a continuous-time P controller would follow, under the paths
+            ax_path.plot(*zip(start, goal, strict=True), ":", color="black", lw=0.6, zorder=1)
+            ax_path.plot(*start, "o", color="black", markersize=3, zorder=4, clip_on=False)
+            ax_path.plot(*goal, "*", color="black", markersize=5, zorder=4, clip_on=False)
+            ax_path.margins(0.1)
+            ax_path.set_xlabel(r"$x$ (m)", labelpad=1)
+            ax_path.set_ylabel(r"$y$ (m)", labelpad=1)
+            ax_path.xaxis.set_major_locator(MaxNLocator(2))
+            ax_path.yaxis.set_major_locator(MaxNLocator(3))
+            ax_path.set_title("(d)", loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
         ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
@@ -348,7 +371,7 @@ def pair_figure(
                 ax.set_xlim(-0.02 * end, 1.03 * end)
         q_axes[-1].set_xlabel(r"$t$ (s)")
         qd_axes[-1].set_xlabel(r"$t$ (s)")
-        joint_q, joint_qd = ("(e)", "(f)") if gap else ("(d)", "(e)")
+        joint_q, joint_qd = ("(e)", "(f)") if gap or path else ("(d)", "(e)")
         q_axes[0].set_title(
             rf"$\bf {joint_q}$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
         )

@@ -126,6 +126,10 @@ TASKS = ("task1", "task2")
 PAIRS = {"UC": (Name.UC_IVKC, Name.UC_EMDM), "C": (Name.C_IVKC, Name.C_EMDM)}
 """Each pair as (IVKC, EMDM): the brief compares them pair by pair."""
 
+FOURTH_PANEL = {"task1": "path", "task2": "gap"}
+"""Each task's fourth panel in its pair figures: Task 1's tip paths (its task is imposed, the
+tracking overlaid), Task 2's tracking gap (its slack at work)."""
+
 
 @dataclass(frozen=True)
 class Evidence:

@@ -50,6 +50,7 @@ from . import explain
 from .config import (
     BYLINE,
     EVIDENCE,
+    FOURTH_PANEL,
     FULL,
     PAIRS,
     QUICK,
@@ -294,9 +295,11 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
     ivkc, emdm = PAIRS[group]
     pair = [runs[ivkc], runs[emdm]]
     with pf.png_only(cfg.quick):
-        # Task 2's pairs also show the tracking gap: the slack, or the scaled-off part
-        gap = task == "task2"
-        out = [str(pf.pair_figure(pair, stage / PAPER_FIGURES / f"{task}-{group}", gap=gap))]
+        # a fourth panel: Task 2's tracking gap (the slack, or the scaled-off part), Task 1's
+        # tip paths (its task imposed: the tracking overlaid)
+        fourth = FOURTH_PANEL[task]
+        stem = stage / PAPER_FIGURES / f"{task}-{group}"
+        out = [str(pf.pair_figure(pair, stem, gap=fourth == "gap", path=fourth == "path"))]
         if not cfg.quick:
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))

@@ -21,7 +21,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
-from ..config import PAIRS
+from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
 from .records import (
@@ -394,28 +394,28 @@ class StoryBase:
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod
-    def panels(only_c: bool = False, far: bool = False) -> Sentence:
-        """The five panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`),
-        as its captions name them (without the final stop); ``only_c``: panel (c) alone."""
-        third = sentence("(c) distance to the goal ", ERR, " (log; dotted: the tolerance)")
-        if only_c:
-            return third
-        return (
-            sentence(
-                "(a) manipulability ",
-                M_SYM,
-                ", (b) effort ",
-                E_SYM,
-                " (log, floored at ",
-                Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
-                "), ",
-            )
-            + third
-            + sentence(
-                ", (d) joint positions, limits and damper zones (shaded), (e) joint velocities, "
-                "limits dotted",
-                " (off-scale: triangles, farther run's value at right)" if far else "",
-            )
+    def panels(far: bool = False, path: bool = False) -> Sentence:
+        """The panels of a pair figure (:func:`emdm.outputs.paper_figures.pair_figure`), as its
+        captions name them (without the final stop); ``path``: its fourth panel, the tip paths,
+        the joints then (e) and (f)."""
+        joints = ("(e)", "(f)") if path else ("(d)", "(e)")
+        out = sentence(
+            "(a) manipulability ",
+            M_SYM,
+            ", (b) effort ",
+            E_SYM,
+            " (log, floored at ",
+            Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
+            "), (c) distance to the goal ",
+            ERR,
+            " (log; dotted: the tolerance), ",
+        )
+        if path:
+            out += sentence("(d) tip paths (dotted: the straight line; dot: start, star: goal), ")
+        return out + sentence(
+            f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
+            "velocities, limits dotted",
+            " (off-scale: triangles, farther run's value at right)" if far else "",
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
@@ -450,7 +450,8 @@ class StoryBase:
                 )
         out = sentence(f"{ivkc} (solid), {emdm} (dashed)")
         if (task, group) == ("task1", "UC"):
-            out += sentence(": ") + self.panels(far=self.far_beyond(task, PAIRS[group]))
+            far = self.far_beyond(task, PAIRS[group])
+            out += sentence(": ") + self.panels(far, path=FOURTH_PANEL[task] == "path")
         elif (task, group) == ("task2", "UC"):  # the same five panels as Task 2.1's, the gap too
             out += sentence(", as in ", Ref("fig", "t2-c"))
         else:
@@ -463,7 +464,7 @@ class StoryBase:
                 Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
                 "; log, floored at ",
                 Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
-                "), joints in (e), (f)",
+                ")" if FOURTH_PANEL["task1"] == "path" else "), joints in (e), (f)",
             )
         for note in notes:
             out += sentence("; ") + note

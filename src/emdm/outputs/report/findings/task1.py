@@ -67,9 +67,9 @@ class Task1(StoryBase):
         answer += sentence(
             "; at every step their end effectors are at most ",
             gap,
-            " apart, so their distances to the goal coincide in ",
+            " apart: their distances to the goal and their paths coincide in ",
             Ref("fig", "t1-uc"),
-            "(c).",
+            "(c), (d).",
         )
         sec.answer = answer
         self.answers.append(
