@@ -1136,11 +1136,6 @@ def ellipse_figure(run: Run, stem: Path, medium: Medium = SLIDE) -> Path:
     return stem
 
 
-STILL_TOL = 1e-3
-"""Joint angles within this of a run's final ones (rad) count as the final pose in the stills:
-a run that stops short of the goal is drawn while it moves, not at copies of one pose."""
-
-
 def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Medium = SLIDE) -> Path:
     """Animation stills: each run's arm at ``times`` instants (darker = later), path, goal and
     the manipulability ellipse at the last state, the runs side by side."""
@@ -1162,10 +1157,10 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
         axes = fig.subplots(1, len(runs), squeeze=False)[0]
         for ax, run in zip(axes, runs, strict=True):
             # each run's own instants: a run that ends early is not drawn at times it never had,
-            # and one that stops moving (a stall) only until it does, not as copies of one pose
-            away = np.flatnonzero(np.max(np.abs(run.q - run.q[-1]), axis=1) > STILL_TOL)
-            still = int(away[-1]) + 1 if away.size else 0
-            last = still if still < run.steps and not run.reached else run.steps
+            # and one that stalls only until it does (the record's stall, as the paper dates
+            # it), not as copies of one pose
+            stalled = run.stalled_from
+            last = stalled if stalled is not None else run.steps
             instants = np.linspace(0.0, float(run.t[last]), times)
             drawn = [min(round(t / sc.motion.dt), last) for t in instants]
             st = _style(run, medium)
