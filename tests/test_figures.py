@@ -355,3 +355,27 @@ def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, mon
     assert any(np.allclose(line.get_xydata(), [runs[0].p[0]]) for line in lines)
     with pytest.raises(ValueError, match="one fourth panel"):
         pf.pair_figure(runs, tmp_path / "both", gap=True, path=True)
+
+
+def test_the_stills_date_a_stall_as_the_record_does(tmp_path, monkeypatch):
+    """The pitch's stills draw a stalled run until its stall, dated by Run.stalled_from (the
+    paper's date), and say it is still from then on."""
+    from emdm.outputs import paper_figures as pf
+
+    made = []
+
+    class Kept(pf.Figure):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(pf, "Figure", Kept)
+    sc = emdm.load_scenario("task2", {"motion.max_time": 8.0})
+    runs = [emdm.simulate(sc, name) for name in ("C-IVKC", "C-EMDM")]
+    with formats((".png",)):
+        pf.stills_figure(runs, tmp_path / "stills")
+    stalled = runs[0].stalled_from
+    assert stalled is not None and runs[1].stalled_from is None
+    labels = [ax.get_xlabel() for ax in made[-1].axes]
+    assert f"{runs[0].t[stalled]:.2f}".rstrip("0").rstrip(".") + " s, then still" in labels[0]
+    assert "then still" not in labels[1]
