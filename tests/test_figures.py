@@ -379,3 +379,32 @@ def test_the_stills_date_a_stall_as_the_record_does(tmp_path, monkeypatch):
     labels = [ax.get_xlabel() for ax in made[-1].axes]
     assert f"{runs[0].t[stalled]:.2f}".rstrip("0").rstrip(".") + " s, then still" in labels[0]
     assert "then still" not in labels[1]
+
+
+def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, monkeypatch):
+    """A joint whose speed goes far beyond its limit is drawn whole: linear within the limit,
+    log-scaled beyond it (symlog), its axis spanning every run's extremes; the others stay
+    linear."""
+    from emdm.outputs import paper_figures as pf
+
+    made = []
+
+    class Kept(pf.Figure):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(pf, "Figure", Kept)
+    sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
+    runs = [emdm.simulate(sc, name) for name in ("UC-IVKC", "UC-EMDM")]
+    with formats((".png",)):
+        pf.pair_figure(runs, tmp_path / "pair", path=True)
+    strips = [ax for ax in made[-1].axes if ax.get_ylabel().startswith(r"$\dot q")]
+    assert len(strips) == sc.n
+    for j, ax in enumerate(strips):
+        peak = max(np.abs(r.qd[:, j]).max() for r in runs)
+        far = peak > pf.FAR_BEYOND * sc.arm.qd_max[j]
+        assert ax.get_yscale() == ("symlog" if far else "linear"), j
+        lo, hi = ax.get_ylim()
+        assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
+    assert any(ax.get_yscale() == "symlog" for ax in strips)  # the case this guards

@@ -187,13 +187,10 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 
 FAR_BEYOND = 1.5
-"""A joint whose speeds go beyond this multiple of its limit has its speed strip clipped at
-:data:`SPEED_VIEW` times the limit, each off-scale extreme marked at the edge with its value on
-the right (:func:`pair_figure`)."""
-
-SPEED_VIEW = 1.3
-"""A clipped speed strip shows this multiple of the joint's speed limit on each side: the
-limits and the motion within them readable, not squashed by a spike of a step or two."""
+"""A joint whose speeds go beyond this multiple of its limit has its speed strip drawn on a
+symmetric-log axis beyond the limit (linear within it), each such extreme named on the right
+(:func:`pair_figure`): the whole run shows, and a spike of a step or two does not squash the
+motion within the limits into a thin band."""
 
 
 GAP_FLOOR = 1e-6
@@ -312,50 +309,33 @@ def pair_figure(
             top = max(high, -low)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             far = top > FAR_BEYOND * limit
-            # linear, the limits dotted; a run far beyond them is clipped at the view's edge,
-            # where a triangle and the value on the right say how far it went
-            view = SPEED_VIEW * limit
-            beyond = FAR_BEYOND * limit  # a side clipped only where its extreme is far beyond
-            qd_axes[j].set_ylim(
-                -view if low < -beyond else 1.15 * min(low, -limit),
-                view if high > beyond else 1.15 * max(high, limit),
-            )
+            # linear within the limits (dotted); a run far beyond them on a symmetric-log axis
+            # beyond the limit, so the whole of it shows and the motion within the limits keeps
+            # most of the strip, its peaks named on the right in the colour of their run
+            qd_axes[j].set_ylim(1.15 * min(low, -limit), 1.15 * max(high, limit))
+            if far:
+                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.5)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
             qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
             # two ticks per strip (three collide at this height): the position limits, the
-            # velocity limits on the left and, beyond them, the peak itself on the right (a
-            # rounder tick below it read as the axis' end, the curve "cut off")
+            # velocity limits on the left and, beyond them, the peaks themselves on the right
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # each off-scale extreme: a triangle at the edge where it was reached and
-                # its value at that edge on the right, in the colour of the run that reached it
-                edges, values, colours = [], [], []
+            if far:  # each side's extreme far beyond the limit, in the colour of its run
+                peaks, colours = [], []
                 for v in (low, high):
-                    if abs(v) <= beyond:
+                    if abs(v) <= FAR_BEYOND * limit:
                         continue
                     r = next(
                         r for r in runs if r.steps and v in (r.qd[:, j].min(), r.qd[:, j].max())
                     )
-                    k = int(np.argmax(r.qd[:, j] == v))
-                    colour = _style(r, medium)["color"]
-                    edge = view if v > 0 else -view
-                    qd_axes[j].plot(
-                        [r.t[k]],
-                        [edge],
-                        "^" if v > 0 else "v",
-                        color=colour,
-                        markersize=3.5,
-                        clip_on=False,
-                        zorder=4,
-                    )
-                    edges.append(edge)
-                    values.append(float(f"{v:.2g}"))
-                    colours.append(colour)
+                    peaks.append(v)
+                    colours.append(_style(r, medium)["color"])
                 right = qd_axes[j].secondary_yaxis("right")
-                right.set_yticks(edges, [_plain(v) for v in values])
+                right.set_yticks(peaks, [_plain(float(f"{v:.2g}")) for v in peaks])
                 for label, colour in zip(right.get_yticklabels(), colours, strict=True):
                     label.set_color(colour)
                 right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
