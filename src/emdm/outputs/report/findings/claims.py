@@ -73,7 +73,9 @@ class Claims(StoryBase):
         return sentence(
             "without the dexterity term C-EMDM arrives sooner, in ",
             self.evid_goal(key, Name.C_EMDM),
-            *((" (", run_label(key), ")") if label else ()),
+            # w_M = 0 leaves IVKC's objective (times w_E) with C-EMDM's own bounded slack: the
+            # like-for-like pairing of the two under the brief's slack
+            *((" (", run_label(key), ": IVKC's objective with C-EMDM's slack)") if label else ()),
         )
 
     def slack_gains(self) -> list[str]:

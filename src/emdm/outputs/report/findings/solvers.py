@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED
-from ....studies.lab import LIKE_FOR_LIKE, SEEDS, exact_answer
+from ....studies.lab import EXACT, LIKE_FOR_LIKE, SEEDS, exact_answer
 from ..document import Section, Table
 from ..trace import Math, Ref, Sentence, Text, Unit, sentence
 from .base import (
@@ -17,6 +19,9 @@ from .base import (
 )
 from .claims import listed
 from .records import LabName, SolverRow
+
+EXACT_EXP = round(math.log10(EXACT))
+"""The exponent of :data:`~emdm.studies.lab.EXACT`, as Table III's caption writes it."""
 
 SHOWN_ZERO_EXP = -12
 """Table III writes a gap or a bound violation below 10**SHOWN_ZERO_EXP as 0 (its caption says so)."""
@@ -314,6 +319,8 @@ class Solvers(StoryBase):
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
                 " and bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
+                "; exact: both at most ",
+                Math(f"10^{{{EXACT_EXP}}}", f"10<sup>−{-EXACT_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
                 " period; goal: closed-loop arrival, solve time not charged",
