@@ -620,3 +620,19 @@ def test_references_are_numbered_alike_in_the_paper_and_the_page():
     assert tuple(re.findall(r'<li id="ref-(\w+)">', html)) == REFERENCES
     # the page's formulation cites through the same list, never by a typed number
     assert not re.search(r"\[\d\]", (folder / "formulation.html.j2").read_text(encoding="utf-8"))
+
+
+def test_a_scaled_steps_front_is_also_drawn_under_the_free_slack(report):
+    """C-EMDM's first front is one point (a scaled step): the same state under the free slack (6)
+    is solved for every ratio too, at full task scale, and how many optima it has is recorded."""
+    root, _ = report
+    data = json.loads((root / "data" / "task1-pareto-C-EMDM" / "pareto.json").read_text())
+    fronts = json.loads((root / "data" / "task1-pareto-C-EMDM" / "fronts.json").read_text())
+    first = data["steps"][0]
+    assert all(p["alpha"] < 1.0 for p in first["points"])
+    slack = first["slack_points"]
+    assert len(slack) == len(first["points"]) and all(p["alpha"] == 1.0 for p in slack)
+    assert all(p["kkt"] <= 1e-9 for p in slack)
+    distinct = {(round(p["E"], 12), round(p["M"], 12)) for p in slack}
+    assert fronts["steps"][0]["slack_distinct"] == len(distinct)
+    assert all("slack_points" not in s for s in data["steps"][1:] if s["points"][0]["alpha"] == 1)

@@ -588,6 +588,7 @@ def _front_axes(
     norm: Any,
 ) -> Any:
     pts = step["points"]
+    slack = step.get("slack_points")  # a scaled step's front under the free slack (6)
     ratio = np.array([p["w_manip"] / p["w_effort"] for p in pts])
     E = np.array([p["E"] for p in pts])
     M = np.array([p["M"] for p in pts])
@@ -612,7 +613,8 @@ def _front_axes(
         note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
     if note:  # in the emptier of two corners (a front runs from lower left to upper right)
         to_axes = ax.transData + ax.transAxes.inverted()
-        frac = to_axes.transform(np.column_stack((M, E)))
+        drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]
+        frac = to_axes.transform(np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2)))))
         top_left = np.count_nonzero((frac[:, 0] < 0.65) & (frac[:, 1] > 0.5))
         bottom_right = np.count_nonzero((frac[:, 0] > 0.35) & (frac[:, 1] < 0.5))
         x, y, ha, va = (0.04, 0.95, "left", "top")
@@ -629,7 +631,27 @@ def _front_axes(
             bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
             zorder=1.5,  # under the front's points (zorder 2): a note never hides one
         )
-    if info["degenerate"]:
+    if slack and info["degenerate"]:  # the points to the right, the note beside them on the left
+        x = float(np.mean([M[0], *(p["M"] for p in slack)]))
+        span = 0.1 * abs(x) + 1e-3
+        ax.set_xlim(x - 0.88 * span, x + 0.12 * span)
+        energies = [E[0], *(p["E"] for p in slack)]
+        low, high = min(energies), max(energies)
+        ax.set_ylim(low - 0.3 * (high - low) - 1e-3, high + 0.3 * (high - low) + 1e-3)
+    if slack:  # the same state under the free slack (6): a front again, hollow
+        ax.plot([p["M"] for p in slack], [p["E"] for p in slack], color="grey", lw=0.5, zorder=1)
+        ax.scatter(
+            [p["M"] for p in slack],
+            [p["E"] for p in slack],
+            facecolors="none",
+            edgecolors=matplotlib.colormaps["viridis"](
+                norm(np.log10(np.maximum([p["w_manip"] / p["w_effort"] for p in slack], 1e-4)))
+            ),
+            s=9 if medium is PAPER else 22,
+            linewidths=0.6,
+            zorder=2,
+        )
+    elif info["degenerate"]:
         x, y = M[0], E[0]
         ax.set_xlim(x - 0.5 * abs(x) - 1e-3, x + 0.5 * abs(x) + 1e-3)
         ax.set_ylim(0.5 * y, 1.5 * y)

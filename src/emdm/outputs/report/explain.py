@@ -519,6 +519,22 @@ def front_events(data: dict[str, Any]) -> list[dict[str, Any]]:
                 "E_max": float(E.max()),
                 "M_min": float(M.min()),
                 "M_max": float(M.max()),
+                # a task-scaled step's front under the free slack (6) instead, when computed
+                "slack_distinct": _distinct(step["slack_points"])
+                if "slack_points" in step
+                else None,
             }
         )
     return out
+
+
+def _distinct(points: list[dict[str, Any]]) -> int:
+    """How many different optima (E, M) ``points`` hold (relative tolerance 1e-9)."""
+    scale = max(max(abs(p["E"]), abs(p["M"])) for p in points) or 1e-300
+    seen: list[tuple[float, float]] = []
+    for p in points:
+        if not any(
+            abs(p["E"] - e) <= 1e-9 * scale and abs(p["M"] - m) <= 1e-9 * scale for e, m in seen
+        ):
+            seen.append((p["E"], p["M"]))
+    return len(seen)

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from ... import __version__
-from ...core.controllers import CONTROLLERS, Name
+from ...core.controllers import CONTROLLERS, Name, get_controller
 from ...core.loading import load_scenario
 from ...core.scenario import Scenario
 from ...errors import EmdmError, NoSolution
@@ -42,7 +42,7 @@ from ...studies.lab import (
     run_lab,
     worker_pool,
 )
-from ...studies.pareto import default_grid, pareto_study, ratios, weight_grid
+from ...studies.pareto import default_grid, front_at, pareto_study, ratios, weight_grid
 from .. import paper_figures as pf
 from ..animate import animate
 from ..records import atomic_output, cell, write_csv, write_json, write_run_folder
@@ -233,6 +233,10 @@ def _job_pareto(task: str, controller: str, cfg: ReportConfig, data_dir: Path) -
     nominal = scenario.weights.manipulability / scenario.weights.effort
     sweep = np.unique(np.append(ratios(per_decade=cfg.pareto_per_decade), nominal))
     data, _ = pareto_study(scenario, controller, sweep=sweep)
+    slack = load_scenario(task, {"controller.on_infeasible": "slack"})
+    for step in data["steps"]:  # a scaled step's one point: the front Table I's slack row sees
+        if all(p["alpha"] < 1.0 for p in step["points"]):
+            step["slack_points"] = front_at(slack, get_controller(controller), step["q"], sweep)
     grid = weight_grid(scenario, controller, default_grid(scenario, cfg.grid))
     control: dict[str, Any] | None = None  # nominal weights at the finer step (Table II brackets)
     for row in grid:

@@ -318,6 +318,7 @@ FrontKey = Literal[
     "zero_M",
     "nominal_M_share",
     "nominal_E_log_pct",
+    "slack_distinct",
 ]
 """The fields of :class:`FrontStep`."""
 
@@ -347,6 +348,8 @@ class FrontStep:
     zero_M: float
     nominal_M_share: float | None
     nominal_E_log_pct: float | None
+    slack_distinct: int | None = None
+    """At a task-scaled step: how many optima its front has under the free slack (6)."""
 
 
 GridKey = Literal[

@@ -66,7 +66,7 @@ class Tables(Claims):
         table = Table(
             "outcomes",
             sentence(
-                "Outcomes: the program's equations, time to goal (",
+                "Outcomes: program (eqs.), time to goal (",
                 Unit("s"),
                 "; ",
                 ERR,
@@ -81,7 +81,7 @@ class Tables(Claims):
                 Unit("m²"),
                 "), effort (",
                 Unit("rad²/s"),
-                "), peak joint speed (",
+                "), peak speed (",
                 Unit("rad/s"),
                 "), task-scaled steps.",
             ),
@@ -226,8 +226,8 @@ class Tables(Claims):
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs, each changing one thing in a nominal run, whose outcomes are in "
-                "brackets (stall: goal not reached); ",
+                "Evidence runs, each changing one thing in a nominal run (its outcomes in "
+                "brackets; stall: goal not reached); ",
                 Upright(run_label(GRID_MISS)),
                 " is from ",
                 Ref("fig", "pareto"),

@@ -217,6 +217,9 @@ class Task1(StoryBase):
             " (colour, log scale, 0 at its lower end; circle: nominal); right: whole runs, one "
             "per setting. Without a slack only the ratio matters",
         )
+        fronts = self.rec.fronts.get("C-EMDM", [])
+        if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
+            cap += sentence("; hollow: a scaled step's state under the free slack (6)")
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(
@@ -281,6 +284,8 @@ class Task1(StoryBase):
                             ")",
                         )
                     )
+                    if info.slack_distinct == 1:  # not the policy's doing: the bounds'
+                        clauses[-1] += sentence(", as under the free slack (6; hollow)")
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
                 i, _ = sat[0]
@@ -312,7 +317,7 @@ class Task1(StoryBase):
                         MRATE,
                         " < 0 (at most ",
                         self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
-                        "): late in the run, within the joint bounds, ",
+                        "): late in the run, ",
                         M_SYM,
                         " falls whatever the weights",
                     )
@@ -336,9 +341,9 @@ class Task1(StoryBase):
                 self.gridn("UC-EMDM", i, "final_error", fmt=".3f", unit="m"),
                 "): its joint speeds reach ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                ", and a step of ",
+                ", at which a ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
-                " at that speed leaves the linearisation ",
+                " step leaves the linearisation ",
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
                 " far behind. ",
             )
@@ -478,7 +483,6 @@ class Task1(StoryBase):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
-                " (the feasible point is the optimum)",
             )
         p += sentence(
             ". These are Task 1's numerical challenge: each admissible set is "
@@ -515,7 +519,9 @@ class Task1(StoryBase):
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,
-            " at most ",
+            " ",
+            Math(r"\leq", "≤"),
+            " ",
             self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
             ", no slack).",
         )
