@@ -350,7 +350,8 @@ class Task2(Claims):
             M_SYM,
             " is ",
             self.mt(t, emdm, "mean_manipulability", ".3f"),
-            f" against {ivkc}'s ",
+            # a stalled arm's m is frozen: said so (E4 above is the moving, like-for-like one)
+            f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
             " (",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
@@ -364,12 +365,7 @@ class Task2(Claims):
                 traced(common[c], f"data/{t}/events.json", (*src, c), ".3f") for c in (emdm, ivkc)
             ]
             whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
-            if [n.text for n in within] == [n.text for n in whole]:
-                p += sentence(
-                    ", also over the first ",
-                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                )
-            else:
+            if [n.text for n in within] != [n.text for n in whole]:  # the same: nothing to add
                 p += sentence(
                     "; over their common first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
