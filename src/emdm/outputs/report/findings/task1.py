@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Ref, Sentence, Text, sentence
+from ..trace import Math, Ref, Sentence, Text, Unit, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -335,13 +335,11 @@ class Task1(StoryBase):
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                " UC-EMDM fails to reach the goal (",
+                " UC-EMDM misses the goal (",
                 run_label(GRID_MISS),
-                ", final error ",
-                self.gridn("UC-EMDM", i, "final_error", fmt=".3f", unit="m"),
-                "): its joint speeds reach ",
+                "): at ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                ", at which a ",
+                " a ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
                 " step leaves the linearisation ",
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
@@ -352,14 +350,14 @@ class Task1(StoryBase):
                 p += sentence(
                     "With ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " it arrives in ",
-                    self.gridn("UC-EMDM", i, "finer_dt", "time_to_goal", fmt=".2f", unit="s"),
-                    " (",
+                    " it arrives (",
                     run_label(FINER_STEP),
                     ") but spends ",
-                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
-                    " of effort against ",
+                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g"),
+                    " against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
+                    " ",
+                    Unit("rad²/s"),
                     " with nominal weights: the step size causes the miss, the weights the "
                     "extra effort. ",
                 )
@@ -485,8 +483,9 @@ class Task1(StoryBase):
                 ),
             )
         p += sentence(
-            ". These are Task 1's numerical challenge: each admissible set is "
-            "one degenerate vertex",
+            ". These are Task 1's numerical challenge: each admissible set is one degenerate "
+            "vertex (more bounds active than joints left free: an active-set method can cycle; "
+            "ours breaks ties by Bland's rule)",
         )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
