@@ -415,7 +415,7 @@ class StoryBase:
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",
-            " (beyond them log-scaled, the farther peak at right)" if far else "",
+            " (beyond them a log scale, shaded; the farther peak at right)" if far else "",
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
