@@ -316,9 +316,9 @@ def pair_figure(
             if far:  # the logarithmic part, beyond the limits, lightly shaded
                 qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.5)
                 lo_view, hi_view = qd_axes[j].get_ylim()
-                for a, b in ((limit, hi_view), (lo_view, -limit)):
-                    if b > a:
-                        qd_axes[j].axhspan(a, b, color="#E8E8E8", linewidth=0, zorder=0)
+                for start, stop in ((limit, hi_view), (lo_view, -limit)):
+                    if stop > start:
+                        qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
