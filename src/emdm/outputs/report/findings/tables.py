@@ -79,6 +79,8 @@ class Tables(Claims):
                 M_SYM,
                 " (",
                 Unit("m²"),
+                "; over the run: to arrival or ",
+                self.scn("task1", "motion", "max_time", fmt="g", unit="s"),
                 "), effort (",
                 Unit("rad²/s"),
                 "), peak speed (",
