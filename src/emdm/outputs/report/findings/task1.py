@@ -285,7 +285,9 @@ class Task1(StoryBase):
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
-                        clauses[-1] += sentence(", as under the free slack (6; hollow)")
+                        clauses[-1] += sentence(
+                            ", as under the free slack (6; hollow in ", Ref("fig", "pareto"), ")"
+                        )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
                 i, _ = sat[0]
