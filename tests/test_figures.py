@@ -25,6 +25,23 @@ def task2_runs():
     return {c: emdm.simulate(sc, c) for c in emdm.CONTROLLERS}
 
 
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures :mod:`emdm.outputs.paper_figures` draws during a test, kept to be looked at
+    (they are closed once saved)."""
+    from emdm.outputs import paper_figures as pf
+
+    made = []
+
+    class Kept(pf.Figure):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(pf, "Figure", Kept)
+    return made
+
+
 def test_read_run_is_exact(tmp_path):
     assert main(["run", "task1", "--out", str(tmp_path)]) == 0
     sc = emdm.load_scenario("task1")
@@ -329,24 +346,16 @@ def test_the_tracking_gap_is_the_slack_and_the_scaled_off_part(task2_runs):
     assert tracking_gap(task2_runs["UC-EMDM"]).max() > 0.1  # its slack at work
 
 
-def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, monkeypatch):
+def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, drawn):
     """Fig. 1(d): each run's recorded tip path, from its start (the dot) to the goal (the star),
     beside the straight line; a figure has one fourth panel, the path or the gap."""
     from emdm.outputs import paper_figures as pf
 
     sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
     runs = [emdm.simulate(sc, name) for name in ("UC-IVKC", "UC-EMDM")]
-    made = []
-
-    class Kept(pf.Figure):  # the figure drawn, kept to be looked at
-        def __init__(self, *args, **kwargs):
-            super().__init__(*args, **kwargs)
-            made.append(self)
-
-    monkeypatch.setattr(pf, "Figure", Kept)
     with formats((".png",)):
         pf.pair_figure(runs, tmp_path / "pair", path=True)
-    panel = next(ax for ax in made[-1].axes if ax.get_title(loc="left") == "(d)")
+    panel = next(ax for ax in drawn[-1].axes if ax.get_title(loc="left") == "(d)")
     lines = panel.get_lines()
     for run in runs:
         assert any(np.array_equal(line.get_xydata(), run.p[:, :2]) for line in lines)
@@ -357,49 +366,33 @@ def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, mon
         pf.pair_figure(runs, tmp_path / "both", gap=True, path=True)
 
 
-def test_the_stills_date_a_stall_as_the_record_does(tmp_path, monkeypatch):
+def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     """The pitch's stills draw a stalled run until its stall, dated by Run.stalled_from (the
     paper's date), and say it is still from then on."""
     from emdm.outputs import paper_figures as pf
 
-    made = []
-
-    class Kept(pf.Figure):
-        def __init__(self, *args, **kwargs):
-            super().__init__(*args, **kwargs)
-            made.append(self)
-
-    monkeypatch.setattr(pf, "Figure", Kept)
     sc = emdm.load_scenario("task2", {"motion.max_time": 8.0})
     runs = [emdm.simulate(sc, name) for name in ("C-IVKC", "C-EMDM")]
     with formats((".png",)):
         pf.stills_figure(runs, tmp_path / "stills")
     stalled = runs[0].stalled_from
     assert stalled is not None and runs[1].stalled_from is None
-    labels = [ax.get_xlabel() for ax in made[-1].axes]
+    labels = [ax.get_xlabel() for ax in drawn[-1].axes]
     assert f"{runs[0].t[stalled]:.2f}".rstrip("0").rstrip(".") + " s, then still" in labels[0]
     assert "then still" not in labels[1]
 
 
-def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, monkeypatch):
+def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, drawn):
     """A joint whose speed goes far beyond its limit is drawn whole: linear within the limit,
     log-scaled beyond it (symlog), its axis spanning every run's extremes; the others stay
     linear."""
     from emdm.outputs import paper_figures as pf
 
-    made = []
-
-    class Kept(pf.Figure):
-        def __init__(self, *args, **kwargs):
-            super().__init__(*args, **kwargs)
-            made.append(self)
-
-    monkeypatch.setattr(pf, "Figure", Kept)
     sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
     runs = [emdm.simulate(sc, name) for name in ("UC-IVKC", "UC-EMDM")]
     with formats((".png",)):
         pf.pair_figure(runs, tmp_path / "pair", path=True)
-    strips = [ax for ax in made[-1].axes if ax.get_ylabel().startswith(r"$\dot q")]
+    strips = [ax for ax in drawn[-1].axes if ax.get_ylabel().startswith(r"$\dot q")]
     assert len(strips) == sc.n
     for j, ax in enumerate(strips):
         peak = max(np.abs(r.qd[:, j]).max() for r in runs)
