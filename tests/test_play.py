@@ -664,6 +664,19 @@ def _wait(driver, script: str, *args, timeout: float = 5.0):
     raise AssertionError(f"timed out waiting for: {script.strip()[:80]}")
 
 
+def _downloaded(path, marker: bytes, timeout: float) -> bytes:
+    """The bytes of a file the browser downloads, once it holds ``marker`` and its size has
+    stopped changing: the browser may create the file before it has written all of it."""
+    end, seen = time.monotonic() + timeout, None
+    while time.monotonic() < end:
+        data = path.read_bytes() if path.is_file() else b""
+        if marker in data and len(data) == seen:
+            return data
+        seen = len(data) if marker in data else None
+        time.sleep(0.2)
+    raise AssertionError(f"{path.name}: not downloaded whole in {timeout} s")
+
+
 def _drag(driver, start, end, steps: int = 8) -> None:
     from selenium.webdriver.common.actions.action_builder import ActionBuilder
 
@@ -777,10 +790,7 @@ def test_the_page_in_a_real_browser(tmp_path):
             ".shadow_el.querySelector('button').click()"
         )
         exported = tmp_path / "task1-play.toml"
-        end = time.monotonic() + 5
-        while not exported.is_file() and time.monotonic() < end:
-            time.sleep(0.05)
-        data = tomllib.loads(exported.read_text())
+        data = tomllib.loads(_downloaded(exported, b"[weights]", 10).decode())
         assert data["weights"]["manipulability"] == 0.0
         # within half a pixel of the scene (460 px across about 2.4 m)
         assert data["motion"]["goal"] == pytest.approx([0.3, 0.7], abs=4e-3)
@@ -798,12 +808,8 @@ def test_the_page_in_a_real_browser(tmp_path):
             "Bokeh.index.find_one(Bokeh.documents[0].get_model_by_name('save-gif'))"
             ".shadow_el.querySelector('button').click()"
         )
-        clip = tmp_path / "task1-play.gif"
-        end = time.monotonic() + 30
-        while not (clip.is_file() and clip.stat().st_size) and time.monotonic() < end:
-            time.sleep(0.1)
-        time.sleep(0.3)  # the download is renamed into place once complete
-        assert clip.read_bytes()[:6] == b"GIF89a"
+        clip = _downloaded(tmp_path / "task1-play.gif", b"GIF89a", 30)
+        assert clip.endswith(b";")  # a GIF's trailer: the file is whole
 
         # a second tab is a session of its own
         driver.switch_to.new_window("tab")
