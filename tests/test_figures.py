@@ -398,6 +398,9 @@ def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, drawn):
         peak = max(np.abs(r.qd[:, j]).max() for r in runs)
         far = peak > pf.FAR_BEYOND * sc.arm.qd_max[j]
         assert ax.get_yscale() == ("symlog" if far else "linear"), j
+        if far:  # linear as far as FAR_BEYOND on both sides: no excursion squashed at the frame
+            limit = sc.arm.qd_max[j]
+            assert ax.yaxis.get_transform().linthresh == pytest.approx(pf.FAR_BEYOND * limit)
         lo, hi = ax.get_ylim()
         assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
     assert any(ax.get_yscale() == "symlog" for ax in strips)  # the case this guards

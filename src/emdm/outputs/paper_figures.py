@@ -58,8 +58,8 @@ class Medium:
     tiny: float = 7.0
 
 
-PAPER = Medium("paper", column=3.5, wide=7.16, font=8.0, small=7.0, line=1.1, tiny=7.0)
-"""Text at 7-8 pt at print size (never smaller)."""
+PAPER = Medium("paper", column=3.5, wide=7.16, font=8.0, small=8.0, line=1.1, tiny=7.0)
+"""Text at 8 pt at print size (ticks, labels, panel titles), 7 pt in legends and notes."""
 SLIDE = Medium("slide", column=5.9, wide=5.9, font=11.0, small=10.0, line=1.8, tiny=9.0)
 
 FORMATS: tuple[str, ...] = (".pdf", ".png")
@@ -188,7 +188,7 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 FAR_BEYOND = 1.5
 """A joint whose speeds go beyond this multiple of its limit has its speed strip drawn on a
-symmetric-log axis beyond the limit (linear within it), each such extreme named on the right
+symmetric-log axis beyond this multiple (linear within it), each such extreme named on the right
 (:func:`pair_figure`): the whole run shows, and a spike of a step or two does not squash the
 motion within the limits into a thin band."""
 
@@ -278,7 +278,11 @@ def pair_figure(
             ax_path.margins(0.1)
             ax_path.set_xlabel(r"$x$ (m)", labelpad=1)
             ax_path.set_ylabel(r"$y$ (m)", labelpad=1)
-            ax_path.xaxis.set_major_locator(MaxNLocator(2))
+            ends = sorted(round(float(v), 1) for v in (start[0], goal[0]))
+            if ends[1] - ends[0] > 0.5 * np.ptp(np.concatenate([r.p[:, 0] for r in runs])):
+                ax_path.set_xticks(ends, [_plain(v) for v in ends])  # where the tip starts, ends
+            else:
+                ax_path.xaxis.set_major_locator(MaxNLocator(2))
             ax_path.yaxis.set_major_locator(MaxNLocator(3))
             ax_path.set_title("(d)", loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
@@ -309,12 +313,14 @@ def pair_figure(
             top = max(high, -low)
             limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
             far = top > FAR_BEYOND * limit
-            # linear within the limits (dotted); a run far beyond them on a symmetric-log axis
-            # beyond the limit, so the whole of it shows and the motion within the limits keeps
-            # most of the strip, its peaks named on the right in the colour of their run
+            # linear within FAR_BEYOND times the limits (dotted); a run far beyond them on a
+            # symmetric-log axis past that, so the whole of it shows and the motion within the
+            # limits keeps most of the strip, its far peaks named on the right in the colour of
+            # their run. Linear up to FAR_BEYOND, not to the limit: an excursion just past the
+            # limit on the other side would otherwise be squashed into a sliver at the frame
             qd_axes[j].set_ylim(1.15 * min(low, -limit), 1.15 * max(high, limit))
-            if far:  # the logarithmic part, beyond the limits, lightly shaded
-                qd_axes[j].set_yscale("symlog", linthresh=limit, linscale=1.5)
+            if far:  # beyond the limits lightly shaded
+                qd_axes[j].set_yscale("symlog", linthresh=FAR_BEYOND * limit, linscale=1.5)
                 lo_view, hi_view = qd_axes[j].get_ylim()
                 for start, stop in ((limit, hi_view), (lo_view, -limit)):
                     if stop > start:
@@ -614,7 +620,13 @@ def _front_axes(
     if info["degenerate"]:
         note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
     elif info["saturated_from_ratio"] is not None:
-        note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
+        # three short lines: in two, the note spans the panel and covers the front
+        note = (
+            "saturated for\n"
+            + r"$w_M/w_E\geq$"
+            + "\n"
+            + f"${_ratio_tex(info['saturated_from_ratio'])}$"
+        )
     if note:  # in the emptier of two corners (a front runs from lower left to upper right)
         to_axes = ax.transData + ax.transAxes.inverted()
         drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]

@@ -25,6 +25,7 @@ from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
 from .records import (
+    GRID_FILE,
     EventKey,
     EvidenceKey,
     FrontKey,
@@ -240,7 +241,7 @@ class StoryBase:
         return _dig(getattr(self.rec.grids[ctrl][i], key), path)
 
     def gridn(self, ctrl: str, i: int, key: GridKey, *path: str, fmt: str, unit: str = "") -> Num:
-        file = f"data/task1-pareto-{ctrl}/weight_grid.json"
+        file = GRID_FILE.format(ctrl=ctrl)
         return traced(self.grid(ctrl, i, key, *path), file, ("runs", i, key, *path), fmt, unit)
 
     def evid_goal(self, key: EvidenceKey, ctrl: str) -> Num:
@@ -415,7 +416,7 @@ class StoryBase:
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",
-            " (beyond them a log scale, shaded; the farther peak at right)" if far else "",
+            f" (shaded beyond them, log past {FAR_BEYOND:g}×; far peaks at right)" if far else "",
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:

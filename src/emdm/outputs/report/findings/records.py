@@ -54,6 +54,10 @@ MetricKey = Literal[
 """The fields of :class:`Outcomes`."""
 
 
+GRID_FILE = "data/task1-pareto-{ctrl}/weight_grid.json"
+"""Where Task 1's weight grid of a controller ``ctrl`` is recorded (Fig. 2's whole runs, E2)."""
+
+
 @dataclass(frozen=True)
 class Outcomes:
     """One run's outcomes: ``data/TASK/metrics.json#controllers/NAME``."""
@@ -684,7 +688,7 @@ class Records:
         for ctrl in ("UC-EMDM", "C-EMDM"):
             f, g = (
                 f"data/task1-pareto-{ctrl}/fronts.json",
-                f"data/task1-pareto-{ctrl}/weight_grid.json",
+                GRID_FILE.format(ctrl=ctrl),
             )
             if data.exists(f):
                 fronts[ctrl] = [
