@@ -158,8 +158,11 @@ class Evidence:
 
 
 FREE_SLACK = 1e3
-"""m/s: the slack bound of a "free" slack where the program has a bounded one (Task 2's
-C-EMDM). Scenarios take finite bounds only; a test checks that no evidence run comes near it."""
+"""m/s: the slack bound of a "free" slack, the program (6) of the slack rows. Scenarios take
+finite bounds only; a test checks that no evidence run comes near it."""
+
+_FREE = {"slack.min": [-FREE_SLACK] * 2, "slack.max": [FREE_SLACK] * 2}
+"""The overrides that lift a planar task's slack bounds to :data:`FREE_SLACK`."""
 
 EVIDENCE = (
     Evidence(
@@ -169,18 +172,14 @@ EVIDENCE = (
         "t1-c-slack-policy",
         "task1",
         (Name.C_IVKC, Name.C_EMDM),
-        {"controller.on_infeasible": "slack"},
+        {"controller.on_infeasible": "slack", **_FREE},  # (6): the slack free, as in Task 2
         like_for_like_slack=True,
     ),
     Evidence(  # both with a free slack: C-EMDM's bound lifted to one no run comes near
         "t2-c-slack-policy",
         "task2",
         (Name.C_IVKC, Name.C_EMDM),
-        {
-            "controller.on_infeasible": "slack",
-            "slack.min": [-FREE_SLACK, -FREE_SLACK],
-            "slack.max": [FREE_SLACK, FREE_SLACK],
-        },
+        {"controller.on_infeasible": "slack", **_FREE},
         like_for_like_slack=True,
     ),
     Evidence(

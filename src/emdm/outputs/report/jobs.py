@@ -134,8 +134,26 @@ def _events(stage: Path, scenarios: dict[str, Scenario], runs: dict[str, dict[st
         )
     write_json(
         stage / "data" / "evidence.json",
-        {"runs": {ev.key: _evidence_run(ev, runs[ev.task]) for ev in EVIDENCE}},
+        {
+            "table_ii": _table_ii_index(),
+            "runs": {ev.key: _evidence_run(ev, runs[ev.task]) for ev in EVIDENCE},
+        },
     )
+
+
+def _table_ii_index() -> dict[str, str]:
+    """Where each of Table II's rows is recorded: an entry of ``runs`` here, or (E2a, E2b) the
+    weight grid of Fig. 2, whose run it is."""
+    from .findings.base import ABLATIONS, FINER_STEP, GRID_MISS, run_label
+    from .findings.records import GRID_FILE
+
+    grid = GRID_FILE.format(ctrl=Name.UC_EMDM).removeprefix("data/")
+    where = {
+        GRID_MISS: f"{grid}: the first run with reached false",
+        FINER_STEP: f"{grid}: that run's finer_dt (its nominal: the nominal weights there)",
+    }
+    keys = [k for entry in ABLATIONS for k in (entry if isinstance(entry, tuple) else (entry,))]
+    return {run_label(k): where.get(k, f"evidence.json: runs/{k}") for k in keys}
 
 
 # ------------------------------------------------------------------------------- pool jobs

@@ -28,6 +28,7 @@ from .base import (
     run_label,
 )
 from .claims import cap as capitalised
+from .records import GRID_FILE
 
 KKT_EXP = round(math.log10(KKT_TOL))
 """The exponent of the KKT check's acceptance threshold, as the paper writes it."""
@@ -210,7 +211,7 @@ class Task1(StoryBase):
                 r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
                 "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
             ),
-            " (columns 1-4), each point the optimum at the nominal run's state ",
+            " (columns 1–4), each point the optimum at the nominal run's state ",
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
@@ -387,7 +388,7 @@ class Task1(StoryBase):
         dearest = max(above, key=lambda i: grid[i].total_effort)
         if grid[dearest].total_effort <= grid[n].total_effort:
             return []
-        f = "data/task1-pareto-UC-EMDM/weight_grid.json"
+        f = GRID_FILE.format(ctrl=Name.UC_EMDM)
         gain = grid[best].mean_manipulability / grid[n].mean_manipulability - 1.0
         more: Sentence = (
             sentence(

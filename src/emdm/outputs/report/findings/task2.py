@@ -51,29 +51,52 @@ class Task2(Claims):
         ivkc, emdm = PAIRS["C"]
         sec = Section("t2-c", "Task 2.1: C-EMDM against C-IVKC", level=2, brief="2.1")
         reached_e, reached_i = self.mv(t, emdm, "reached"), self.mv(t, ivkc, "reached")
-        refs = sentence(
+        figs = sentence(
             *(
                 (Ref("fig", "workspace"), ", ")
                 if self.d.value(f"data/{t}/events.json", "geometry")
                 else ()
             ),
             Ref("fig", "t2-c"),
-            ", ",
-            Ref("tab", "outcomes"),
         )
-        if reached_e and not reached_i and self.evv(t, ivkc, "stall"):
+        refs = figs + sentence(", ", Ref("tab", "outcomes"))
+        key: EvidenceKey = "t2-c-slack-policy"
+        stall_told = sentence(
+            self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+            " on ",
+            "the scaled " + ivkc if self.ivkc_first_with_slack() else "it",
+            " stalls ",
+            self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
+            f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
+            *(figs if self.ivkc_first_with_slack() else refs),  # then Table I is cited before
+            ")",
+        )
+        stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
+        both_first = stalled and self.ivkc_first_with_slack()
+        if both_first:  # both outcomes in the first sentence: the stall is the policy's
+            answer = sentence(
+                f"{emdm} can leave the straight line to the goal and reaches it in ",
+                self.ttg(t, emdm),
+                f"; {ivkc} under task scaling cannot and stalls, while ",
+                *self.ivkc_with_slack(),  # the shared claim, cites Table I
+            )
+            m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
+            if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
+                answer += sentence(" with a higher mean ", M_SYM)
+            answer += sentence(
+                f", before {emdm} with its own (",
+                self.evid_goal(key, emdm),
+                "). From ",
+                *stall_told,
+            )
+        elif stalled:
             # the contrast first (who can leave the line), then where the other stops
             scaled = " under task scaling" if self.ivkc_with_slack() else ""
             answer = sentence(
                 f"{emdm} can leave the straight line to the goal and reaches it in ",
                 self.ttg(t, emdm),
                 f". {ivkc}{scaled} cannot, and never reaches it: from ",
-                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
-                " on it stalls ",
-                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
-                f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
-                *refs,
-                ")",
+                *stall_told,
             )
         else:
             answer = sentence(
@@ -87,13 +110,12 @@ class Task2(Claims):
                 *refs,
                 ")",
             )
-        if reached_e and not reached_i:
+        if reached_e and not reached_i and not both_first:  # (else told in full above)
             if not self.evv(t, ivkc, "stall"):
                 answer += sentence(
                     ": one can leave the straight line to the goal, the other cannot"
                 )
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
-                key: EvidenceKey = "t2-c-slack-policy"
                 first = self.ivkc_first_with_slack()  # then the stall is the policy's: say so
                 answer += sentence(". Task scaling causes the stall. " if first else ". ")
                 answer += cap(self.ivkc_with_slack())
