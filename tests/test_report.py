@@ -170,6 +170,26 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert "evidence" in text.lower()
 
 
+def test_evidence_json_says_where_every_table_ii_row_is_recorded(report):
+    """A reader of the data finds each of Table II's rows from evidence.json: an entry of its
+    runs, or (E2a, E2b) the weight grid's first run that misses the goal and its finer step."""
+    root, _ = report
+    evidence = json.loads((root / "data" / "evidence.json").read_text())
+    index = evidence["table_ii"]
+    paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
+    table = paper[paper.index(r"\label{tab:evidence}") :]
+    rows = re.findall(r"^(E\d[a-z]?) &", table, flags=re.M)
+    assert rows and sorted(rows) == sorted(index), (rows, index)
+    for label, where in index.items():
+        file, what = where.split(": ", 1)
+        if file == "evidence.json":
+            assert what.removeprefix("runs/") in evidence["runs"], label
+            continue
+        grid = json.loads((root / "data" / file).read_text())["runs"]
+        miss = next(r for r in grid if not r["reached"])
+        assert ("finer_dt" in what) == (label == "E2b") and miss["finer_dt"]["nominal"], label
+
+
 def test_the_pair_coincidence_of_task1_c_is_detected(report):
     root, _ = report
     events = json.loads((root / "data" / "task1" / "events.json").read_text())
