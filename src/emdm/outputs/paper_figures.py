@@ -620,33 +620,35 @@ def _front_axes(
     if info["degenerate"]:
         note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
     elif info["saturated_from_ratio"] is not None:
-        # three short lines: in two, the note spans the panel and covers the front
-        note = (
-            "saturated for\n"
-            + r"$w_M/w_E\geq$"
-            + "\n"
-            + f"${_ratio_tex(info['saturated_from_ratio'])}$"
-        )
-    if note:  # in the emptier of two corners (a front runs from lower left to upper right)
-        to_axes = ax.transData + ax.transAxes.inverted()
+        note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
+    if note:  # where it covers fewest points (a front runs from lower left to upper right)
         drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]
-        frac = to_axes.transform(np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2)))))
-        top_left = np.count_nonzero((frac[:, 0] < 0.65) & (frac[:, 1] > 0.5))
-        bottom_right = np.count_nonzero((frac[:, 0] > 0.35) & (frac[:, 1] < 0.5))
-        x, y, ha, va = (0.04, 0.95, "left", "top")
-        if bottom_right < top_left:
-            x, y, ha, va = (0.97, 0.05, "right", "bottom")
-        ax.text(
-            x,
-            y,
-            note,
-            transform=ax.transAxes,
-            ha=ha,
-            va=va,
-            fontsize=medium.tiny,
-            bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
-            zorder=1.5,  # under the front's points (zorder 2): a note never hides one
+        points = np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2))))
+        ax.get_xlim(), ax.get_ylim()  # the limits settled, so that transData places the points
+        renderer = ax.figure.canvas.get_renderer()  # type: ignore[attr-defined]
+        covered: list[tuple[int, Artist]] = []
+        corners = (  # in this order of preference where they cover as few points
+            (0.04, 0.95, "left", "top"),
+            (0.97, 0.05, "right", "bottom"),
+            (0.97, 0.45, "right", "center"),
         )
+        for x, y, ha, va in corners:
+            text = ax.text(
+                x,
+                y,
+                note,
+                transform=ax.transAxes,
+                ha=ha,
+                va=va,
+                fontsize=medium.tiny,
+                bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
+                zorder=1.5,  # under the front's points (zorder 2): a note never hides one
+            )
+            box = text.get_window_extent(renderer).expanded(1.1, 1.1)
+            inside = sum(box.contains(*xy) for xy in ax.transData.transform(points))
+            covered.append((int(inside), text))
+        for _, text in sorted(covered, key=lambda c: c[0])[1:]:  # keep the one covering fewest
+            text.remove()
     if slack and info["degenerate"]:  # the points to the right, the note beside them on the left
         x = float(np.mean([M[0], *(p["M"] for p in slack)]))
         span = 0.1 * abs(x) + 1e-3
