@@ -625,7 +625,7 @@ def _front_axes(
         drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]
         points = np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2))))
         ax.get_xlim(), ax.get_ylim()  # the limits settled, so that transData places the points
-        renderer = ax.figure.canvas.get_renderer()  # type: ignore[attr-defined]
+        renderer = ax.figure.canvas.get_renderer()
         covered: list[tuple[int, Artist]] = []
         corners = (  # in this order of preference where they cover as few points
             (0.04, 0.95, "left", "top"),
