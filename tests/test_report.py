@@ -661,3 +661,18 @@ def test_a_scaled_steps_front_is_also_drawn_under_the_free_slack(report):
     distinct = {(round(p["E"], 12), round(p["M"], 12)) for p in slack}
     assert fronts["steps"][0]["slack_distinct"] == len(distinct)
     assert all("slack_points" not in s for s in data["steps"][1:] if s["points"][0]["alpha"] == 1)
+
+
+def test_table_iii_says_which_solvers_iterate_without_evaluating(report):
+    """it./ev. reads oddly where iterations outnumber evaluations (a trust-region method's short
+    steps evaluate nothing): the caption names exactly those solvers."""
+    root, _ = report
+    lab = json.loads((root / "data" / "task2-lab-C-EMDM" / "solvers.json").read_text())
+    skip = [
+        k for k, r in lab["solvers"].items() if r["median_iterations"] > r["median_evaluations"] > 0
+    ]
+    paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
+    caption = paper[: paper.index(r"\label{tab:solvers}")].rsplit(r"\caption{", 1)[1]
+    assert ("not every iteration evaluates" in caption) == bool(skip)
+    for k in skip:
+        assert k in caption.split("not every iteration evaluates")[0].rsplit(";", 1)[1], k

@@ -312,20 +312,32 @@ class Solvers(StoryBase):
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, least dexterous included). ",
                 Unit("ms"),
-                ": median time from "
-                "scratch, from Python (*: compiled inner loop); it./ev.: median iterations/"
-                "evaluations (--: none); gap, viol.: "
-                "largest ",
+                ": median cold time, from Python (*: compiled loop); it./ev.: median "
+                "iterations, evaluations (--: none",
+                *(  # a trust-region method's short steps: iterations that evaluate nothing
+                    ("; ", ", ".join(skip), ": not every iteration evaluates")
+                    if (
+                        skip := [
+                            k
+                            for k, r in rows.items()
+                            if r.median_iterations > r.median_evaluations > 0
+                        ]
+                    )
+                    else ()
+                ),
+                "); gap, viol.: largest ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
                 " and bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "; exact: both at most ",
                 Math(f"10^{{{EXACT_EXP}}}", f"10<sup>−{-EXACT_EXP}</sup>"),
-                "); over: programs over the ",
+                "); over: programs over the period ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: closed-loop arrival, solve time not charged",
+                "; goal: closed-loop arrival, solve time not charged",
                 *(
-                    ("; ", ", ".join(seeded), f": seed 0 (seeds 0–{SEEDS - 1}: text)")
+                    (
+                        f"; the stochastic {'ones' if len(seeded) > 1 else 'one'}: seed 0 of 0–{SEEDS - 1}",
+                    )
                     if (seeded := [k for k in rows if k in SEEDED])
                     else ()
                 ),
