@@ -686,15 +686,18 @@ def pareto_figure(
     stem: Path,
     medium: Medium = PAPER,
     steps: Sequence[int] = (0, 1, 2, 3),
+    width: float | None = None,
 ) -> Path:
     """Rows: controllers (``fronts`` keys); columns: the fronts of the chosen ``steps`` (indices
     into the four of the brief) and the whole-run trade-off (mean m against total effort per
-    weight setting; the settings that fail to reach are named)."""
+    weight setting; the settings that fail to reach are named). ``width`` (in): the width it is
+    shown at, so that its text keeps its size (default: the medium's full width)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    height = (0.92 * len(names) + 0.2) if medium is PAPER else 2.7
+    width = medium.wide if width is None else width
+    height = (0.92 * len(names) + 0.2) if medium is PAPER else 2.7 * width / medium.wide
     whole = len(steps)
-    with _figure(stem, medium, medium.wide, height) as fig:
+    with _figure(stem, medium, width, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)
         sc = None
         for row, name in enumerate(names):

@@ -62,6 +62,9 @@ from .config import (
 
 PAPER_FIGURES = "paper/figures"
 SLIDE_FIGURES = "paper/slides"
+SLIDE_PARETO_WIDTH = 0.84 * 398.34 / 72.27
+"""in: the pitch's Pareto figure, shown at its own size (0.84 of the 16:9 slide's 398.34 pt
+text width, leaving the bullets their room): drawn so, its text is printed at its set size."""
 
 
 # ------------------------------------------------------------------------ in-process runs
@@ -423,6 +426,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
                 stage / SLIDE_FIGURES / "pareto",
                 pf.SLIDE,
                 steps=(0, 1),
+                width=SLIDE_PARETO_WIDTH,
             )
         )
     )

@@ -82,7 +82,7 @@ class Pitch:
                 sentence(
                     "Constrained: identical commands for the first ",
                     s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
-                    ": the bounds leave no choice (grey: ",
+                    ", the same joints held at their bounds (grey: ",
                     s.pairn(t1, "C", "coincide_scaled_steps", "d"),
                     " steps slowed down, to as little as ",
                     s.ev(t1, Name.C_EMDM, "scaling", "min_alpha", fmt=".2f"),

@@ -364,11 +364,11 @@ class StoryBase:
         e2: EvidenceKey = "t1-c-slack-policy"
         emdm = Name.C_EMDM
         words = {
-            "time_to_goal": ("arrives sooner", "arrives later"),
-            "total_effort": (", with less effort", ", with more effort"),
+            "time_to_goal": (sentence("arrives sooner"), sentence("arrives later")),
+            "total_effort": (sentence(", with less effort"), sentence(", with more effort")),
             "mean_manipulability": (
-                " and a higher mean manipulability",
-                " and a lower mean manipulability",
+                sentence(" and a higher mean ", M_SYM),
+                sentence(" and a lower mean ", M_SYM),
             ),
         }
         p = sentence(
@@ -377,7 +377,7 @@ class StoryBase:
             ") C-EMDM ",
         )
         for metric, better in self._policy_terms():
-            p += sentence(words[metric][0 if better else 1])
+            p += words[metric][0 if better else 1]
         p += sentence(
             ". Scaling keeps a straighter path (",
             self.mt("task1", emdm, "path_length", ".2f"),

@@ -80,15 +80,15 @@ class Front(Claims):
             Cite("yoshikawa"),
             ". Resolved-rate control",
             Cite("whitney"),
-            " follows the goal through the Jacobian's pseudoinverse (IVKC); on a redundant arm "
-            "(three joints for a planar task) a gradient step in its null space can also raise ",
+            " follows the goal through the Jacobian's pseudoinverse (IVKC); on a redundant arm a "
+            "gradient step in its null space can also raise ",
             M_SYM,
             Cite("liegeois"),
             ", and later controllers keep joint limits as hard constraints",
             Cite("flacco"),
             ",",
             Cite("haviland"),
-            ". A non-redundant arm (two joints) can only trade tracking for dexterity through a "
+            ". A non-redundant arm can only trade tracking for dexterity through a "
             "task slack. As in",
             Cite("haviland"),
             ", we solve one strictly convex quadratic program (QP) per step, with a custom "

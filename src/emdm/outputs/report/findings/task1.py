@@ -85,8 +85,15 @@ class Task1(StoryBase):
         p = sentence(
             "Both impose ",
             Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so the tip follows the same path up to the Euler step's second-order "
-            "term. Only null-space motion differs: with ",
+            " exactly, so the tips follow one path up to the Euler step's ",
+            Math(r"O(\Delta t^2)", "<i>O</i>(Δ<i>t</i><sup>2</sup>)"),
+            " term. Only null-space motion differs, ",
+            Math(
+                r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
+                "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
+                "<i>w</i><sub>E</sub>)(<i>I</i> − <i>J</i><sup>+</sup><i>J</i>)<i>J</i><sub>m</sub>",
+            ),
+            " for EMDM: with ",
             W_M,
             " = 0 (",
             run_label("t1-uc-no-manip"),
@@ -97,13 +104,13 @@ class Task1(StoryBase):
             p += sentence(f"{emdm} reproduces {ivkc} command for command. ")
         else:
             p += sentence(
-                f"{emdm} differs from {ivkc} by at most ",
+                "the two differ by at most ",
                 self.evidn(
                     "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
                 ),
                 ". ",
             )
-        p += sentence("Neither sees the joint limits: ")
+        p += sentence("Neither sees the limits: ")
         for name in (ivkc, emdm):
             if self.evv(t, name, "limits", "max_excess") > 0:
                 p += sentence(
@@ -181,7 +188,8 @@ class Task1(StoryBase):
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
                 ", ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of them scaled) are identical: on each, bounds and task admit one command",
+                " of them scaled) are identical: on each, the joints at bounds leave the "
+                "task one solution",
             )
             coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
             if coincide:  # (with none in common, the next paragraph says enough)
@@ -215,12 +223,14 @@ class Task1(StoryBase):
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
-            " (colour, log scale, 0 at its lower end; circle: nominal); right: whole runs, one "
-            "per setting. Without a slack only the ratio matters",
+            " (colour: its log, ",
+            Math("w_M=0", "<i>w</i><sub>M</sub> = 0"),
+            " at the bar's foot; circle: nominal); right: whole runs, one per setting. Without a "
+            "slack only the ratio matters",
         )
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
-            cap += sentence("; hollow: a scaled step's state under the free slack (6)")
+            cap += sentence("; hollow: the front at a scaled step's state under the free slack (6)")
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(
