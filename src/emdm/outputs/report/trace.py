@@ -214,6 +214,22 @@ class Upright(Segment):
 
 
 @dataclass(frozen=True)
+class File(Segment):
+    """A file's path, never broken across lines (a break at its hyphen reads as part of it)."""
+
+    path: str
+
+    def html(self) -> str:
+        return f'<span class="file">{html.escape(self.path)}</span>'
+
+    def latex(self) -> str:
+        return rf"\mbox{{{latex_escape(self.path)}}}"
+
+    def plain(self) -> str:
+        return self.path
+
+
+@dataclass(frozen=True)
 class Math(Segment):
     """Inline math, given once for each output (LaTeX source and HTML)."""
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Cite, Math, Ref, Sentence, sentence
+from ..trace import Cite, File, Math, Ref, Sentence, sentence
 from .base import (
     M_SYM,
 )
@@ -74,8 +74,8 @@ class Front(Claims):
     def introduction(self) -> Section:
         sec = Section("intro", "Introduction")
         intro = sentence(
-            "A planar arm must bring its end effector to a goal while spending little "
-            "joint-velocity effort and staying dexterous, i.e. keeping a large manipulability ",
+            "A planar arm must bring its end effector to a goal with little joint-velocity "
+            "effort while staying dexterous, with a large manipulability ",
             M_SYM,
             Cite("yoshikawa"),
             ". Resolved-rate control",
@@ -92,20 +92,21 @@ class Front(Claims):
             "task slack. As in",
             Cite("haviland"),
             ", we solve one strictly convex quadratic program (QP) per step, with a custom "
-            "active-set method certified by KKT conditions, and compare this "
-            "EMDM controller with IVKC, each unconstrained (UC-) or constrained by joint limits "
-            "(C-).",
+            "active-set method certified by KKT conditions, and compare it (EMDM) with IVKC, "
+            "each unconstrained (UC-) or constrained by joint limits "
+            "(C-), written from the brief's definitions (its supplementary code was not "
+            "available to us).",
         )
         anims = [a for a in (self.anim(t, g) for t in ("task1", "task2") for g in PAIRS) if a]
         if anims:
             last = anims[-1]
             p = sentence(
-                "Every pair's animation is in the report's animations/ folder (e.g. ",
-                f"{last['task']}/{last['files'][-1]}",
+                "Animations: animations/ (e.g. ",
+                File(f"{last['task']}/{last['files'][-1]}"),
             )
             if last["speedup"] != 1.0:
                 p += sentence(
-                    ", at ",
+                    ", ",
                     self.d.num(
                         "data/animations.json",
                         "animations",

@@ -6,7 +6,7 @@ from typing import Any
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Eqs, Math, Ref, Sentence, Unit, Upright, sentence
+from ..trace import Eqs, Math, Ref, Sentence, Text, Unit, Upright, sentence
 from .base import (
     C_S,
     DT,
@@ -21,6 +21,18 @@ from .base import (
 )
 from .claims import Claims
 from .records import EvidenceKey, MetricKey, RunOutcome
+
+MISS_NOTE = Text("; miss: goal not reached")
+"""Table II's caption names a miss only where the table has one."""
+
+
+STALL, MISS = Text("stall"), Text("miss")
+
+
+def unreached(stalled: bool) -> Sentence:
+    """A run that does not reach the goal: ``stall`` where it came to rest short of it (its
+    record's stall event), ``miss`` otherwise (or where no events are recorded)."""
+    return [STALL if stalled else MISS]
 
 
 class Tables(Claims):
@@ -176,12 +188,14 @@ class Tables(Claims):
             return ".0f" if fmt.endswith("g") and abs(value) >= 1e3 else fmt
 
         w_m = sentence(*eq(W_M, self.gridn(ctrl, i, "w_manip", fmt=".4g")))
+        # the weight grid keeps no events: a run of it that does not arrive is a miss
+        nominal = unreached(bool(self.evv("task1", ctrl, "stall")))
         miss = [
             pair(
-                sentence("stall")
+                unreached(False)
                 if stall(metric, runs[i].reached)
                 else sentence(self.gridn(ctrl, i, metric, fmt=plain(fmt, metric))),
-                sentence("stall")
+                nominal
                 if stall(metric, self.mv("task1", ctrl, "reached"))
                 else sentence(self.mt("task1", ctrl, metric, fmt)),
             )
@@ -192,10 +206,10 @@ class Tables(Claims):
             return out
         cells = [
             pair(
-                sentence("stall")
+                unreached(False)
                 if stall(metric, finer.get("reached"))
                 else sentence(self.gridn(ctrl, i, "finer_dt", metric, fmt=fmt)),
-                sentence("stall")
+                unreached(False)
                 if stall(metric, finer["nominal"].get("reached"))
                 else sentence(self.gridn(ctrl, i, "finer_dt", "nominal", metric, fmt=fmt)),
             )
@@ -229,7 +243,9 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run (its outcomes in "
-                "brackets; stall: goal not reached); ",
+                "brackets; stall: at rest short of the goal",
+                MISS_NOTE,
+                "); ",
                 Upright(run_label(GRID_MISS)),
                 " is from ",
                 Ref("fig", "pareto"),
@@ -267,12 +283,12 @@ class Tables(Claims):
                     continue
                 stall = metric == "time_to_goal"
                 new = (
-                    sentence("stall")
+                    unreached(bool(run.get("events", {}).get("stall")))
                     if stall and not run["reached"]
                     else sentence(self.evidn(key, "runs", ctrl, metric, fmt=fmt))
                 )
                 old = (
-                    sentence("stall")
+                    unreached(bool(self.evv(task, ctrl, "stall")))
                     if stall and not self.mv(task, ctrl, "reached")
                     else sentence(self.mt(task, ctrl, metric, fmt))
                 )
@@ -287,6 +303,8 @@ class Tables(Claims):
             )
             if key == "t1-uc-no-manip":
                 table.rows.extend(self.grid_rows())
+        if not any(MISS in cell for row in table.rows for cell in row):  # none to explain
+            table.caption = [seg for seg in table.caption if seg is not MISS_NOTE]
         self.tables["evidence"] = table
         for s in sections:  # with Task 1.2: it floats to the top of the page Task 1 ends on
             if s.key == "t1-c":
