@@ -404,3 +404,23 @@ def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, drawn):
         lo, hi = ax.get_ylim()
         assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
     assert any(ax.get_yscale() == "symlog" for ax in strips)  # the case this guards
+
+
+def test_convergence_markers_show_the_returned_answer_not_the_best_point(tmp_path, drawn):
+    """A solver may return a point worse than the best it evaluated (cobyla trades objective
+    against violation): the end marker is at the returned answer's error, the curve is the
+    running best, and a solver without a returned answer ends its marker on its curve."""
+    from emdm.outputs import paper_figures as pf
+
+    curves = {
+        "returns-worse": ("gradient-free", [1, 2, 3], [1.0, 1e-3, 1e-12], 2e-8),
+        "no-answer": ("gradient", [1, 2], [1.0, 1e-6], None),
+    }
+    with formats((".png",)):
+        pf.convergence_figure(curves, 7, tmp_path / "conv")
+    ax = drawn[-1].axes[0]
+    markers = [ln for ln in ax.get_lines() if ln.get_linestyle() == "None"]
+    ends = sorted((float(m.get_xdata()[0]), float(m.get_ydata()[0])) for m in markers)
+    assert ends == [(2.0, 1e-6), (3.0, 2e-8)]
+    best = next(ln for ln in ax.get_lines() if ln.get_label() == "returns-worse")
+    assert list(best.get_ydata()) == [1.0, 1e-3, 1e-12]  # the curve itself unchanged

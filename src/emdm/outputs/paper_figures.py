@@ -963,33 +963,46 @@ FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
 
 
 def convergence_figure(
-    curves: Mapping[str, tuple[str, Sequence[float], Sequence[float]]],
+    curves: Mapping[str, tuple[str, Sequence[float], Sequence[float], float | None]],
     step: int,
     stem: Path,
     medium: Medium = PAPER,
 ) -> Path:
     """One program's convergence, every solver: the running best of |f - f*| + bound violation
-    against objective evaluations (``curves``: name -> (family, evaluations, error)), each
-    solver in its own colour and marker, solid for gradient-based and dashed for gradient-free
-    (the paper's Task 2.1 figure; the lab's own figure has every representative step)."""
+    against objective evaluations (``curves``: name -> (family, evaluations, error, returned)),
+    each solver in its own colour and marker, solid for gradient-based and dashed for
+    gradient-free; the marker at the last evaluation shows the error of the answer the solver
+    returns (``returned``; the curve's end where it is None), which need not be the best point
+    it evaluated (the paper's Task 2.1 figure; the lab's own figure has every representative
+    step)."""
     height = 1.0 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3
     marks = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<")
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
-        for i, (name, (family, evaluations, error)) in enumerate(curves.items()):
-            # the marker at the solver's last evaluation: one done in a few evaluations (slsqp)
-            # is a short trace ending in its marker
+        for i, (name, (family, evaluations, error, returned)) in enumerate(curves.items()):
+            # the marker at the solver's last evaluation, at its returned answer's error: one
+            # done in a few evaluations (slsqp) is a short trace ending in its marker
+            colour = SOLVER_COLORS[i % len(SOLVER_COLORS)]
             ax.loglog(
                 evaluations,
                 error,
-                color=SOLVER_COLORS[i % len(SOLVER_COLORS)],
+                color=colour,
                 linestyle=FAMILY_DASH.get(family, ":"),
                 linewidth=medium.line,
                 marker=marks[i % len(marks)],
-                markevery=[len(evaluations) - 1],
+                markevery=[],  # the legend's marker; the plotted one below
                 markersize=3.5 if medium is PAPER else 6,
                 label=name,
+            )
+            end = error[-1] if returned is None else max(returned, 1e-17)  # (the curves' floor)
+            ax.plot(
+                [evaluations[-1]],
+                [end],
+                linestyle="none",
+                color=colour,
+                marker=marks[i % len(marks)],
+                markersize=3.5 if medium is PAPER else 6,
             )
         ax.set_xlabel("objective evaluations", labelpad=1)
         ax.set_ylabel(

@@ -209,11 +209,25 @@ def _write_lab(
         )
         k = lab.representative[label]
         f_star = lab.optimum[k][1]
+        # each solver's returned answer, which need not be its best evaluated point (cobyla's
+        # final iterate trades objective against violation): the figure's end marker
+        returned = {
+            name: next(
+                (
+                    abs(st.gap) + st.violation
+                    for st in study.solves
+                    if st.step == k and st.x is not None
+                ),
+                None,
+            )
+            for name, study in lab.studies.items()
+        }
         curves = {
             name: (
                 study.spec.family,
                 [h["evaluations"] for h in study.histories[label]],
                 list(error_curve(study.histories[label], f_star)),
+                returned[name],
             )
             for name, study in lab.studies.items()
             if study.histories.get(label) and "evaluations" in study.histories[label][0]

@@ -90,7 +90,7 @@ class Solvers(StoryBase):
                 self.sn(lab, grad, "median_evaluations", ".4g"),
                 " objective evaluations (",
                 self.sn(lab, grad, "median_iterations", ".4g"),
-                " iterations, each with the exact gradient; ",
+                " iterations with the exact gradient, ",
                 self.sn(lab, grad, "median_time", unit="ms"),
                 "). ",
             )
@@ -190,8 +190,8 @@ class Solvers(StoryBase):
                 if hardest
                 else "first re-solved Task 2 program (",
                 *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
-                ") for solvers counting evaluations (solid: gradient-based, dashed: "
-                "gradient-free; marker: last).",
+                ") for solvers counting evaluations (dashed: gradient-free; marker: the answer "
+                "returned).",
             ),
         )
         if self.has_figure("convergence"):

@@ -366,6 +366,16 @@ class Task2(Claims):
                 )
             p += sentence(".")
         sec.paragraphs.append(p)
+        # each mean is over its own run (a stall's 30 s weigh in): the common window too
+        common = self.pair(t, "C", "mean_m_common")
+        src = ("pairs", "C", "mean_m_common")
+        within = (
+            [traced(common[c], f"data/{t}/events.json", (*src, c), ".3f") for c in (emdm, ivkc)]
+            if common
+            else []
+        )
+        whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
+        same = [n.text for n in within] == [n.text for n in whole]
         p = sentence(
             emdm,
             "'s mean ",
@@ -373,21 +383,19 @@ class Task2(Claims):
             " is ",
             self.mt(t, emdm, "mean_manipulability", ".3f"),
             # a stalled arm's m is frozen: said so (E4 above is the moving, like-for-like one)
-            f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
+            f" against the stalled {ivkc}'s " if not reached_i and not same else f", {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
             " (",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
+            *(
+                ("; the same over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
+                if same and not reached_i
+                else ()
+            ),
             ")",
         )
         if reached_e and not reached_i and self.evv(t, emdm, "singular", "near"):
-            # each mean is over its own run: the stall's 30 s weigh in, so the common window too
-            common = self.pair(t, "C", "mean_m_common")
-            src = ("pairs", "C", "mean_m_common")
-            within = [
-                traced(common[c], f"data/{t}/events.json", (*src, c), ".3f") for c in (emdm, ivkc)
-            ]
-            whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
-            if [n.text for n in within] != [n.text for n in whole]:  # the same: nothing to add
+            if not same:  # the stall's tail changes the means: the common window's too
                 p += sentence(
                     "; over their common first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
