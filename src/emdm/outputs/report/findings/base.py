@@ -416,7 +416,9 @@ class StoryBase:
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",
-            f" (shaded beyond them, log past {FAR_BEYOND:g}×; far peaks at right)" if far else "",
+            f" (shaded beyond them, log past {FAR_BEYOND:g}×; each side's farthest peak at right)"
+            if far
+            else "",
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:

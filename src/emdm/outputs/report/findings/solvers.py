@@ -306,7 +306,7 @@ class Solvers(StoryBase):
         table = Table(
             "solvers",
             sentence(
-                "Every solver on the same ",
+                f"The {len(rows)} solvers on the same ",
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
