@@ -124,10 +124,8 @@ class Front(Claims):
         sec = Section("conclusion", "Conclusion")
         p = sentence(
             "On the redundant arm EMDM is IVKC plus null-space motion towards dexterity, "
-            "trading effort for manipulability (",
-            Ref("tab", "outcomes"),
-            "). On the non-redundant arm the slack, not the dexterity term, decides: it lets "
-            "C-EMDM leave a straight line that the joint limits block, where task scaling "
+            "trading effort for manipulability. On the non-redundant arm the slack, not the "
+            "dexterity term, decides: it lets C-EMDM leave a straight line that the joint limits block, where task scaling "
             "stalls C-IVKC. ",
         )
         gains = self.slack_gains()
@@ -142,7 +140,7 @@ class Front(Claims):
                 " (",
                 Ref("tab", "outcomes"),
                 "). Where the path does not matter a slack is the better choice; where it "
-                "does, only task scaling, our default, keeps the tip on ",
+                "does, only task scaling keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",
             )
@@ -159,7 +157,7 @@ class Front(Claims):
                 self.sn("task2-lab-C-EMDM", free, "median_evaluations", ".4g"),
                 f" evaluations where {grad} needs ",
                 self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
-                ", a count no compiler changes)",
+                ")",
             )
         p += sentence(".")
         sec.paragraphs.append(p)

@@ -47,8 +47,6 @@ class Solvers(StoryBase):
                 "all " if every else "",
                 self.sn(lab, k, "limit_stops", "d"),
                 f" of {k}'s searches" if i == 0 else f" of {k}'s",
-                # a population method stops short of the budget: say why its count is lower
-                " (in whole generations)" if k == "differential-evolution" else "",
                 "" if i == len(stopped) - 1 else " and " if i == len(stopped) - 2 else ", ",
             )
         return out
