@@ -125,8 +125,8 @@ class Front(Claims):
         p = sentence(
             "On the redundant arm EMDM is IVKC plus null-space motion towards dexterity, "
             "trading effort for manipulability. On the non-redundant arm the slack, not the "
-            "dexterity term, decides: it lets C-EMDM leave a straight line that the joint limits block, where task scaling "
-            "stalls C-IVKC. ",
+            "dexterity term, decides: it lets C-EMDM leave a straight line that the joint "
+            "limits block, where task scaling stalls C-IVKC. ",
         )
         gains = self.slack_gains()
         if gains:
