@@ -676,3 +676,17 @@ def test_table_iii_says_which_solvers_iterate_without_evaluating(report):
     assert ("not every iteration evaluates" in caption) == bool(skip)
     for k in skip:
         assert k in caption.split("not every iteration evaluates")[0].rsplit(";", 1)[1], k
+
+
+def test_fig2_caption_states_the_swept_ratios_from_the_records(report):
+    """Fig. 2's caption gives both sweeps: the fronts' ratios (per decade) and the whole runs'
+    count, each read from its record (the nominal ratio is the circle, in neither count)."""
+    root, _ = report
+    pareto = json.loads((root / "data" / "task1-pareto-UC-EMDM" / "pareto.json").read_text())
+    grid = json.loads((root / "data" / "task1-pareto-UC-EMDM" / "weight_grid.json").read_text())
+    nominal = pareto["nominal_ratio"]
+    runs = [r["w_manip"] / r["w_effort"] for r in grid["runs"]]
+    count = sum(1 for r in runs if r > 0 and not np.isclose(r, nominal))
+    paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
+    caption = paper[: paper.index(r"\label{fig:pareto}")].rsplit(r"\caption{", 1)[1]
+    assert "Ratios: 0 and " in caption and f"; 0 and {count} from " in caption

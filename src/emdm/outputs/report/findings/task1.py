@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Ref, Sentence, Text, Unit, sentence
+from ..trace import Math, Ref, Segment, Sentence, Text, Unit, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -204,6 +204,42 @@ class Task1(StoryBase):
             sec.paragraphs.append(self.policy_weighed())
         return sec
 
+    def ratios_swept(self) -> Sentence:
+        """``. Ratios: 0 and 10^-3 to 10^4, 4 per decade, in the fronts; 0 and 12 from 10^-2 to
+        10^3 in the runs`` (and the nominal ratio): Fig. 2's sweeps, from their records (empty where
+        either is missing)."""
+        f = "data/task1-pareto-UC-EMDM/pareto.json"
+        grid = self.rec.grids.get("UC-EMDM", [])
+        if not (self.d.exists(f) and grid):
+            return []
+        nominal = float(self.d.value(f, "nominal_ratio"))
+
+        def spread(ratios: list[float]) -> tuple[Sentence, int, float]:
+            pos = sorted(r for r in ratios if r > 0 and not math.isclose(r, nominal))
+            lo, hi = pos[0], pos[-1]
+
+            def power(x: float) -> Segment:
+                e = math.log10(x)
+                if abs(e - round(e)) < 1e-9:
+                    return Math(f"10^{{{round(e)}}}", f"10<sup>{round(e)}</sup>".replace("-", "−"))
+                return Text(f"{x:.3g}")
+
+            return (
+                sentence(power(lo), " to ", power(hi)),
+                len(pos),
+                (len(pos) - 1) / math.log10(hi / lo),
+            )
+
+        fronts, _, per = spread([float(r) for r in self.d.value(f, "ratios")])
+        runs, count, _ = spread([r.w_manip / r.w_effort for r in grid])
+        return sentence(
+            ". Ratios: 0 and ",
+            *fronts,
+            f", {per:.2g} per decade, in the fronts; 0 and {count} from ",
+            *runs,
+            " in the runs",
+        )
+
     def pareto(self) -> Section:
         sec = Section("t1-pareto", "Task 1: Pareto fronts and weights", level=2, brief="1.1-1.2")
         uc = "data/task1-pareto-UC-EMDM/fronts.json"  # (the percentages trace both operands)
@@ -228,9 +264,10 @@ class Task1(StoryBase):
             " at the bar's foot; circle: nominal); right: whole runs, one per setting. Without a "
             "slack only the ratio matters",
         )
+        cap += self.ratios_swept()
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
-            cap += sentence("; hollow: the front at a scaled step's state under the free slack (6)")
+            cap += sentence("; hollow: a scaled step's front under the free slack (6)")
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(
