@@ -61,18 +61,19 @@ class Task2(Claims):
         )
         refs = figs + sentence(", ", Ref("tab", "outcomes"))
         key: EvidenceKey = "t2-c-slack-policy"
+        first = self.ivkc_first_with_slack()  # with a free slack each, C-IVKC arrives first
         stall_told = sentence(
             self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
             " on ",
-            "the scaled " + ivkc if self.ivkc_first_with_slack() else "it",
+            "the scaled " + ivkc if first else "it",
             " stalls ",
             self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
             f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
-            *(figs if self.ivkc_first_with_slack() else refs),  # then Table I is cited before
+            *(figs if first else refs),  # then Table I is cited before
             ")",
         )
         stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
-        both_first = stalled and self.ivkc_first_with_slack()
+        both_first = stalled and first
         if both_first:  # both outcomes in the first sentence: the stall is the policy's
             answer = sentence(
                 f"{emdm} can leave the straight line to the goal and reaches it in ",
@@ -116,7 +117,7 @@ class Task2(Claims):
                     ": one can leave the straight line to the goal, the other cannot"
                 )
             if self.ivkc_with_slack():  # the like-for-like comparison, beside the headline
-                first = self.ivkc_first_with_slack()  # then the stall is the policy's: say so
+                # when C-IVKC arrives first, the stall is the policy's: say so
                 answer += sentence(". Task scaling causes the stall. " if first else ". ")
                 answer += cap(self.ivkc_with_slack())
                 if first:
