@@ -18,7 +18,7 @@ from .base import (
     eq,
 )
 from .claims import listed
-from .records import LabName, SolverRow
+from .records import LabName, SeedRun, SolverRow
 
 EXACT_EXP = round(math.log10(EXACT))
 """The exponent of :data:`~emdm.studies.lab.EXACT`, as Table III's caption writes it."""
@@ -251,7 +251,14 @@ class Solvers(StoryBase):
             ]
             span = sentence(ends[0], "–", ends[1]) if min(values) < max(values) else [ends[0]]
             if all(exact):
-                out += sentence(k, " stays exact (median ", *span, " evaluations)")
+                out += sentence(
+                    k,
+                    " stays exact (median ",
+                    *span,
+                    " evaluations",
+                    *self.overrun_span(lab, k, seeds),
+                    ")",
+                )
             elif not any(exact):
                 out += sentence(k, "'s largest gap is ", *span)
             else:
@@ -260,6 +267,20 @@ class Solvers(StoryBase):
                 "; " if i < len(seeded) - 2 else " and " if i == len(seeded) - 2 else ""
             )
         return out
+
+    def overrun_span(self, lab: LabName, name: str, seeds: list[SeedRun]) -> Sentence:
+        """``, 6–41 overruns``: how many programs each seed of a stochastic solver took longer
+        than the control period, when that depends on the seed (empty when it does not, or when
+        none overran): a time near the period (cma-es's) makes the count the seed's."""
+        counts = [r.over_period for r in seeds]
+        if min(counts) == max(counts):
+            return []
+        f = f"data/{lab}/solvers.json"
+        ends = [
+            self.d.num(f, "solvers", name, "seeds", j, "over_period", fmt="d")
+            for j in (int(np.argmin(counts)), int(np.argmax(counts)))
+        ]
+        return sentence(", ", ends[0], "–", ends[1], " overruns")
 
     def overruns(
         self, lab: LabName, names: list[str], rows: dict[str, SolverRow], named: bool = True

@@ -191,13 +191,6 @@ class Task1(StoryBase):
                 " of them scaled) are identical: on each, the joints at bounds leave the "
                 "task one solution",
             )
-            coincide = self.evid("t1-c-slack-policy", "pair", "coincide_steps")
-            if coincide:  # (with none in common, the next paragraph says enough)
-                p += sentence(
-                    " (",
-                    self.evidn("t1-c-slack-policy", "pair", "coincide_steps", fmt="d"),
-                    " with a free slack)",
-                )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
         else:
