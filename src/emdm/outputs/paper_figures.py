@@ -619,6 +619,8 @@ def _front_axes(
     note = ""
     if info["degenerate"]:
         note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
+        if slack:  # the hollow points beside it are another program's: say whose
+            note += "\nhollow: free slack"
     elif info["saturated_from_ratio"] is not None:
         note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
     if note:  # where it covers fewest points (a front runs from lower left to upper right)
@@ -641,6 +643,7 @@ def _front_axes(
                 ha=ha,
                 va=va,
                 fontsize=medium.tiny,
+                linespacing=1.05,  # three lines in a panel under 0.5 in tall
                 bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
                 zorder=1.5,  # under the front's points (zorder 2): a note never hides one
             )
