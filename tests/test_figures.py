@@ -5,8 +5,10 @@ from __future__ import annotations
 import itertools
 import json
 
+import matplotlib.colors
 import numpy as np
 import pytest
+from matplotlib.offsetbox import AnnotationBbox
 from PIL import Image
 
 import emdm
@@ -403,6 +405,24 @@ def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, drawn):
             assert ax.yaxis.get_transform().linthresh == pytest.approx(pf.FAR_BEYOND * limit)
         lo, hi = ax.get_ylim()
         assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
+        # every run's extreme on each side far beyond the limit is written, in its run's
+        # colour (reading 92 could not read UC-IVKC's 7.26 rad/s beside UC-EMDM's 8.73)
+        written = sorted(
+            (area.get_text(), matplotlib.colors.to_hex(area._text.get_color()))
+            for box in ax.artists
+            if isinstance(box, AnnotationBbox)
+            for area in box.offsetbox.get_children()
+        )
+        expected = sorted(
+            (
+                pf._plain(float(f"{v:.2g}")),
+                matplotlib.colors.to_hex(pf._style(r, pf.PAPER)["color"]),
+            )
+            for r in runs
+            for v in (r.qd[:, j].min(), r.qd[:, j].max())
+            if abs(v) > pf.FAR_BEYOND * sc.arm.qd_max[j]
+        )
+        assert written == expected, j
     assert any(ax.get_yscale() == "symlog" for ax in strips)  # the case this guards
 
 

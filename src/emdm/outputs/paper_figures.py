@@ -35,6 +35,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.offsetbox import AnnotationBbox, HPacker, TextArea
 from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
@@ -246,7 +247,13 @@ def pair_figure(
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
         upper = outer[0].subgridspec(1, 4 if gap or path else 3)
-        lower = outer[1].subgridspec(1, 2)
+        far_any = any(  # a speed far beyond its limit: its peaks are labelled on the right
+            r.steps and float(np.abs(r.qd[:, j]).max()) > FAR_BEYOND * float(sc.arm.qd_max[j])
+            for r in runs
+            for j in range(n)
+        )
+        # the labels' room comes out of the speed strips' column: it gets that much more width
+        lower = outer[1].subgridspec(1, 2, width_ratios=[1.0, 1.3 if far_any else 1.0])
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
@@ -334,22 +341,15 @@ def pair_figure(
             # velocity limits on the left and, beyond them, the peaks themselves on the right
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # each side's extreme far beyond the limit, in the colour of its run
-                peaks, colours = [], []
-                for v in (low, high):
-                    if abs(v) <= FAR_BEYOND * limit:
-                        continue
-                    r = next(
-                        r for r in runs if r.steps and v in (r.qd[:, j].min(), r.qd[:, j].max())
-                    )
-                    peaks.append(v)
-                    colours.append(_style(r, medium)["color"])
-                right = qd_axes[j].secondary_yaxis("right")
-                right.set_yticks(peaks, [_plain(float(f"{v:.2g}")) for v in peaks])
-                for label, colour in zip(right.get_yticklabels(), colours, strict=True):
-                    label.set_color(colour)
-                right.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
-                right.tick_params(pad=1)
+            if far:  # every run's extreme on each side far beyond the limit, in its colour
+                peaks = [
+                    (v, _style(r, medium)["color"])
+                    for r in runs
+                    if r.steps
+                    for v in (float(r.qd[:, j].min()), float(r.qd[:, j].max()))
+                    if abs(v) > FAR_BEYOND * limit
+                ]
+                _label_peaks(qd_axes[j], peaks, medium)
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [_plain(-tick), _plain(tick)])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
@@ -384,6 +384,60 @@ def pair_figure(
             columnspacing=1.0,
         )
     return stem
+
+
+PEAK_GAP = 1.1
+"""How many label heights apart two far peaks' labels must be to stand apart; closer ones are
+written side by side, in their runs' colours, at the farther one."""
+
+
+def _label_peaks(ax: Any, peaks: list[tuple[float, str]], medium: Medium) -> None:
+    """Mark each far peak with a tick on the right of its strip and its value in its run's
+    colour; peaks whose labels would touch (one-step spikes of two runs on the same joint, say
+    7.3 and 8.7 rad/s on a log scale) share one label, their values side by side."""
+    if not peaks:
+        return
+    right = ax.secondary_yaxis("right")
+    right.set_yticks([v for v, _ in peaks], [""] * len(peaks))
+    right.yaxis.set_minor_locator(NullLocator())
+    right.tick_params(pad=1)
+    ax.figure.canvas.draw()  # the layout settled: the strip's height in points is final
+    to_axes = ax.transAxes.inverted()
+    height = ax.get_window_extent().height * 72.0 / ax.figure.dpi
+    gap = PEAK_GAP * medium.tiny / height  # a label's height, in axes fractions
+
+    def frac(v: float) -> float:
+        return float(to_axes.transform(ax.transData.transform((0.0, v)))[1])
+
+    for side in (-1, 1):
+        group: list[tuple[float, str]] = []
+        ordered = sorted((p for p in peaks if np.sign(p[0]) == side), key=lambda p: abs(p[0]))
+        for i, (v, colour) in enumerate(ordered):
+            group.append((v, colour))
+            last = i == len(ordered) - 1
+            if last or abs(frac(ordered[i + 1][0]) - frac(v)) > gap:
+                texts: list[Artist] = [
+                    TextArea(
+                        _plain(float(f"{u:.2g}")),
+                        textprops={"color": c, "fontsize": medium.tiny},
+                    )
+                    for u, c in group
+                ]
+                box = HPacker(children=texts, pad=0, sep=1.5)
+                ax.add_artist(
+                    AnnotationBbox(
+                        box,
+                        (1.0, v),  # at the farthest of the group
+                        xycoords=("axes fraction", "data"),
+                        xybox=(4.5, 0.0),
+                        boxcoords="offset points",
+                        box_alignment=(0.0, 0.5),
+                        frameon=False,
+                        pad=0.0,
+                        annotation_clip=False,
+                    )
+                )
+                group = []
 
 
 def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:

@@ -416,7 +416,7 @@ class StoryBase:
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",
-            f" (shaded beyond them, log past {FAR_BEYOND:g}×; each side's farthest peak at right)"
+            f" (shaded beyond them, log past {FAR_BEYOND:g}×; each run's peaks at right)"
             if far
             else "",
         )
