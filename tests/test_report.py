@@ -15,6 +15,7 @@ import pytest
 from conftest import headless_chromium
 
 import emdm
+from emdm.outputs.records import read_run
 from emdm.outputs.report import format_value
 from emdm.outputs.report.config import FREE_SLACK
 from emdm.outputs.report.render import compile_documents, document, latex_environment
@@ -154,6 +155,15 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
         for name in ("C-IVKC", "C-EMDM"):
             assert 0 < free["runs"][name]["max_abs_slack"] < 0.01 * FREE_SLACK, (key, name)
     assert evidence["t1-uc-no-manip"]["reference"]["max_abs_qd_difference"] < 1e-12
+    # E4 ends sooner than its nominal run: the nominal's mean m over E4's time is recorded
+    # (reading 94: each run's own mean covers its own horizon), from the nominal trajectory
+    ref = evidence["t2-c-emdm-no-manip"]["reference"]
+    e4 = evidence["t2-c-emdm-no-manip"]["runs"]["C-EMDM"]
+    nominal = read_run(root / "data" / "task2", "C-EMDM")
+    upto = nominal.t <= ref["common_until_t"] + 1e-9
+    assert ref["controller"] == "C-EMDM"
+    assert ref["common_until_t"] == pytest.approx(min(e4["final_time"], nominal.t[-1]))
+    assert ref["mean_m_common"]["reference"] == pytest.approx(nominal.m[upto].mean(), rel=1e-12)
     # the identical commands are scaling's (one admissible command): a free slack has fewer
     t1 = json.loads((root / "data" / "task1" / "events.json").read_text())["pairs"]["C"]
     assert evidence["t1-c-slack-policy"]["pair"]["coincide_steps"] < t1["coincide_steps"]

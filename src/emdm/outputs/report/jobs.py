@@ -114,6 +114,12 @@ def _evidence_run(ev: Evidence, nominal: dict[str, Run]) -> dict[str, Any]:
             "controller": ev.reference,
             "same_steps": ours.steps == ref.steps,
             "max_abs_qd_difference": float(np.abs(ours.qd[:n] - ref.qd[:n]).max()) if n else 0.0,
+            # each mean over the states both runs have: a shorter run's own mean covers less
+            "common_until_t": float(ours.t[n]),
+            "mean_m_common": {
+                "run": float(np.mean(ours.m[: n + 1])),
+                "reference": float(np.mean(ref.m[: n + 1])),
+            },
         }
     if len(ev.controllers) == 2 and all(c in runs for c in ev.controllers):
         entry["pair"] = explain.pair_events(runs[ev.controllers[0]], runs[ev.controllers[1]])

@@ -75,7 +75,7 @@ class Claims(StoryBase):
             self.evid_goal(key, Name.C_EMDM),
             # w_M = 0 leaves IVKC's objective (times w_E) with C-EMDM's own bounded slack: the
             # like-for-like pairing of the two under the brief's slack
-            *((" (", run_label(key), ": IVKC's objective with C-EMDM's slack)") if label else ()),
+            *((" (", run_label(key), ": IVKC's objective, C-EMDM's slack)") if label else ()),
         )
 
     def slack_gains(self) -> list[str]:

@@ -23,6 +23,8 @@ from .claims import Claims
 from .records import EvidenceKey, MetricKey, RunOutcome
 
 MISS_NOTE = Text("; miss: goal not reached")
+STALL_NOTE = "stall: at rest short of the goal"
+"""What "stall" means in Tables I and II (a run's record has a stall event)."""
 """Table II's caption names a miss only where the table has one."""
 
 
@@ -84,7 +86,7 @@ class Tables(Claims):
                 ERR,
                 " < ",
                 self.scn("task1", "motion", "tolerance", fmt=".0e", unit="m"),
-                *(("; stall: never reached",) if len(drifted) < len(missed) else ()),
+                *(("; " + STALL_NOTE,) if len(drifted) < len(missed) else ()),
                 ")",
                 *((" or final error (m)",) if drifted else ()),
                 ", mean ",
@@ -243,7 +245,7 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run (its outcomes in "
-                "brackets; stall: at rest short of the goal",
+                "brackets; " + STALL_NOTE,
                 MISS_NOTE,
                 "); ",
                 Upright(run_label(GRID_MISS)),

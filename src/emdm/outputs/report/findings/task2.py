@@ -15,6 +15,7 @@ from .base import (
     ERR,
     M_SYM,
     T_EQ,
+    W_M,
     W_S,
     eq,
     q,
@@ -43,6 +44,23 @@ class Task2(Claims):
             self.evidn(key, "runs", emdm, "events", "singular", "t", fmt=".2f"),
             " to ",
             self.ev("task2", emdm, "singular", "t", fmt=".2f", unit="s"),
+        )
+
+    def common_mean(self, key: EvidenceKey) -> tuple[Segment | str, ...]:
+        """``, 0.121 over the same 13.15 s``: the nominal run's mean m over the time the
+        shorter evidence run lasts (each run's own mean covers its own horizon), when the
+        evidence run is the shorter one (empty otherwise)."""
+        ref = self.evid(key, "reference")
+        if not (ref and "mean_m_common" in ref) or ref.get("same_steps"):
+            return ()
+        run = self.evid(key, "runs", ref["controller"])
+        if not run or ref["common_until_t"] < run["final_time"]:
+            return ()  # the nominal is the shorter: its own mean is over the common time
+        return (
+            ", ",
+            self.evidn(key, "reference", "mean_m_common", "reference", fmt=".3f"),
+            " over the same ",
+            self.evidn(key, "reference", "common_until_t", fmt=".2f", unit="s"),
         )
 
     # ------------------------------------------------------------------ Task 2
@@ -144,12 +162,10 @@ class Task2(Claims):
                     "workspace",
                     "figures/workspace",
                     sentence(
-                        "Task 2 in the workspace: the straight line to the goal enters the disc "
-                        "the arm cannot reach with ",
+                        "Task 2: the straight line to the goal enters the disc unreachable with ",
                         Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
                         " outside its stop zone (hatched); C-IVKC stalls on its edge, C-EMDM "
-                        "goes around and flips its elbow into the only goal configuration within "
-                        "the limits.",
+                        "goes around and flips its elbow into the admissible goal configuration.",
                     ),
                 )
             )
@@ -328,6 +344,7 @@ class Task2(Claims):
                             ),
                             " against ",
                             self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+                            *self.common_mean("t2-c-emdm-no-manip"),
                             "). On this arm the term does not raise ",
                             M_SYM,
                             *(
@@ -485,21 +502,21 @@ class Task2(Claims):
         e8 = self.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             p += sentence(
-                "The slack saves effort by giving up ",
-                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-                " while ",
+                "The slack saves effort while ",
                 ERR,
-                " is large. With ",
+                " is large: with ",
                 *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
                 " (",
                 run_label("t2-uc-emdm-stiff-slack"),
-                ") its ",
-                Math(r"|\delta_i|", "|δ<sub>i</sub>|"),
-                " peaks at ",
+                ", ",
+                W_M,
+                " kept) ",
+                Math(r"\max|\delta_i|", "max |δ<sub>i</sub>|"),
+                " is ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "max_abs_slack", fmt=".0e", unit="m/s"
                 ),
-                ", and ",
+                " and ",
                 emdm,
                 " behaves like ",
                 ivkc,
@@ -508,6 +525,12 @@ class Task2(Claims):
                 ", ",
                 self.evidn(
                     "t2-uc-emdm-stiff-slack", "runs", emdm, "total_effort", fmt=".2f", unit="rad²/s"
+                ),
+                ", mean ",
+                M_SYM,
+                " ",
+                self.evidn(
+                    "t2-uc-emdm-stiff-slack", "runs", emdm, "mean_manipulability", fmt=".3f"
                 ),
                 ").",
             )
