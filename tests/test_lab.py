@@ -412,3 +412,44 @@ def test_the_gradient_free_l1_penalty_is_exact_on_every_preset_program(preset_pr
         largest = max(np.abs(mult.mu).max(initial=0.0), mult.nu.max(initial=0.0))
         rho = PENALTY * (1.0 + np.abs(qp.P).max())
         assert features["penalty_margin"] == (rho / largest if largest > 0 else np.inf)
+
+
+def test_admissible_width_is_the_feasible_sets_extent():
+    """A segment has its length as width, a single point zero, and a free direction infinity:
+    the measure behind "each admissible set is one point" (Task 1's scaled steps)."""
+    from emdm.studies.lab import admissible_width
+
+    def box(b: float, lo: float = 0.0) -> QP:  # x1 + x2 = b in [lo, 1]^2, a slack-free program
+        return QP(np.eye(2), np.zeros(2), np.ones((1, 2)), np.array([b]), [lo, lo], [1.0, 1.0], 2)
+
+    assert admissible_width(box(1.0)) == pytest.approx(1.0)  # the segment (0, 1) to (1, 0)
+    assert admissible_width(box(1.5)) == pytest.approx(0.5)
+    assert admissible_width(box(2.0)) == pytest.approx(0.0, abs=1e-12)  # the corner (1, 1)
+
+    def line(upper: float) -> QP:  # x1 + x2 = 0, x <= upper
+        return QP(np.eye(2), np.zeros(2), np.ones((1, 2)), [0.0], [-np.inf] * 2, [upper] * 2, 2)
+
+    assert admissible_width(line(1.0)) == pytest.approx(2.0)  # (1, -1) to (-1, 1)
+    assert admissible_width(line(np.inf)) == np.inf
+
+
+def test_task1_scaled_steps_are_single_degenerate_vertices():
+    """Every task-scaled step of Task 1's C-EMDM leaves one admissible command, held by more
+    bounds than a vertex needs (the paper's "degenerate vertex"): measured on the run, and the
+    lab's record says the same of the steps it re-solves."""
+    from emdm.studies.lab import admissible_width, challenges
+
+    sc = emdm.load_scenario("task1")
+    ctrl = emdm.get_controller("C-EMDM")
+    run = emdm.simulate(sc, ctrl)
+    scaled = [k for k in range(run.steps) if run.alpha[k] < 1.0]
+    assert scaled
+    for k in scaled:
+        qp = program_at(ctrl, sc, run.q[k]).qp
+        assert admissible_width(qp) <= 1e-9, k
+        assert np.count_nonzero(run.active[k]) > qp.P.shape[0] - qp.A.shape[0], k
+    lab = run_lab(sc, ctrl, ["active-set"], sample=8, repeats=1, closed_loop=False)
+    assert any(run.alpha[k] < 1.0 for k in lab.steps)  # the sample holds scaled steps
+    vertex = challenges(lab)["scaled_vertex"]
+    assert vertex["max_width"] <= 1e-9 and vertex["unknowns"] == 3 and vertex["task_rows"] == 2
+    assert vertex["active"][0] > vertex["unknowns"] - vertex["task_rows"]

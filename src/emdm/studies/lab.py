@@ -185,7 +185,9 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
     ``alpha``: task scale (``< 1``: the feasible set is a face, degenerate active sets);
     ``active``: number of joint bounds active at the optimum; ``penalty_margin``: the l1
     penalty weight of the gradient-free methods over the largest optimal multiplier of the
-    bounds and rows (the penalty is exact, its minimiser the program's, when this exceeds 1).
+    bounds and rows (the penalty is exact, its minimiser the program's, when this exceeds 1);
+    ``width``: on a task-scaled step, the feasible set's extent (:func:`admissible_width`; NaN on
+    the others); ``unknowns`` and ``rows``: the program's variables and task rows.
     """
     _, s, Vt = np.linalg.svd(qp.A)
     Z = Vt[int(np.sum(s > 1e-12 * s[0])) :].T
@@ -198,6 +200,9 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
     largest = max(float(np.abs(mult.mu).max(initial=0.0)), float(mult.nu.max(initial=0.0)))
     rho = penalty_weight(qp)
     return {
+        "width": admissible_width(qp) if run.alpha[k] < 1.0 else math.nan,
+        "unknowns": float(qp.P.shape[0]),
+        "rows": float(qp.A.shape[0]),
         "cond_reduced": cond,
         "w_slack": float(qp.P[-1, -1]) if qp.n_slack else 0.0,
         "cond_J": float(sj[0] / sj[-1]) if sj[-1] > 0 else math.inf,
@@ -206,6 +211,36 @@ def step_features(run: Run, k: int, qp: QP) -> dict[str, float]:
         "active": float(np.count_nonzero(run.active[k])),
         "penalty_margin": rho / largest if largest > 0 else math.inf,
     }
+
+
+def admissible_width(qp: QP) -> float:
+    """The widest extent of the program's feasible set along any variable: ``max_j (max x_j -
+    min x_j)`` over ``A x = b, G x <= h, lb <= x <= ub``, by two linear programs per variable
+    (HiGHS). Zero when the set is one point (a task-scaled step's: the largest scale leaves one
+    command), positive when the objective has a face or more to choose from."""
+    from scipy.optimize import linprog  # loaded on first use: the control loop never needs it
+
+    n = qp.P.shape[0]
+    widest = 0.0
+    for j in range(n):
+        ends = []
+        for sign in (1.0, -1.0):
+            c = np.zeros(n)
+            c[j] = sign
+            res = linprog(
+                c,
+                A_ub=qp.G if qp.G.shape[0] else None,
+                b_ub=qp.h if qp.G.shape[0] else None,
+                A_eq=qp.A,
+                b_eq=qp.b,
+                bounds=list(zip(qp.lb, qp.ub, strict=True)),
+                method="highs",
+            )
+            if res.status != 0:  # unbounded along j (a free slack) or numerically infeasible
+                return math.inf if res.status == 3 else math.nan
+            ends.append(float(res.x[j]))
+        widest = max(widest, ends[1] - ends[0])
+    return widest
 
 
 @dataclass(eq=False)
@@ -504,9 +539,26 @@ def challenges(lab: LabResult) -> dict[str, Any]:
             entry["median_iterations_scaled"] = float(np.median(its[scaled]))
             entry["median_iterations_unscaled"] = float(np.median(its[~scaled]))
         per_solver[name] = entry
+    # a scaled step's admissible set: its extent (one point: zero) and the bounds active there
+    # (with the task rows, more active constraints than unknowns: a degenerate vertex)
+    on_scaled = [lab.features[k] for k, s in zip(steps, scaled, strict=True) if s]
+    vertex = (
+        {
+            "max_width": float(max(f["width"] for f in on_scaled)),
+            "active": [
+                int(min(f["active"] for f in on_scaled)),
+                int(max(f["active"] for f in on_scaled)),
+            ],
+            "unknowns": int(on_scaled[0]["unknowns"]),
+            "task_rows": int(on_scaled[0]["rows"]),
+        }
+        if on_scaled
+        else None
+    )
     return {
         "feature_ranges": ranges,
         "scaled_steps": int(scaled.sum()),
+        "scaled_vertex": vertex,
         "solvers": per_solver,
         "min_manipulability_step": int(
             steps[int(np.argmin([lab.features[k]["m"] for k in steps]))]

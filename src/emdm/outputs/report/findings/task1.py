@@ -515,7 +515,7 @@ class Task1(StoryBase):
             ch = self.d.value(lab, "challenges", "solvers")
         if "median_iterations_scaled" in ch.get("active-set", {}):
             p += sentence(
-                "; scaled steps take ",
+                "; scaled steps ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -525,11 +525,26 @@ class Task1(StoryBase):
                     fmt=".0f",
                 ),
             )
-        p += sentence(
-            ". These are Task 1's numerical challenge: each admissible set is one degenerate "
-            "vertex (more bounds active than joints left free: an active-set method can cycle; "
-            "ours breaks ties by Bland's rule)",
-        )
+        vertex = self.d.value(lab, "challenges", "scaled_vertex") if self.d.exists(lab) else None
+        if vertex and vertex["max_width"] <= 1e-9:  # measured: one point, and how degenerate
+            low, high = vertex["active"]
+            fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
+            p += sentence(
+                # (the widest, rounded: a bound "<=" would understate it)
+                ". These are Task 1's challenge: each admissible set is one point (widest ",
+                self.d.num(
+                    lab, "challenges", "scaled_vertex", "max_width", fmt=".0e", unit="rad/s"
+                ),
+                "), a degenerate vertex (",
+                self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
+                *(
+                    ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
+                    if high > low
+                    else ()
+                ),
+                f" bounds active, {fixed} needed), where an active-set method can cycle; ours "
+                "breaks ties by Bland's rule",
+            )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
                 ". First-order ADMM needs ",
