@@ -303,6 +303,10 @@ class Task1(StoryBase):
                 " at ",
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
+                # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
+                " (of ",
+                self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
+                ")",
             )
         answer += sentence(".")
         answer += self.whole_runs_levelled()
