@@ -261,6 +261,7 @@ def pair_figure(
         ax_path = fig.add_subplot(upper[0, 3]) if path else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
+        far_peaks: list[tuple[Axes, list[tuple[float, str]]]] = []
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
@@ -349,7 +350,7 @@ def pair_figure(
                     for v in (float(r.qd[:, j].min()), float(r.qd[:, j].max()))
                     if abs(v) > FAR_BEYOND * limit
                 ]
-                _label_peaks(qd_axes[j], peaks, medium)
+                far_peaks.append((qd_axes[j], peaks))  # labelled once the layout is known
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [_plain(-tick), _plain(tick)])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
@@ -383,6 +384,10 @@ def pair_figure(
             frameon=False,
             columnspacing=1.0,
         )
+        if far_peaks:
+            fig.canvas.draw()  # one layout for every strip: their heights in points are final
+            for ax, peaks in far_peaks:
+                _label_peaks(ax, peaks, medium)
     return stem
 
 
@@ -394,14 +399,14 @@ written side by side, in their runs' colours, at the farther one."""
 def _label_peaks(ax: Any, peaks: list[tuple[float, str]], medium: Medium) -> None:
     """Mark each far peak with a tick on the right of its strip and its value in its run's
     colour; peaks whose labels would touch (one-step spikes of two runs on the same joint, say
-    7.3 and 8.7 rad/s on a log scale) share one label, their values side by side."""
+    7.3 and 8.7 rad/s on a log scale) share one label, their values side by side. The figure
+    is drawn first: the strip's height decides which labels touch."""
     if not peaks:
         return
     right = ax.secondary_yaxis("right")
     right.set_yticks([v for v, _ in peaks], [""] * len(peaks))
     right.yaxis.set_minor_locator(NullLocator())
     right.tick_params(pad=1)
-    ax.figure.canvas.draw()  # the layout settled: the strip's height in points is final
     to_axes = ax.transAxes.inverted()
     height = ax.get_window_extent().height * 72.0 / ax.figure.dpi
     gap = PEAK_GAP * medium.tiny / height  # a label's height, in axes fractions
