@@ -412,7 +412,9 @@ class StoryBase:
             " (log; dotted: the tolerance), ",
         )
         if path:
-            out += sentence("(d) tip paths (dotted: the straight line; dot: start, star: goal), ")
+            out += sentence(
+                "(d) tip paths (y stretched; dotted: the straight line; dot: start, star: goal), "
+            )
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",

@@ -139,7 +139,7 @@ class Front(Claims):
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 " (",
                 Ref("tab", "outcomes"),
-                "). Where the path does not matter a slack is the better choice; where it "
+                "). Here, where the path does not matter a slack did better; where it "
                 "does, only task scaling keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",

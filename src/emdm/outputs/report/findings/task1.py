@@ -68,9 +68,9 @@ class Task1(StoryBase):
         answer += sentence(
             "; at every step their end effectors are at most ",
             gap,
-            " apart: their distances to the goal and their paths coincide in ",
+            " apart, as ",
             Ref("fig", "t1-uc"),
-            "(c), (d).",
+            "(c), (d) show.",
         )
         sec.answer = answer
         self.answers.append(
