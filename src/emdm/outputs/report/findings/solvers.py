@@ -83,7 +83,7 @@ class Solvers(StoryBase):
                 grad,
                 " wins on both counts: it",
                 " reaches the exact optimum (largest gap ",
-                self.sn(lab, grad, "max_abs_gap", ".0e"),
+                self.sn(lab, grad, "max_abs_gap", ".1e"),
                 ") after a median ",
                 self.sn(lab, grad, "median_evaluations", ".4g"),
                 " objective evaluations (",

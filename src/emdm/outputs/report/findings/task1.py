@@ -537,7 +537,7 @@ class Task1(StoryBase):
                 # (the widest, rounded: a bound "<=" would understate it)
                 ". These are Task 1's challenge: each admissible set is one point (widest ",
                 self.d.num(
-                    lab, "challenges", "scaled_vertex", "max_width", fmt=".0e", unit="rad/s"
+                    lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
                 "), a degenerate vertex (",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
