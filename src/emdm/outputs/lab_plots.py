@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.patches import Patch
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import MaxNLocator, NullFormatter
 
-from ..studies.lab import LabResult
+from ..studies.lab import LabResult, Representative
 from .style import COLUMN, DOUBLE, FAMILY_COLOR, color, figure
 
 FLOOR = 1e-17
@@ -30,16 +30,21 @@ def _line_style(index: int) -> dict[str, object]:
 
 def convergence_figure(lab: LabResult, out: Path) -> Path:
     """Optimality error against iterations (top) and evaluations (bottom) at representative steps."""
-    reps = lab.representative
+    # one column per step: a step that is two representatives at once (the first step of Task 1
+    # is also its least dexterous) is drawn once, with both names
+    steps: dict[int, list[Representative]] = {}
+    for rep, k in lab.representative.items():
+        steps.setdefault(k, []).append(rep)
+    reps = {" and ".join(map(str, names)): (names[0], k) for k, names in steps.items()}
     stem = out / "convergence"
-    with figure(stem, width=DOUBLE, height=4.2, nrows=2, ncols=len(reps), squeeze=False) as (
+    with figure(stem, width=DOUBLE, height=4.4, nrows=2, ncols=len(reps), squeeze=False) as (
         fig,
         ax,
     ):
-        for col, (label, k) in enumerate(reps.items()):
+        for col, (label, (key, k)) in enumerate(reps.items()):
             f_star = lab.optimum[k][1]
             for i, (name, study) in enumerate(lab.studies.items()):
-                hist = study.histories.get(label, ())
+                hist = study.histories.get(key, ())  # recorded under the step's first name
                 if not hist:
                     continue
                 err = error_curve(hist, f_star)
@@ -55,10 +60,12 @@ def convergence_figure(lab: LabResult, out: Path) -> Path:
                 if "evaluations" in hist[0]:
                     ax[1, col].loglog([h["evaluations"] for h in hist], err, **style)
             alpha = lab.reference.alpha[k]
-            ax[0, col].set_title(f"{label} step (k = {k}, alpha = {alpha:.3g})")
+            # two short lines: one line per panel ran into its neighbours' titles
+            ax[0, col].set_title(f"{label} step\n$k = {k}$, $\\alpha = {alpha:.2f}$", fontsize=9)
             ax[0, col].set_xlabel("iteration + 1")
-            ax[0, col].xaxis.set_minor_formatter(NullFormatter())  # 2x10^0, 3x10^0... ran together
             ax[1, col].set_xlabel("objective evaluations")
+            for row in range(2):  # 2x10^0, 3x10^0... ran together
+                ax[row, col].xaxis.set_minor_formatter(NullFormatter())
             for row in range(2):
                 ax[row, col].set_ylabel("best |f - f*| + violation")
                 if not ax[row, col].lines:  # say why a panel is empty instead of a blank frame
@@ -71,6 +78,13 @@ def convergence_figure(lab: LabResult, out: Path) -> Path:
                     ax[row, col].set_yticks([])
                     continue
                 ax[row, col].set_ylim(1e-17, None)
+                counts = np.concatenate([line.get_xdata() for line in ax[row, col].lines])
+                if counts.max() < 10 * counts.min():  # within a decade: plain integer ticks
+                    ax[row, col].set_xscale("linear")
+                    ax[row, col].xaxis.set_major_locator(MaxNLocator(integer=True))
+                    if np.ptp(counts) == 0:  # one count (a search that ends at once): its tick
+                        ax[row, col].set_xlim(counts[0] - 1, counts[0] + 1)
+                        ax[row, col].set_xticks([counts[0]])
         handles, labels = [], []
         for axis in ax.flat:
             for h, lab_ in zip(*axis.get_legend_handles_labels(), strict=True):
