@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Ref, Segment, Sentence, Text, Unit, sentence
+from ..trace import File, Math, Ref, Segment, Sentence, Text, Unit, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -519,7 +519,7 @@ class Task1(StoryBase):
             ch = self.d.value(lab, "challenges", "solvers")
         if "median_iterations_scaled" in ch.get("active-set", {}):
             p += sentence(
-                "; scaled steps ",
+                "; ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -528,6 +528,7 @@ class Task1(StoryBase):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
+                " on scaled steps",
             )
         vertex = self.d.value(lab, "challenges", "scaled_vertex") if self.d.exists(lab) else None
         if vertex and vertex["max_width"] <= 1e-9:  # measured: one point, and how degenerate
@@ -546,8 +547,8 @@ class Task1(StoryBase):
                     if high > low
                     else ()
                 ),
-                f" bounds active, {fixed} needed), where an active-set method can cycle; ours "
-                "breaks ties by Bland's rule",
+                f" bounds active, {fixed} needed), where an active set can cycle (ours uses "
+                "Bland's rule)",
             )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
@@ -560,6 +561,11 @@ class Task1(StoryBase):
                     lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".4g"
                 ),
                 " elsewhere",
+                *(  # the lab's convergence plots, beside the study (as the animations are)
+                    (" (plots: ", File("figures/task1-lab-C-EMDM/"), ")")
+                    if self.d.exists("figures/task1-lab-C-EMDM/convergence.png")
+                    else ()
+                ),
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
@@ -573,10 +579,10 @@ class Task1(StoryBase):
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of the ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved C-EMDM programs",
+                " re-solved programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
-                p += sentence(", all scaled ones")
+                p += sentence(", all scaled")
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,
