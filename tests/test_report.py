@@ -175,7 +175,7 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
     text = (root / "index.html").read_text(encoding="utf-8")
     # both outcomes first (the stall is the policy's), then where the scaled run stops
-    assert "under task scaling cannot and stalls, while with a free slack, C-IVKC arrives" in text
+    assert "under task scaling cannot, and stalls. With a free slack, C-IVKC arrives" in text
     assert " on the scaled C-IVKC stalls " in text
     assert "evidence" in text.lower()
 

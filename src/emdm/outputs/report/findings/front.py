@@ -94,8 +94,8 @@ class Front(Claims):
             ", we solve one strictly convex quadratic program (QP) per step, with a custom "
             "active-set method certified by KKT conditions, and compare it (EMDM) with IVKC, "
             "each unconstrained (UC-) or constrained by joint limits "
-            "(C-), written from the brief's definitions (its supplementary code was not "
-            "available to us).",
+            "(C-). We coded both from the brief's definitions; its supplementary code was "
+            "unavailable.",
         )
         anims = [a for a in (self.anim(t, g) for t in ("task1", "task2") for g in PAIRS) if a]
         if anims:
@@ -139,7 +139,7 @@ class Front(Claims):
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 " (",
                 Ref("tab", "outcomes"),
-                "). Here, where the path does not matter a slack did better; where it "
+                "). Here a slack did better where the path does not matter; where it "
                 "does, only task scaling keeps the tip on ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
                 ". ",

@@ -181,15 +181,14 @@ class Task1(StoryBase):
         # joints, which the two task equations fix: the reason is stated only when it holds
         if same and self.pair(t, "C", "coincide_determined_steps") == same:
             p = sentence(
-                "The first ",
+                "Both give the same first ",
                 self.pairn(t, "C", "coincide_steps", "d"),
                 " commands (to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                ", ",
+                "; ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of them scaled) are identical: on each, the joints at bounds leave the "
-                "task one solution",
+                " scaled): at each, the joints at bounds allow the task only one solution",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -324,14 +323,14 @@ class Task1(StoryBase):
                             "C-EMDM's front at ",
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
-                            " is one point (the scaled step, ",
+                            " is one point, the scaled step (",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
                             ")",
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            ", as under the free slack (6; hollow in ", Ref("fig", "pareto"), ")"
+                            "; so is the free-slack front (6), hollow in ", Ref("fig", "pareto")
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
@@ -345,7 +344,7 @@ class Task1(StoryBase):
                         RATIO,
                         " from ",
                         self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
-                        " on gives one optimum, a vertex of the joint bounds",
+                        " on gives the same optimum, a vertex of the joint bounds",
                     )
                 )
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
@@ -369,8 +368,8 @@ class Task1(StoryBase):
                         " falls whatever the weights",
                     )
                 )
-            for c, clause in enumerate(clauses):
-                p += capitalised(clause) if c == 0 else sentence("; ") + clause
+            for c, clause in enumerate(clauses):  # one sentence each
+                p += capitalised(clause) if c == 0 else sentence(". ") + capitalised(clause)
             if clauses:
                 p += sentence(". ")
         # the weight grid: failures
@@ -547,8 +546,8 @@ class Task1(StoryBase):
                     if high > low
                     else ()
                 ),
-                f" bounds active, {fixed} needed), where an active set can cycle (ours uses "
-                "Bland's rule)",
+                f" bounds active, {fixed} needed). Active-set methods can cycle there; ours "
+                "uses Bland's rule",
             )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(

@@ -47,7 +47,7 @@ class Task2(Claims):
         )
 
     def common_mean(self, key: EvidenceKey) -> tuple[Segment | str, ...]:
-        """``, 0.121 over the same 13.15 s``: the nominal run's mean m over the time the
+        """``, or 0.121 over 0-13.15 s``: the nominal run's mean m over the time the
         shorter evidence run lasts (each run's own mean covers its own horizon), when the
         evidence run is the shorter one (empty otherwise)."""
         ref = self.evid(key, "reference")
@@ -57,9 +57,9 @@ class Task2(Claims):
         if not run or ref["common_until_t"] < run["final_time"]:
             return ()  # the nominal is the shorter: its own mean is over the common time
         return (
-            ", ",
+            ", or ",
             self.evidn(key, "reference", "mean_m_common", "reference", fmt=".3f"),
-            " over the same ",
+            " over 0–",
             self.evidn(key, "reference", "common_until_t", fmt=".2f", unit="s"),
         )
 
@@ -96,16 +96,16 @@ class Task2(Claims):
             answer = sentence(
                 f"{emdm} can leave the straight line to the goal and reaches it in ",
                 self.ttg(t, emdm),
-                f"; {ivkc} under task scaling cannot and stalls, while ",
-                *self.ivkc_with_slack(),  # the shared claim, cites Table I
+                f"; {ivkc} under task scaling cannot, and stalls. ",
+                *cap(self.ivkc_with_slack()),  # the shared claim, cites Table I
             )
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
             if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
                 answer += sentence(" with a higher mean ", M_SYM)
             answer += sentence(
-                f", before {emdm} with its own (",
+                f"; {emdm}, given one too, takes ",
                 self.evid_goal(key, emdm),
-                "). From ",
+                ". From ",
                 *stall_told,
             )
         elif stalled:
@@ -143,7 +143,7 @@ class Task2(Claims):
                     if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
                         answer += sentence(" with a higher mean ", M_SYM)
                     answer += sentence(  # (both rows are in Table I, cited just before)
-                        f", before {emdm} with its own (", self.evid_goal(key, emdm), ")"
+                        f"; {emdm}, given one too, takes ", self.evid_goal(key, emdm)
                     )
             answer += sentence(".")
         else:
