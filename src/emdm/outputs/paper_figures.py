@@ -247,13 +247,12 @@ def pair_figure(
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
         upper = outer[0].subgridspec(1, 4 if gap or path else 3)
-        far_any = any(  # a speed far beyond its limit: its peaks are labelled on the right
-            r.steps and float(np.abs(r.qd[:, j]).max()) > FAR_BEYOND * float(sc.arm.qd_max[j])
-            for r in runs
-            for j in range(n)
-        )
+        # per joint: every run's lowest and highest speed, and the limit; a joint whose speed
+        # goes far beyond its limit gets a log-scaled strip with its peaks labelled on the right
+        extents = [_speed_extent(runs, j) for j in range(n)]
+        far_joints = {j for j, (lo_, hi_, lim) in enumerate(extents) if _far(lo_, hi_, lim)}
         # the labels' room comes out of the speed strips' column: it gets that much more width
-        lower = outer[1].subgridspec(1, 2, width_ratios=[1.0, 1.3 if far_any else 1.0])
+        lower = outer[1].subgridspec(1, 2, width_ratios=[1.0, 1.3 if far_joints else 1.0])
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
@@ -316,11 +315,8 @@ def pair_figure(
             qd_axes[j].set_ylabel(rf"$\dot q_{j + 1}$", labelpad=1)
             for bound in (sc.arm.qd_min[j], sc.arm.qd_max[j]):
                 qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
-            high = max(float(r.qd[:, j].max()) if r.steps else 0.0 for r in runs)
-            low = min(float(r.qd[:, j].min()) if r.steps else 0.0 for r in runs)
-            top = max(high, -low)
-            limit = float(max(abs(sc.arm.qd_min[j]), abs(sc.arm.qd_max[j])))
-            far = top > FAR_BEYOND * limit
+            low, high, limit = extents[j]
+            far = j in far_joints
             # linear within FAR_BEYOND times the limits (dotted); a run far beyond them on a
             # symmetric-log axis past that, so the whole of it shows and the motion within the
             # limits keeps most of the strip, its far peaks named on the right in the colour of
@@ -389,6 +385,20 @@ def pair_figure(
             for ax, peaks in far_peaks:
                 _label_peaks(ax, peaks, medium)
     return stem
+
+
+def _speed_extent(runs: Sequence[Run], j: int) -> tuple[float, float, float]:
+    """Joint ``j``'s lowest and highest speed over ``runs`` (0 for a run without steps) and its
+    speed limit (the larger of the two bounds' magnitudes)."""
+    arm = runs[0].scenario.arm
+    high = max(float(r.qd[:, j].max()) if r.steps else 0.0 for r in runs)
+    low = min(float(r.qd[:, j].min()) if r.steps else 0.0 for r in runs)
+    return low, high, float(max(abs(arm.qd_min[j]), abs(arm.qd_max[j])))
+
+
+def _far(low: float, high: float, limit: float) -> bool:
+    """Whether a speed range goes far beyond its limit (:data:`FAR_BEYOND` times it)."""
+    return max(high, -low) > FAR_BEYOND * limit
 
 
 PEAK_GAP = 1.1
