@@ -594,9 +594,11 @@ def build_report(
         futures: dict[str, Future[Any]] = {}
         results: dict[str, Any] = {}
         with worker_pool(workers) as pool:  # no worker outlives a killed report
-            # longest jobs first: the gradient-free closed loops
+            # longest jobs first: the gradient-free closed loops, then the benchmark on the
+            # spatial arms (a long job submitted last would run alone at the end)
             for name in reversed(solvers2):
                 futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", Name.C_EMDM, [name], cfg)
+            futures["mmc"] = pool.submit(_job_mmc, stage, cfg)
             for ctrl in (Name.UC_EMDM, Name.C_EMDM):
                 futures[f"pareto:{ctrl}"] = pool.submit(
                     _job_pareto, "task1", ctrl, cfg, stage / "data" / f"task1-pareto-{ctrl}"
@@ -616,7 +618,6 @@ def build_report(
                         _job_pair_figures, task, group, stage, cfg
                     )
             futures["figures:story"] = pool.submit(_job_story_figures, stage, cfg)
-            futures["mmc"] = pool.submit(_job_mmc, stage, cfg)
             for task in TASKS:
                 for group, (ivkc, emdm) in PAIRS.items():
                     stem = stage / "animations" / task / f"{ivkc}_vs_{emdm}"
