@@ -432,15 +432,107 @@ def test_convergence_markers_show_the_returned_answer_not_the_best_point(tmp_pat
     running best, and a solver without a returned answer ends its marker on its curve."""
     from emdm.outputs import paper_figures as pf
 
-    curves = {
+    curves: dict[str, pf.Curve] = {
         "returns-worse": ("gradient-free", [1, 2, 3], [1.0, 1e-3, 1e-12], 2e-8),
         "no-answer": ("gradient", [1, 2], [1.0, 1e-6], None),
     }
     with formats((".png",)):
-        pf.convergence_figure(curves, 7, tmp_path / "conv")
+        pf.convergence_figure([pf.ConvergencePanel("k = 7", "evaluations", curves)], tmp_path / "c")
     ax = drawn[-1].axes[0]
     markers = [ln for ln in ax.get_lines() if ln.get_linestyle() == "None"]
     ends = sorted((float(m.get_xdata()[0]), float(m.get_ydata()[0])) for m in markers)
     assert ends == [(2.0, 1e-6), (3.0, 2e-8)]
     best = next(ln for ln in ax.get_lines() if ln.get_label() == "returns-worse")
     assert list(best.get_ydata()) == [1.0, 1e-3, 1e-12]  # the curve itself unchanged
+
+
+def test_convergence_panels_share_each_solvers_style_and_the_table_is_their_legend(tmp_path, drawn):
+    """Fig. 6: one program per task side by side; a solver in both keeps its colour and
+    marker, gradient-free ones are dashed, and with ``glyphs`` the figure draws no legend but
+    saves each drawn solver's line and marker for the table's rows."""
+    from emdm.outputs import paper_figures as pf
+
+    task1 = {
+        "active-set": ("exact", [1], [1e-17], 0.0),
+        "slsqp": ("gradient", [1, 2], [1e-3, 1e-16], 1e-16),
+    }
+    task2 = {
+        "slsqp": ("gradient", [2, 4, 6], [1.0, 1e-6, 1e-14], 1e-14),
+        "cobyla": ("gradient-free", [1, 10, 50], [1.0, 1e-4, 1e-8], 3e-8),
+    }
+    panels = [
+        pf.ConvergencePanel("Task 1, $k=0$", "iterations", task1),
+        pf.ConvergencePanel("Task 2, $k=9$", "objective evaluations", task2),
+    ]
+    with formats((".png",)):
+        pf.convergence_figure(panels, tmp_path / "conv", glyphs=tmp_path / "glyphs")
+    fig = next(f for f in drawn if len(f.axes) == 2)
+    assert not fig.legends and not any(ax.get_legend() for ax in fig.axes)
+    styles = {}
+    for ax, panel in zip(fig.axes, panels, strict=True):
+        assert ax.get_xlabel() == panel.xlabel
+        for line in ax.get_lines():
+            if line.get_label() in panel.curves:
+                style = (line.get_color(), line.get_marker())
+                assert styles.setdefault(line.get_label(), style) == style
+                dashed = panel.curves[line.get_label()][0] == "gradient-free"
+                assert (line.get_linestyle() == "--") == dashed
+    assert len(set(styles.values())) == 3  # three solvers, three styles
+    assert sorted(p.stem for p in (tmp_path / "glyphs").glob("*.png")) == [
+        "active-set",
+        "cobyla",
+        "slsqp",
+    ]
+    glyph = next(f for f in drawn if f.axes and f.axes[0].get_lines() and len(f.axes) == 1)
+    colours = {line.get_color() for line in glyph.axes[0].get_lines()}
+    assert colours == {styles["active-set"][0]}  # the first glyph drawn: the first solver's
+
+
+def test_a_convergence_panel_is_built_from_the_histories_record():
+    """``convergence_panel``: the running best of |f - f*| + violation against the counted
+    field, from 1 (an interior-point method's iteration 0 is its starting point, not drawn),
+    solvers that do not count it left out, and each answer's error passed on."""
+    from emdm.outputs.report.jobs import convergence_panel
+
+    record = {
+        "scenario": "task1",
+        "representative_steps": {"first": 0, "least dexterous": 4},
+        "optimum": {"first": 0.0, "least dexterous": -1.0},
+        "solvers": {
+            "interior-point": {
+                "family": "exact",
+                "histories": {
+                    "least dexterous": [
+                        {"iteration": 0, "objective": 5.0, "primal_residual": 1.0},
+                        {"iteration": 1, "objective": -0.5, "primal_residual": 0.25},
+                        {"iteration": 2, "objective": 0.0, "primal_residual": 0.5},
+                        {"iteration": 3, "objective": -1.0, "primal_residual": 0.0},
+                    ]
+                },
+                "returned": {"first": 0.0, "least dexterous": 0.0},
+            },
+            "daqp": {"family": "exact", "histories": {}, "returned": {"least dexterous": 0.0}},
+            "cobyla": {
+                "family": "gradient-free",
+                "histories": {
+                    "least dexterous": [
+                        {"evaluations": 1, "objective": 0.0, "violation": 0.0},
+                        {"evaluations": 2, "objective": -0.9, "violation": 0.0},
+                    ]
+                },
+                "returned": {"least dexterous": 0.2},
+            },
+        },
+    }
+    panel = convergence_panel(record, "iteration")
+    assert panel is not None and panel.title == "Task 1, $k=4$" and panel.xlabel == "iterations"
+    assert list(panel.curves) == ["interior-point"]
+    family, counts, error, returned = panel.curves["interior-point"]
+    assert (family, counts, returned) == ("exact", [1, 2, 3], 0.0)
+    assert error[:2] == [0.75, 0.75] and error[2] == pytest.approx(1e-17)  # running best, floored
+    panel = convergence_panel(record, "evaluations")
+    assert panel is not None and list(panel.curves) == ["cobyla"]
+    assert panel.curves["cobyla"][2] == [1.0, pytest.approx(0.1)]
+    assert panel.curves["cobyla"][3] == 0.2
+    record["solvers"] = {"daqp": record["solvers"]["daqp"]}
+    assert convergence_panel(record, "iteration") is None

@@ -16,7 +16,7 @@ from emdm import QP
 from emdm.cli import main
 from emdm.core.controllers import program_at
 from emdm.solvers import available_solvers, get_solver, kkt_report
-from emdm.studies.lab import lab_json, merge_labs, run_lab
+from emdm.studies.lab import lab_histories, lab_json, merge_labs, run_lab
 
 # solvers whose answers are exact to 1e-8 (measured; piqp and highs reach about 1e-7, osqp 1e-2)
 EXACT = [
@@ -453,3 +453,25 @@ def test_task1_scaled_steps_are_single_degenerate_vertices():
     vertex = challenges(lab)["scaled_vertex"]
     assert vertex["max_width"] <= 1e-9 and vertex["unknowns"] == 3 and vertex["task_rows"] == 2
     assert vertex["active"][0] > vertex["unknowns"] - vertex["task_rows"]
+
+
+def test_the_histories_record_keeps_every_iterate_and_the_returned_answer(small_lab):
+    """``histories.json`` (the paper's convergence figure is drawn from it): per
+    representative program its exact optimum, and per solver its iterates and the error of the
+    answer it returned there, the same error the solver's row measures."""
+    record = json.loads(json.dumps(lab_histories(small_lab)))  # as written and read back
+    reps = record["representative_steps"]
+    assert reps == {str(rep): k for rep, k in small_lab.representative.items()}
+    for rep, k in reps.items():
+        assert record["optimum"][rep] == small_lab.optimum[k][1]
+    for name, study in small_lab.studies.items():
+        entry = record["solvers"][name]
+        assert entry["family"] == study.spec.family
+        for rep, k in reps.items():
+            solve = next(st for st in study.solves if st.step == k)
+            expected = None if solve.x is None else abs(solve.gap) + solve.violation
+            assert entry["returned"][rep] == expected
+            assert entry["histories"][rep] == [dict(h) for h in study.histories[rep]]
+    # the gradient-free methods count their evaluations, one more per iterate at least
+    evaluations = [h["evaluations"] for h in record["solvers"]["nelder-mead"]["histories"]["first"]]
+    assert evaluations == sorted(evaluations) and evaluations[-1] > 10

@@ -751,3 +751,35 @@ def test_seed_dependent_overruns_and_the_penalty_margin_are_read_from_the_lab(
     margin = lab["challenges"]["feature_ranges"]["penalty_margin"][0]
     mantissa, exponent = f"{margin:.2g}".split("e+")
     assert rf"(weight $\ge$ ${mantissa}\times10^{{{int(exponent)}}}$" in paper
+
+
+def test_table_iii_rows_are_the_convergence_figures_legend(report):
+    """Fig. 6 has no legend of its own: each solver it draws has its line and marker beside its
+    name in Table III (and on the page), drawn with the figure; a solver it does not draw keeps
+    a blank of the same width. The two panels are each task's lab, read from its
+    histories.json."""
+    root, page = report
+    histories = {
+        task: json.loads((root / "data" / f"{task}-lab-C-EMDM" / "histories.json").read_text())
+        for task in ("task1", "task2")
+    }
+    drawn = {
+        name
+        for record, count in (
+            (histories["task1"], "iteration"),
+            (histories["task2"], "evaluations"),
+        )
+        for name, entry in record["solvers"].items()
+        if any(h.get(count, 0) >= 1 for h in entry["histories"].get("least dexterous", ()))
+    }
+    assert drawn and (root / "paper" / "figures" / "convergence.png").exists()
+    glyphs = root / "paper" / "figures" / "glyphs"
+    assert {p.stem for p in glyphs.glob("*.png")} == drawn
+    paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
+    table = paper[paper.index(r"\label{tab:solvers}") :].split(r"\end{tabular}")[0]
+    lab = histories["task2"]["solvers"]
+    for name in lab:
+        row = next(ln for ln in table.splitlines() if re.search(rf"}}{re.escape(name)}\*? &", ln))
+        assert (f"figures/glyphs/{name}}}" in row) == (name in drawn), row
+    for name in drawn & set(lab):
+        assert f"paper/figures/glyphs/{name}.png" in page.sources

@@ -1034,68 +1034,116 @@ six shades of one family colour could not be told apart in print."""
 FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
 
 
+Curve = tuple[str, Sequence[float], Sequence[float], float | None]
+"""A solver's convergence: (family, x (iterations or evaluations), error, returned error)."""
+
+
+@dataclass(frozen=True)
+class ConvergencePanel:
+    """One program of :func:`convergence_figure`: its title, what its x axis counts and every
+    solver's curve (name -> :data:`Curve`)."""
+
+    title: str
+    xlabel: str
+    curves: Mapping[str, Curve]
+
+
+def solver_styles(names: Sequence[str]) -> dict[str, tuple[str, str]]:
+    """Each solver's colour and marker, in the order given (every pair distinct for up to
+    12 solvers)."""
+    marks = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">", "p")
+    return {
+        name: (SOLVER_COLORS[i % len(SOLVER_COLORS)], marks[i % len(marks)])
+        for i, name in enumerate(names)
+    }
+
+
 def convergence_figure(
-    curves: Mapping[str, tuple[str, Sequence[float], Sequence[float], float | None]],
-    step: int,
+    panels: Sequence[ConvergencePanel],
     stem: Path,
     medium: Medium = PAPER,
+    glyphs: Path | None = None,
 ) -> Path:
-    """One program's convergence, every solver: the running best of |f - f*| + bound violation
-    against objective evaluations (``curves``: name -> (family, evaluations, error, returned)),
-    each solver in its own colour and marker, solid for gradient-based and dashed for
-    gradient-free; the marker at the last evaluation shows the error of the answer the solver
-    returns (``returned``; the curve's end where it is None), which need not be the best point
-    it evaluated (the paper's Task 2.1 figure; the lab's own figure has every representative
-    step)."""
+    """Programs side by side, every solver: the running best of |f - f*| + bound violation
+    against the panel's count (iterations or objective evaluations), each solver in its own
+    colour and marker (the same in every panel), solid for exact and gradient-based and dashed
+    for gradient-free methods; the marker at the last count shows the error of the answer the
+    solver returns (the curve's end where it is None), which need not be the best point it
+    evaluated (the paper's Fig. 6; the lab's own figure has every representative step).
+
+    With ``glyphs`` (a folder), each solver's line and marker is saved there as ``NAME`` (a
+    table's rows become the legend) and the figure has none; else one legend beside it.
+    """
+    names = list(dict.fromkeys(name for panel in panels for name in panel.curves))
+    styles = solver_styles(names)
+    family = {name: f for panel in panels for name, (f, *_rest) in panel.curves.items()}
+    size = 3.5 if medium is PAPER else 6
     height = 1.0 if medium is PAPER else 2.7
-    width = medium.column if medium is PAPER else 3.3
-    marks = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<")
+    width = medium.column if medium is PAPER else 3.3 * len(panels)
     with _figure(stem, medium, width, height) as fig:
-        ax = fig.add_subplot()
-        for i, (name, (family, evaluations, error, returned)) in enumerate(curves.items()):
-            # the marker at the solver's last evaluation, at its returned answer's error: one
-            # done in a few evaluations (slsqp) is a short trace ending in its marker
-            colour = SOLVER_COLORS[i % len(SOLVER_COLORS)]
-            ax.loglog(
-                evaluations,
-                error,
-                color=colour,
-                linestyle=FAMILY_DASH.get(family, ":"),
-                linewidth=medium.line,
-                marker=marks[i % len(marks)],
-                markevery=[],  # the legend's marker; the plotted one below
-                markersize=3.5 if medium is PAPER else 6,
-                label=name,
+        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        for ax, panel in zip(axes, panels, strict=True):
+            for name, (kind, counts, error, returned) in panel.curves.items():
+                # the marker at the solver's last count, at its returned answer's error: one
+                # done in a few evaluations (slsqp) is a short trace ending in its marker
+                colour, mark = styles[name]
+                ax.loglog(
+                    counts,
+                    error,
+                    color=colour,
+                    linestyle=FAMILY_DASH.get(kind, ":"),
+                    linewidth=medium.line,
+                    marker=mark,
+                    markevery=[],  # the legend's marker; the plotted one below
+                    markersize=size,
+                    label=name,
+                )
+                end = error[-1] if returned is None else max(returned, 1e-17)  # (the floor)
+                ax.plot(
+                    [counts[-1]],
+                    [end],
+                    linestyle="none",
+                    color=colour,
+                    marker=mark,
+                    markersize=size,
+                )
+            ax.set_xlabel(panel.xlabel, labelpad=1)
+            ax.set_title(panel.title, fontsize=medium.small, pad=2)
+            # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this size
+            ax.yaxis.set_major_locator(
+                matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)])
             )
-            end = error[-1] if returned is None else max(returned, 1e-17)  # (the curves' floor)
-            ax.plot(
-                [evaluations[-1]],
-                [end],
-                linestyle="none",
-                color=colour,
-                marker=marks[i % len(marks)],
-                markersize=3.5 if medium is PAPER else 6,
-            )
-        ax.set_xlabel("objective evaluations", labelpad=1)
-        ax.set_ylabel(
+            ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        axes[0].set_ylabel(
             r"best $|f-f^*|$ + viol." if medium is not PAPER else r"$|f-f^*|$ + viol.", labelpad=1
         )
-        # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this height
-        ax.yaxis.set_major_locator(
-            matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)])
-        )
-        ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
-        if medium is not PAPER:  # the paper's caption names the program
-            ax.set_title(rf"Task 2 C-EMDM, step $k={step}$", fontsize=medium.small, pad=2)
-        # a figure legend: the layout gives the axes the figure's whole height beside it (an
-        # axes legend taller than the axes shrank them to half the figure)
-        fig.legend(
-            loc="outside right center",
-            fontsize=medium.tiny,
-            frameon=False,
-            handlelength=2.2,
-            labelspacing=0.15 if medium is PAPER else 0.5,
-        )
+        if glyphs is None:
+            # a figure legend: the layout gives the axes the figure's whole height beside it
+            # (an axes legend taller than the axes shrank them to half the figure)
+            fig.legend(
+                loc="outside right center",
+                fontsize=medium.tiny,
+                frameon=False,
+                handlelength=2.2,
+                labelspacing=0.15 if medium is PAPER else 0.5,
+            )
+    if glyphs is not None:
+        for name, (colour, mark) in styles.items():
+            solver_glyph(colour, mark, FAMILY_DASH.get(family[name], ":"), glyphs / name, medium)
+    return stem
+
+
+def solver_glyph(colour: str, mark: str, dash: str, stem: Path, medium: Medium = PAPER) -> Path:
+    """A curve's line and marker alone, as a legend draws them (0.17 x 0.06 in: set about
+    1.3 em wide in 7 pt text, its marker keeps about the figure's size)."""
+    with _figure(stem, medium, 0.17, 0.06) as fig:
+        fig.set_layout_engine("none")
+        ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+        ax.set_axis_off()
+        ax.plot([0.0, 1.0], [0.5, 0.5], color=colour, linestyle=dash, linewidth=medium.line)
+        ax.plot([0.5], [0.5], color=colour, marker=mark, markersize=3.5, linestyle="none")
+        ax.set_xlim(0.0, 1.0)
+        ax.set_ylim(0.0, 1.0)
     return stem
 
 

@@ -512,6 +512,38 @@ def lab_json(lab: LabResult) -> dict[str, Any]:
     }
 
 
+def lab_histories(lab: LabResult) -> dict[str, Any]:
+    """``histories.json``: every solver's iterates on the representative programs (its format
+    is in the README), the record the convergence figures are drawn from.
+
+    Per representative step: its exact optimum ``f*``; per solver: its family, its history at
+    each representative (the solver's own fields per iterate: ``iteration``, ``objective`` and,
+    as it reports them, ``evaluations``, ``violation`` or ``primal_residual``) and
+    ``returned``: ``|f - f*|`` + bound violation of the answer it returned there (null: none).
+    """
+    returned: dict[str, dict[str, float | None]] = {}
+    for name, study in lab.studies.items():
+        answers = {st.step: st for st in study.solves if st.x is not None}
+        returned[name] = {
+            str(rep): (float(abs(answers[k].gap) + answers[k].violation) if k in answers else None)
+            for rep, k in lab.representative.items()
+        }
+    return {
+        "scenario": lab.scenario.name,
+        "controller": lab.controller.name,
+        "representative_steps": {str(rep): k for rep, k in lab.representative.items()},
+        "optimum": {str(rep): float(lab.optimum[k][1]) for rep, k in lab.representative.items()},
+        "solvers": {
+            name: {
+                "family": study.spec.family,
+                "histories": {str(rep): list(h) for rep, h in study.histories.items()},
+                "returned": returned[name],
+            }
+            for name, study in lab.studies.items()
+        },
+    }
+
+
 def challenges(lab: LabResult) -> dict[str, Any]:
     """How the numerical challenges show in the measurements (from the lab's own records).
 

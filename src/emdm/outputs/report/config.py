@@ -58,6 +58,10 @@ QUICK = ReportConfig(
     mmc_trials=40,
 )
 
+GLYPHS = "figures/glyphs"
+"""Under ``paper/``: each solver's line and marker in the convergence figure, drawn beside its
+name in the solver table (the figure's legend)."""
+
 BYLINE = "data/byline.json"
 """The authors and title given to ``emdm report`` (:func:`byline`), read by the paper, the pitch
 and the page."""

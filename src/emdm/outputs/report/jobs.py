@@ -36,6 +36,7 @@ from ...solvers import available_solvers
 from ...studies.lab import (
     LabResult,
     lab_header,
+    lab_histories,
     lab_json,
     lab_rows,
     merge_labs,
@@ -52,6 +53,7 @@ from .config import (
     EVIDENCE,
     FOURTH_PANEL,
     FULL,
+    GLYPHS,
     PAIRS,
     QUICK,
     TASKS,
@@ -178,9 +180,7 @@ def _job_lab(task: str, controller: str, solvers: Sequence[str], cfg: ReportConf
     )
 
 
-def _write_lab(
-    folder: Path, lab: LabResult, fig_dir: Path | None, paper_stem: Path | None = None
-) -> None:
+def _write_lab(folder: Path, lab: LabResult, fig_dir: Path | None) -> None:
     record = lab_json(lab)
     # where each solver failed: on task-scaled steps (a single admissible point) or not
     record["notes"] = {
@@ -192,6 +192,7 @@ def _write_lab(
         for name, study in lab.studies.items()
     }
     write_json(folder / "solvers.json", record)
+    write_json(folder / "histories.json", lab_histories(lab))
     for name in lab.studies:
         write_csv(
             folder / "solvers" / f"{name}.csv",
@@ -204,42 +205,6 @@ def _write_lab(
 
         with formats((".png",)):
             convergence_figure(lab, fig_dir)
-    if paper_stem is not None:  # the paper's: the hardest program (else the first), every solver
-        from ...studies.lab import Representative
-        from ..lab_plots import error_curve
-
-        label = (
-            Representative.LEAST_DEXTEROUS
-            if Representative.LEAST_DEXTEROUS in lab.representative
-            else next(iter(lab.representative))
-        )
-        k = lab.representative[label]
-        f_star = lab.optimum[k][1]
-        # each solver's returned answer, which need not be its best evaluated point (cobyla's
-        # final iterate trades objective against violation): the figure's end marker
-        returned = {
-            name: next(
-                (
-                    abs(st.gap) + st.violation
-                    for st in study.solves
-                    if st.step == k and st.x is not None
-                ),
-                None,
-            )
-            for name, study in lab.studies.items()
-        }
-        curves = {
-            name: (
-                study.spec.family,
-                [h["evaluations"] for h in study.histories[label]],
-                list(error_curve(study.histories[label], f_star)),
-                returned[name],
-            )
-            for name, study in lab.studies.items()
-            if study.histories.get(label) and "evaluations" in study.histories[label][0]
-        }
-        if curves:
-            pf.convergence_figure(curves, k, paper_stem)
 
 
 def _job_lab_written(
@@ -249,10 +214,9 @@ def _job_lab_written(
     cfg: ReportConfig,
     data_dir: Path,
     fig_dir: Path | None,
-    paper_stem: Path | None = None,
 ) -> str:
     """A whole lab, its data (and convergence figures) written by the worker."""
-    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir, paper_stem)
+    _write_lab(data_dir, _job_lab(task, controller, solvers, cfg), fig_dir)
     return controller
 
 
@@ -460,7 +424,56 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
         if (stage / "data" / "task2-lab-C-EMDM" / "solvers" / f"{name}.csv").exists()
     }
     out.append(str(pf.conditioning_figure(run, rows, stage / PAPER_FIGURES / "conditioning")))
+    panels = [
+        panel
+        for rel, count in (
+            (f"data/task1-lab-{Name.C_EMDM}/histories.json", "iteration"),
+            (f"data/task2-lab-{Name.C_EMDM}/histories.json", "evaluations"),
+        )
+        if (stage / rel).exists() and (panel := convergence_panel(load(rel), count)) is not None
+    ]
+    if panels:  # the paper's: each task's hardest program, every solver that counts there
+        # its legend is Table III's rows: each solver's line and marker, beside its name
+        stem = stage / PAPER_FIGURES / "convergence"
+        out.append(str(pf.convergence_figure(panels, stem, glyphs=stage / "paper" / GLYPHS)))
     return out
+
+
+CONVERGENCE_PROGRAM = "least dexterous"
+"""The program of the paper's convergence figure, each task's hardest (the lab's first, if it
+did not record that one): the smallest m, the worst-conditioned."""
+
+
+def convergence_panel(histories: dict[str, Any], count: str) -> pf.ConvergencePanel | None:
+    """A lab's panel of the paper's convergence figure from its ``histories.json``: the running
+    best error of every solver whose iterates count ``count`` (``iteration``: the iterations
+    done, from 1; ``evaluations``: objective evaluations), on :data:`CONVERGENCE_PROGRAM`."""
+    from ..lab_plots import error_curve
+
+    steps = histories["representative_steps"]
+    rep = CONVERGENCE_PROGRAM if CONVERGENCE_PROGRAM in steps else next(iter(steps), None)
+    if rep is None:
+        return None
+    f_star = histories["optimum"][rep]
+    curves: dict[str, pf.Curve] = {}
+    for name, solver in histories["solvers"].items():
+        # (iteration 0 is an interior-point method's starting point: nothing done yet)
+        history = [h for h in solver["histories"].get(rep, ()) if h.get(count, 0) >= 1]
+        if history:
+            curves[name] = (
+                solver["family"],
+                [h[count] for h in history],
+                list(error_curve(tuple(history), f_star)),
+                solver["returned"][rep],
+            )
+    if not curves:
+        return None
+    task = "Task 1" if histories["scenario"] == "task1" else "Task 2"
+    return pf.ConvergencePanel(
+        f"{task}, $k={steps[rep]}$",
+        "iterations" if count == "iteration" else "objective evaluations",
+        curves,
+    )
 
 
 def _job_animation(task: str, group: str, stem: Path, cfg: ReportConfig) -> dict[str, Any]:
@@ -624,7 +637,8 @@ def build_report(
                     futures[f"anim:{task}:{group}"] = pool.submit(
                         _job_animation, task, group, stem, cfg
                     )
-            first = [k for k in futures if k.startswith(("lab2:", "pareto:"))]
+            # the records the second wave draws from (Task 1's labs: their histories)
+            first = [k for k in futures if k.startswith(("lab2:", "pareto:", "lab1:"))]
             for key in first:
                 results[key] = futures[key].result()
                 say(f"{key} done ({time.perf_counter() - start:.1f} s)")
@@ -633,7 +647,6 @@ def build_report(
                 stage / "data" / "task2-lab-C-EMDM",
                 lab2,
                 stage / "figures" / "task2-lab-C-EMDM" if lab_figs else None,
-                stage / PAPER_FIGURES / "convergence",
             )
             data_figs = pool.submit(_job_data_figures, stage, scenarios["task2"].motion.dt, cfg)
             for key, future in futures.items():

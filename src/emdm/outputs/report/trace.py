@@ -266,6 +266,35 @@ class Ref(Segment):
         return f"{self.kind} {self.key}"
 
 
+GLYPH_WIDTH = "1.5em"
+"""The width a :class:`Glyph` takes in a line, the same with or without a drawing."""
+
+
+@dataclass(frozen=True)
+class Glyph(Segment):
+    """A figure's line and marker for one curve, inline (a table row as the figure's legend):
+    ``stem`` is the drawing's path under ``paper/`` without its suffix; ``None`` keeps its
+    width blank, so that the names after it stay aligned."""
+
+    stem: str | None
+
+    def html(self) -> str:
+        if self.stem is None:
+            return '<span class="glyph"></span>'
+        return f'<img class="glyph" src="paper/{html.escape(self.stem)}.png" alt="">'
+
+    def latex(self) -> str:
+        if self.stem is None:
+            return rf"\makebox[{GLYPH_WIDTH}]{{}}"
+        return (
+            rf"\makebox[{GLYPH_WIDTH}][l]{{\raisebox{{0.15ex}}"
+            rf"{{\includegraphics[width=1.3em]{{{self.stem}}}}}}}"
+        )
+
+    def plain(self) -> str:
+        return ""
+
+
 EQUATIONS = ("ivkc", "emdm", "slack", "bounds", "scale", "free")
 """The formulation's displayed equations in their order (``\\label{eq:KEY}`` in
 ``templates/formulation.tex.j2``, numbered alike in ``formulation.html.j2``)."""

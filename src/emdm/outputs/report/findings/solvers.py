@@ -9,13 +9,13 @@ import numpy as np
 from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED
 from ....studies.lab import EXACT, LIKE_FOR_LIKE, SEEDS, exact_answer
+from ..config import GLYPHS
 from ..document import Section, Table
-from ..trace import Math, Ref, Sentence, Text, Unit, sentence
+from ..trace import Glyph, Math, Ref, Sentence, Text, Unit, sentence
 from .base import (
     DT,
     StoryBase,
     bare,
-    eq,
 )
 from .claims import listed
 from .records import LabName, SeedRun, SolverRow
@@ -176,20 +176,17 @@ class Solvers(StoryBase):
                 paper=False,
             )
         )
-        # the hardest program when the lab recorded it (jobs._write_lab draws it), else the first
+        # each task's hardest program when its lab recorded it, else its first (as jobs draws)
         hardest = "least dexterous" in self.rec.labs[lab].representative_steps
-        shown = "least dexterous" if hardest else "first"
         conv = self.figure(
             "convergence",
             "figures/convergence",
             sentence(
-                "Convergence on the ",
-                "least dexterous Task 2 program ("
-                if hardest
-                else "first re-solved Task 2 program (",
-                *eq(Math("k", "<i>k</i>"), self.d.num(f, "representative_steps", shown, fmt="d")),
-                ") for solvers counting evaluations (dashed: gradient-free; marker: the answer "
-                "returned).",
+                "Convergence on each task's ",
+                "least dexterous" if hardest else "first",
+                " C-EMDM program, cold (lines as in ",
+                Ref("tab", "solvers"),
+                "; dashed: gradient-free; marker: the answer returned).",
             ),
         )
         if self.has_figure("convergence"):
@@ -373,7 +370,7 @@ class Solvers(StoryBase):
             ],
             align="lrrrrrr",
             font="scriptsize" if len(rows) > 8 else "footnotesize",  # 7 pt fits a column
-            colsep=2.0,  # the widest cells: a 3.4e-8 gap and a 0.099 violation
+            colsep=1.6,  # the widest cells: a 3.4e-8 gap and a 0.099 violation
         )
         for family in Family:
             names = [k for k, r in rows.items() if r.family == family]
@@ -387,9 +384,14 @@ class Solvers(StoryBase):
                     if r.reached
                     else sentence("--")
                 )
+                glyph = f"{GLYPHS}/{k}"  # its curve in the convergence figure
                 table.rows.append(
                     [
-                        sentence(k, "*" if r.loop == "compiled" else ""),
+                        sentence(
+                            Glyph(glyph if self.d.exists(f"paper/{glyph}.png") else None),
+                            k,
+                            "*" if r.loop == "compiled" else "",
+                        ),
                         sentence(bare(self.sn(lab, k, "median_time", unit="ms"))),
                         sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
                             self.sn(lab, k, "median_iterations") if r.median_iterations else "--",

@@ -551,7 +551,7 @@ class Task1(StoryBase):
             )
         if "median_iterations_scaled" in ch.get("admm", {}):
             p += sentence(
-                ". First-order ADMM needs ",
+                ". First-order ADMM needs a median of ",
                 self.d.num(
                     lab, "challenges", "solvers", "admm", "median_iterations_scaled", fmt=".4g"
                 ),
@@ -560,8 +560,14 @@ class Task1(StoryBase):
                     lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".4g"
                 ),
                 " elsewhere",
-                *(  # the lab's convergence plots, beside the study (as the animations are)
-                    (" (plots: ", File("figures/task1-lab-C-EMDM/"), ")")
+                *(  # the paper's convergence figure has Task 1's hardest program
+                    (
+                        " (",
+                        Ref("fig", "convergence"),
+                        ")",
+                    )
+                    if self.d.exists("paper/figures/convergence.png")
+                    else (" (plots: ", File("figures/task1-lab-C-EMDM/"), ")")
                     if self.d.exists("figures/task1-lab-C-EMDM/convergence.png")
                     else ()
                 ),
