@@ -36,6 +36,9 @@ SEEDED = ("differential-evolution", "cma-es")
 """The stochastic methods: each takes a ``seed`` (0 by default), so a run is reproducible and
 their spread is sampled by running seeds 0, 1, ... (:data:`emdm.studies.lab.SEEDS`)."""
 
+WHOLE_GENERATIONS = ("differential-evolution",)
+"""The methods whose budget ends them at the last whole generation that fits in it: they stop
+a few evaluations short of the budget."""
 PENALISED = ("nelder-mead", "powell", "cma-es")
 """The gradient-free methods that see the bounds as the exact l1 penalty (the others take them
 as constraints)."""

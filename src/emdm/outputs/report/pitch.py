@@ -133,7 +133,7 @@ class Pitch:
         out.bullets["task2"] = t2c
         ev: list[Sentence] = []
         if s.ivkc_with_slack():  # (the evidence labels are the paper's, not the talk's)
-            ev.append(cap(s.ivkc_with_slack(label=False)))
+            ev.append(cap(s.ivkc_with_slack(label=False, defined=True)))
             e4 = s.evid("t2-c-slack-policy", "runs", Name.C_EMDM)
             if e4.get("reached"):  # the same freedom for both: C-EMDM's time beside it
                 ev[-1] += sentence(

@@ -42,14 +42,17 @@ class Claims(StoryBase):
             " effort",
         )
 
-    def ivkc_with_slack(self, label: bool = True) -> Sentence:
+    def ivkc_with_slack(self, label: bool = True, defined: bool = False) -> Sentence:
         """The like-for-like Task 2 comparison: C-IVKC given a free slack instead of scaling
-        (empty when that run did not arrive; ``label``: cite Table I, where its row is)."""
+        (empty when that run did not arrive; ``label``: cite Table I, where its row is;
+        ``defined``: say what a free slack is, for a reader without Section II)."""
         key: EvidenceKey = "t2-c-slack-policy"
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
         return sentence(  # free: unbounded (Section II), as C-EMDM's is in the same run
-            "with a free slack, C-IVKC arrives in ",
+            "with a free slack",
+            " (unbounded, instead of task scaling)" if defined else "",
+            ", C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
             *((" (", Ref("tab", "outcomes"), ")") if label else ()),
         )

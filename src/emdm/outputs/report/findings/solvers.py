@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ....solvers.base import Family
-from ....solvers.nlp import PENALISED, SEEDED
+from ....solvers.nlp import PENALISED, SEEDED, WHOLE_GENERATIONS
 from ....studies.lab import EXACT, LIKE_FOR_LIKE, SEEDS, exact_answer
 from ..config import GLYPHS
 from ..document import Section, Table
@@ -41,12 +41,18 @@ class Solvers(StoryBase):
             self.d.num(f"data/{lab}/solvers.json", "budget", fmt="d"),
             "-evaluation budget ends ",
         )
+        budget = self.d.value(f"data/{lab}/solvers.json", "budget")
         for i, k in enumerate(stopped):
             every = rows[k].limit_stops == rows[k].resolved_steps
             out += sentence(
                 "all " if every else "",
                 self.sn(lab, k, "limit_stops", "d"),
                 f" of {k}'s searches" if i == 0 else f" of {k}'s",
+                # a method stopped by whole generations stops short of the budget (Table III's
+                # median evaluations below it)
+                " (at the last whole generation)"
+                if k in WHOLE_GENERATIONS and rows[k].median_evaluations < budget
+                else "",
                 "" if i == len(stopped) - 1 else " and " if i == len(stopped) - 2 else ", ",
             )
         return out

@@ -66,11 +66,11 @@ class Task1(StoryBase):
                 f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
             )
         answer += sentence(
-            "; at every step their end effectors are at most ",
+            "; at each step their tips are at most ",
             gap,
-            " apart, as ",
+            " apart (",
             Ref("fig", "t1-uc"),
-            "(c), (d) show.",
+            "(c), (d)).",
         )
         sec.answer = answer
         self.answers.append(
