@@ -185,9 +185,10 @@ class Tables(Claims):
             return new + sentence(" (") + old + sentence(")")
 
         def plain(fmt: str, metric: RunOutcome) -> str:
-            """Whole numbers from 1000 on (a power of ten does not fit the column)."""
+            """Whole numbers from 1000 on, their thousands marked (a power of ten does not fit
+            the column; 11749 was read as a typo for 117.49)."""
             value = self.grid(ctrl, i, metric)
-            return ".0f" if fmt.endswith("g") and abs(value) >= 1e3 else fmt
+            return ",.0f" if fmt.endswith("g") and abs(value) >= 1e3 else fmt
 
         w_m = sentence(*eq(W_M, self.gridn(ctrl, i, "w_manip", fmt=".4g")))
         # the weight grid keeps no events: a run of it that does not arrive is a miss
