@@ -691,7 +691,9 @@ def _front_axes(
         if slack:  # the hollow points beside it are another program's: say whose
             note += "\nhollow: free slack"
     elif info["saturated_from_ratio"] is not None:
-        note = "saturated for\n" + rf"$w_M/w_E\geq{_ratio_tex(info['saturated_from_ratio'])}$"
+        # three short lines: a note as wide as its ratio ran into the front's nominal ring
+        ratio = _ratio_tex(info["saturated_from_ratio"])
+        note = "saturated\nfor $w_M/w_E$\n" + rf"$\geq{ratio}$"
     if note:  # where it covers fewest points (a front runs from lower left to upper right)
         drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]
         points = np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2))))
@@ -716,7 +718,9 @@ def _front_axes(
                 bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.85},
                 zorder=1.5,  # under the front's points (zorder 2): a note never hides one
             )
-            box = text.get_window_extent(renderer).expanded(1.1, 1.1)
+            # a point counts as covered when its marker would touch the note: the box is
+            # padded by the nominal ring's radius (the largest marker, about 4 pt)
+            box = text.get_window_extent(renderer).padded(4.0 * ax.figure.dpi / 72.0)
             inside = sum(box.contains(*xy) for xy in ax.transData.transform(points))
             covered.append((int(inside), text))
         for _, text in sorted(covered, key=lambda c: c[0])[1:]:  # keep the one covering fewest
