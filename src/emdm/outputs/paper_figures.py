@@ -692,8 +692,8 @@ def _front_axes(
             note += "\nhollow: free slack"
     elif info["saturated_from_ratio"] is not None:
         # three short lines: a note as wide as its ratio ran into the front's nominal ring
-        ratio = _ratio_tex(info["saturated_from_ratio"])
-        note = "saturated\nfor $w_M/w_E$\n" + rf"$\geq{ratio}$"
+        least = _ratio_tex(info["saturated_from_ratio"])
+        note = "saturated\nfor $w_M/w_E$\n" + rf"$\geq{least}$"
     if note:  # where it covers fewest points (a front runs from lower left to upper right)
         drawn = [(p["M"], p["E"]) for p in step.get("slack_points", [])]
         points = np.vstack((np.column_stack((M, E)), np.reshape(drawn, (-1, 2))))
@@ -782,7 +782,9 @@ def pareto_figure(
                 step, info = data["steps"][index], infos[name][index]
                 ax = axes[row, col]
                 sc = _front_axes(ax, step, info, medium, norm)
-                ax.set_title(rf"$k={step['k']}$, $t={step['t']:.2f}$ s", fontsize=medium.small)
+                # (on a slide's narrower panels, two lines: side by side the titles touched)
+                sep = ",\n" if medium is SLIDE else ", "
+                ax.set_title(rf"$k={step['k']}${sep}$t={step['t']:.2f}$ s", fontsize=medium.small)
                 if col == 0:
                     ax.set_ylabel(f"{name}\n" + r"$E$ (rad$^2$/s$^2$)")
                 ax.set_xlabel(r"$M$ (m$^2$/s)", labelpad=1)  # every row: its own scale
@@ -1145,7 +1147,8 @@ def solver_glyph(colour: str, mark: str, dash: str, stem: Path, medium: Medium =
         ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
         ax.set_axis_off()
         ax.plot([0.0, 1.0], [0.5, 0.5], color=colour, linestyle=dash, linewidth=medium.line)
-        ax.plot([0.5], [0.5], color=colour, marker=mark, markersize=3.5, linestyle="none")
+        # (a marker a little larger than the figure's: the glyph is printed at 0.85 of its size)
+        ax.plot([0.5], [0.5], color=colour, marker=mark, markersize=4.2, linestyle="none")
         ax.set_xlim(0.0, 1.0)
         ax.set_ylim(0.0, 1.0)
     return stem

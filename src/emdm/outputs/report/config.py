@@ -58,6 +58,10 @@ QUICK = ReportConfig(
     mmc_trials=40,
 )
 
+SLIDE_PARETO_STEPS = (0, 3)
+"""The pitch's Pareto slide: the first and the last front (k = 0 and T), the cheapest and, in
+this study, the dearest nominal step, each said on the slide."""
+
 GLYPHS = "figures/glyphs"
 """Under ``paper/``: each solver's line and marker in the convergence figure, drawn beside its
 name in the solver table (the figure's legend)."""

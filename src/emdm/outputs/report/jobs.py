@@ -56,6 +56,7 @@ from .config import (
     GLYPHS,
     PAIRS,
     QUICK,
+    SLIDE_PARETO_STEPS,
     TASKS,
     Evidence,
     ReportConfig,
@@ -409,7 +410,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
                 {Name.UC_EMDM: grids[Name.UC_EMDM]},
                 stage / SLIDE_FIGURES / "pareto",
                 pf.SLIDE,
-                steps=(0, 1),
+                steps=SLIDE_PARETO_STEPS,
                 width=SLIDE_PARETO_WIDTH,
             )
         )

@@ -7,6 +7,7 @@ from typing import Any
 
 from ...core.controllers import Name
 from ...studies.lab import exact_answer
+from .config import SLIDE_PARETO_STEPS
 from .document import Document
 from .findings import DT, ERR, M_SYM, MRATE, RATIO, Story
 from .findings.base import C_S, T_EQ, eq
@@ -266,13 +267,13 @@ class Pitch:
         i = self.s.dearest_later("UC-EMDM")
         if i is None:
             return ()
-        return (  # a step the slide's fronts do not show: said as a time of the run
+        return (  # said as a time of the run (and so when the slide's fronts omit it)
             ", up to ",
             self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
             " later (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
-            ", not shown)",
+            ")" if i in SLIDE_PARETO_STEPS else ", not shown)",
         )
 
     def policy(self) -> list[Sentence]:
@@ -282,9 +283,10 @@ class Pitch:
             return [sentence("Task scaling keeps the tip on its line at no cost we could measure")]
         return [
             sentence(
-                "Task scaling keeps the straight line, but with a slack our Task 1 C-EMDM is ",
+                "Where the limits forbid the asked tip velocity, slowing the tip keeps its path "
+                "straight; a slack instead made our Task 1 C-EMDM ",
                 listed(gains),
-                "; in Task 2 scaling stalls C-IVKC",
+                ", and slowing stalls Task 2's C-IVKC",
             )
         ]
 

@@ -266,7 +266,7 @@ class Ref(Segment):
         return f"{self.kind} {self.key}"
 
 
-GLYPH_WIDTH = "1.5em"
+GLYPH_WIDTH = "1.65em"
 """The width a :class:`Glyph` takes in a line, the same with or without a drawing."""
 
 
@@ -288,7 +288,7 @@ class Glyph(Segment):
             return rf"\makebox[{GLYPH_WIDTH}]{{}}"
         return (
             rf"\makebox[{GLYPH_WIDTH}][l]{{\raisebox{{0.15ex}}"
-            rf"{{\includegraphics[width=1.3em]{{{self.stem}}}}}}}"
+            rf"{{\includegraphics[width=1.45em]{{{self.stem}}}}}}}"
         )
 
     def plain(self) -> str:
