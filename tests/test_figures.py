@@ -536,3 +536,20 @@ def test_a_convergence_panel_is_built_from_the_histories_record():
     assert panel.curves["cobyla"][3] == 0.2
     record["solvers"] = {"daqp": record["solvers"]["daqp"]}
     assert convergence_panel(record, "iteration") is None
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "power"), [(-6e-5, 1e-5, -5), (0.0, 30.0, 0), (0.0, 0.045, -2), (1e3, 5e4, 4)]
+)
+def test_the_power_folded_into_an_axis_label_is_the_one_its_ticks_left_out(low, high, power):
+    """Fig. 2 writes a front's scale into its label (M (10^-5 m²/s)): the power is read from the
+    offset text the formatter draws (a typographic minus included), 0 where it draws none."""
+    from emdm.outputs import paper_figures as pf
+
+    fig = pf.Figure()
+    pf.FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.plot([low, high], [0.0, 1.0])
+    ax.ticklabel_format(axis="x", style="sci", scilimits=(-2, 3), useMathText=True)
+    fig.canvas.draw()
+    assert pf._offset_power(ax.xaxis.get_major_formatter()) == power

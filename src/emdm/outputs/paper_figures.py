@@ -22,6 +22,7 @@ Figures (each a function of measured records only):
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -837,11 +838,19 @@ def pareto_figure(
         bar.set_label(r"$\log_{10} w_M/w_E$ (circle: nominal)")
         fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
         for ax in axes[:, :whole].ravel():
-            power = getattr(ax.xaxis.get_major_formatter(), "orderOfMagnitude", 0)
+            power = _offset_power(ax.xaxis.get_major_formatter())
             if power:
                 ax.xaxis.get_offset_text().set_visible(False)
                 ax.set_xlabel(rf"$M$ ($10^{{{power}}}$ m$^2$/s)")
     return stem
+
+
+def _offset_power(formatter: Any) -> int:
+    """The power of ten a scalar formatter has taken out of its tick labels (0: none), read
+    from the offset text it draws (``×10^{-5}``; the attribute that held it is private since
+    Matplotlib 3.11)."""
+    found = re.search(r"10\^\{([-\u2212]?\d+)\}", formatter.get_offset() if formatter else "")
+    return int(found.group(1).replace("\u2212", "-")) if found else 0  # (a typographic minus)
 
 
 FAMILY_MARKER = {"exact": "s", "gradient": "o", "gradient-free": "^"}

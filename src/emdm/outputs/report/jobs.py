@@ -3,8 +3,9 @@ animations, then the documents and their compilation.
 
 The closed-loop and evidence runs are fast (compiled) and run first, in this process; their
 records and detected events are written to ``data/``. The rest is a flat list of jobs spread over
-the machine's cores, longest first, in two waves (the figures that need the labs' and sweeps'
-records come second). Every document is rendered from the files on disk, never from memory.
+the machine's cores, longest first; the figures that need the labs' and sweeps' records are drawn
+in this process once those are written, while the workers go on. Every document is rendered from
+the files on disk, never from memory.
 """
 
 from __future__ import annotations
@@ -649,12 +650,12 @@ def build_report(
                 lab2,
                 stage / "figures" / "task2-lab-C-EMDM" if lab_figs else None,
             )
-            data_figs = pool.submit(_job_data_figures, stage, scenarios["task2"].motion.dt, cfg)
+            # drawn here while the workers go on: queued behind them, it ran alone at the end
+            results["figures:data"] = _job_data_figures(stage, scenarios["task2"].motion.dt, cfg)
             for key, future in futures.items():
                 if key not in results:
                     results[key] = future.result()
                     say(f"{key} done ({time.perf_counter() - start:.1f} s)")
-            results["figures:data"] = data_figs.result()
             say(f"figures done ({time.perf_counter() - start:.1f} s)")
         write_json(
             stage / "data" / "animations.json",
