@@ -19,14 +19,26 @@ def rng():
 
 
 @pytest.fixture(scope="session")
-def quick_report(tmp_path_factory):
+def quick_report(tmp_path_factory, worker_id):
     """One ``emdm report --quick`` for every test that reads a report (test_report, test_paper),
-    signed by two authors whose names hold TeX's special characters."""
+    signed by two authors whose names hold TeX's special characters.
+
+    Built once per run: under pytest-xdist the first worker to need it builds it in the run's
+    shared temporary folder, and the other waits for it (a lock) and reads the same one. Tests
+    only read it; one that changes a report works on a copy."""
+    import fcntl
+
     from emdm.cli import main
 
-    out = tmp_path_factory.mktemp("report") / "report"
-    authors = ["--author", "Émilie du Châtelet", "--author", "R&D 100% $x_1$ #2"]
-    assert main(["report", "--quick", *authors, "--out", str(out)]) == 0
+    shared = tmp_path_factory.getbasetemp()
+    if worker_id != "master":  # (the workers' folders sit side by side in the run's folder)
+        shared = shared.parent
+    out = shared / "quick-report" / "report"
+    with open(shared / "quick-report.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not (out / "index.html").exists():
+            authors = ["--author", "Émilie du Châtelet", "--author", "R&D 100% $x_1$ #2"]
+            assert main(["report", "--quick", *authors, "--out", str(out)]) == 0
     return out
 
 
