@@ -1096,7 +1096,9 @@ def convergence_figure(
     height = 1.0 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3 * len(panels)
     with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        # a busier panel gets more room (Task 2's nine solvers against Task 1's four)
+        widths = [max(1, len(panel.curves)) ** 0.5 for panel in panels]
+        axes = fig.subplots(1, len(panels), squeeze=False, width_ratios=widths)[0]
         for ax, panel in zip(axes, panels, strict=True):
             for name, (kind, counts, error, returned) in panel.curves.items():
                 # the marker at the solver's last count, at its returned answer's error: one
