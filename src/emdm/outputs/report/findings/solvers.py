@@ -335,7 +335,7 @@ class Solvers(StoryBase):
                 " programs (evenly spaced, least dexterous included). ",
                 Unit("ms"),
                 ": median cold time, from Python (*: compiled loop); it./ev.: median "
-                "iterations, evaluations (--: none",
+                "iterations, evaluations (–: none",
                 *(  # a trust-region method's short steps: iterations that evaluate nothing
                     ("; ", ", ".join(skip), ": not every iteration evaluates")
                     if (
@@ -388,7 +388,7 @@ class Solvers(StoryBase):
                 goal = (
                     sentence(self.sn(lab, k, "time_to_goal", ".2f"))
                     if r.reached
-                    else sentence("--")
+                    else sentence("–")
                 )
                 glyph = f"{GLYPHS}/{k}"  # its curve in the convergence figure
                 table.rows.append(
@@ -400,9 +400,9 @@ class Solvers(StoryBase):
                         ),
                         sentence(bare(self.sn(lab, k, "median_time", unit="ms"))),
                         sentence(  # a count of 0: none reported (daqp; a QP's evaluations)
-                            self.sn(lab, k, "median_iterations") if r.median_iterations else "--",
+                            self.sn(lab, k, "median_iterations") if r.median_iterations else "–",
                             "/",
-                            self.sn(lab, k, "median_evaluations") if r.median_evaluations else "--",
+                            self.sn(lab, k, "median_evaluations") if r.median_evaluations else "–",
                         ),
                         sentence(  # two digits, as the text quotes them
                             self.sn(lab, k, "max_abs_gap", ".2g")
