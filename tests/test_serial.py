@@ -170,3 +170,17 @@ def test_near_singular_values_equal_robotics_toolbox():
                 np.testing.assert_allclose(
                     arm.manipulability_jacobian(q), robot.jacobm(q).ravel(), rtol=1e-8, atol=1e-12
                 )
+
+
+@pytest.mark.parametrize("preset", ["panda", "ur5"])
+def test_state_is_pose_jacobian_and_manipulability_in_one_pass(preset, rng):
+    """``state(q)``: the pose, the Jacobian, m and its gradient from one kinematics pass, the
+    same values, bit for bit, as forward, jacobian and manipulability_and_jacobian each give."""
+    arm = emdm.load_scenario(preset).serial_arm
+    for q in rng.uniform(-2.0, 2.0, (5, arm.n)):
+        T, J, m, Jm = arm.state(q)
+        m_alone, Jm_alone = arm.manipulability_and_jacobian(q)
+        assert np.array_equal(T, arm.forward(q)) and np.array_equal(J, arm.jacobian(q))
+        assert m == m_alone and np.array_equal(Jm, Jm_alone)
+    with pytest.raises(ScenarioError, match="joint values"):
+        arm.state(np.zeros(arm.n + 1))

@@ -255,7 +255,18 @@ class SerialArm:
             raise ScenarioError(
                 "SerialArm", "axes", f'must be "all", "trans" or "rot", got {axes!r}'
             )
-        J = self.jacobian(q)
+        return self._manipulability(self.jacobian(q), axes)
+
+    def state(self, q: ArrayLike) -> tuple[Matrix, Matrix, float, Matrix]:
+        """``(T, J, m, Jm)`` at ``q`` from one pass of the kinematics: the end-effector pose,
+        the geometric Jacobian, the manipulability over all six rows and its gradient (what
+        :meth:`forward`, :meth:`jacobian` and :meth:`manipulability_and_jacobian` give, each
+        computing the kinematics again)."""
+        _, T, J = self._kinematics(q)
+        m, Jm = self._manipulability(J, "all")
+        return T, J, m, Jm
+
+    def _manipulability(self, J: Matrix, axes: Axes) -> tuple[float, Matrix]:
         H = np.empty((self.n, 6, self.n))
         Jm = np.empty(self.n)
         m = manipulability_gradient(

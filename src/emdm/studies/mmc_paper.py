@@ -196,10 +196,9 @@ def run_trial(
             if s["arrived"] or s["failed"]:
                 continue
             q = s["q"]
-            T, J0 = arm.forward(q), arm.jacobian(q)
+            T, J0, m, Jm = arm.state(q)
             R = T[:3, :3]
             J = np.vstack((R.T @ J0[:3], R.T @ J0[3:]))  # the end-effector frame
-            m, Jm = arm.manipulability_and_jacobian(q)
             v, s["arrived"], e_s = servo(T, goal)
             try:
                 qd = command(c, J, Jm, v, e_s, q, lo, hi)

@@ -386,9 +386,7 @@ class Solvers(StoryBase):
             for k in names:
                 r = rows[k]
                 goal = (
-                    sentence(self.sn(lab, k, "time_to_goal", ".2f"))
-                    if r.reached
-                    else sentence("–")
+                    sentence(self.sn(lab, k, "time_to_goal", ".2f")) if r.reached else sentence("–")
                 )
                 glyph = f"{GLYPHS}/{k}"  # its curve in the convergence figure
                 table.rows.append(
