@@ -478,6 +478,8 @@ def test_convergence_panels_share_each_solvers_style_and_the_table_is_their_lege
                 dashed = panel.curves[line.get_label()][0] == "gradient-free"
                 assert (line.get_linestyle() == "--") == dashed
     assert len(set(styles.values())) == 3  # three solvers, three styles
+    twelve = pf.solver_styles([f"s{i}" for i in range(12)])  # (the paper draws twelve)
+    assert len({colour for colour, _ in twelve.values()}) == 12
     assert sorted(p.stem for p in (tmp_path / "glyphs").glob("*.png")) == [
         "active-set",
         "cobyla",

@@ -786,3 +786,7 @@ def test_table_iii_rows_are_the_convergence_figures_legend(report):
         assert (f"figures/glyphs/{name}}}" in row) == (name in drawn), row
     for name in drawn & set(lab):
         assert f"paper/figures/glyphs/{name}.png" in page.sources
+    # the caption names the table's solvers the figure has no curve of
+    caption = paper[: paper.index(r"\label{fig:convergence}")].rsplit(r"\caption{", 1)[1]
+    missing = [name for name in lab if name not in drawn]
+    assert (f"; {', '.join(missing)}: no iterates;" in caption) == bool(missing), caption

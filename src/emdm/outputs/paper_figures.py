@@ -1043,9 +1043,12 @@ SOLVER_COLORS = (
     "#999999",
     "#882255",
     "#44AA99",
+    "#117733",
+    "#AA4499",
 )
-"""One colour per solver of a figure (Okabe-Ito without its yellow, grey, then two of Tol's):
-six shades of one family colour could not be told apart in print."""
+"""One colour per solver of a figure (Okabe-Ito without its yellow, grey, then four of Tol's):
+six shades of one family colour could not be told apart in print; twelve, so that the paper's
+convergence figure repeats none (cma-es had interior-point's gold)."""
 FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
 
 

@@ -182,17 +182,24 @@ class Solvers(StoryBase):
                 paper=False,
             )
         )
-        # each task's hardest program when its lab recorded it, else its first (as jobs draws)
+        # each task's hardest program when its lab recorded it, else its first (as jobs draws);
+        # the caption names the table's solvers the figure cannot draw
         hardest = "least dexterous" in self.rec.labs[lab].representative_steps
+        unplotted = [k for k in rows if not self.d.exists(f"paper/{GLYPHS}/{k}.png")]
         conv = self.figure(
             "convergence",
             "figures/convergence",
             sentence(
-                "Convergence on each task's ",
+                "Convergence on the ",
                 "least dexterous" if hardest else "first",
-                " C-EMDM program, cold (lines as in ",
+                " programs, cold (lines: ",
                 Ref("tab", "solvers"),
-                "; dashed: gradient-free; marker: the answer returned).",
+                *(  # the table's solvers without a curve: they report no iterates
+                    (f"; {', '.join(unplotted)}: no iterates",)
+                    if 0 < len(unplotted) < len(rows)
+                    else ()
+                ),
+                "; dashed: gradient-free; marker: answer returned).",
             ),
         )
         if self.has_figure("convergence"):
