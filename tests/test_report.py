@@ -790,3 +790,29 @@ def test_table_iii_rows_are_the_convergence_figures_legend(report):
     caption = paper[: paper.index(r"\label{fig:convergence}")].rsplit(r"\caption{", 1)[1]
     missing = [name for name in lab if name not in drawn]
     assert (f"; {', '.join(missing)}: no iterates;" in caption) == bool(missing), caption
+
+
+def test_the_single_point_claim_is_made_only_where_measured(quick_report, tmp_path):
+    """'At that alpha the admissible set was a single point' (the pitch's backup, the paper's
+    Section III-D) stands on the Task 1 lab's measured widths: a wider set, or no measurement,
+    and neither document says it."""
+    from emdm.outputs.report.pitch import Pitch
+    from emdm.outputs.report.render import document
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task1-lab-C-EMDM" / "solvers.json"
+    lab = json.loads(path.read_text(encoding="utf-8"))
+    vertex = lab["challenges"]["scaled_vertex"]
+    assert vertex and vertex["max_width"] <= 1e-9  # the quick study's scaled steps: one point
+    assert Pitch(Data(root), document(root)).build().single_point
+
+    def said() -> str:
+        return " ".join(render_latex(p) for s in document(root).sections for p in s.paragraphs)
+
+    assert "each admissible set is one point" in said()
+    vertex["max_width"] = 1e-3  # a segment, not a point
+    path.write_text(json.dumps(lab), encoding="utf-8")
+    assert not Pitch(Data(root), document(root)).build().single_point
+    assert "each admissible set is one point" not in said()

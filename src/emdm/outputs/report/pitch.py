@@ -23,6 +23,8 @@ class Slides:
     titles: dict[str, Sentence] = field(default_factory=dict)
     animations: dict[str, dict[str, Any]] = field(default_factory=dict)
     figures: dict[str, bool] = field(default_factory=dict)
+    single_point: bool = False
+    """Every task-scaled step the Task 1 lab measured had a single admissible command."""
 
 
 class Pitch:
@@ -259,6 +261,7 @@ class Pitch:
             "task2-UC-effort",
         ):
             out.figures[name] = self.d.exists(f"paper/slides/{name}.png")
+        out.single_point = s.single_point_vertex() is not None
         return out
 
     def dearer_later(self, uc: str) -> tuple[Any, ...]:

@@ -131,6 +131,13 @@ def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
     return node
 
 
+SINGLE_POINT = 1e-9
+"""rad/s: an admissible set no wider than this (by linear programming) is one point."""
+
+SCALED_LAB = "data/task1-lab-C-EMDM/solvers.json"
+"""The lab whose task-scaled steps are measured (Task 1's C-EMDM: 38 of them)."""
+
+
 class StoryBase:
     """The data, the figures and tables made so far, and what every section reads them with."""
 
@@ -148,6 +155,14 @@ class StoryBase:
     def mt(self, task: str, ctrl: str, key: MetricKey, fmt: str, unit: str = "") -> Num:
         value = self.mv(task, ctrl, key)
         return traced(value, f"data/{task}/metrics.json", ("controllers", ctrl, key), fmt, unit)
+
+    def single_point_vertex(self) -> dict[str, Any] | None:
+        """Task 1's measured scaled vertex (``challenges.scaled_vertex``) when every scaled step
+        had a single admissible command, else None (not measured, or a wider set)."""
+        if not self.d.exists(SCALED_LAB):
+            return None
+        vertex = self.d.value(SCALED_LAB, "challenges", "scaled_vertex")
+        return vertex if vertex and vertex["max_width"] <= SINGLE_POINT else None
 
     def mv(self, task: str, ctrl: str, key: MetricKey) -> Any:
         return getattr(self.rec.outcomes[task][ctrl], key)

@@ -21,6 +21,7 @@ from .base import (
     M_SYM,
     MRATE,
     RATIO,
+    SCALED_LAB,
     T_EQ,
     W_M,
     StoryBase,
@@ -520,7 +521,7 @@ class Task1(StoryBase):
             self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
             " iterations",
         )
-        lab = "data/task1-lab-C-EMDM/solvers.json"
+        lab = SCALED_LAB
         ch: dict[str, Any] = {}
         if self.d.exists(lab):
             ch = self.d.value(lab, "challenges", "solvers")
@@ -537,8 +538,8 @@ class Task1(StoryBase):
                 ),
                 " on scaled steps",
             )
-        vertex = self.d.value(lab, "challenges", "scaled_vertex") if self.d.exists(lab) else None
-        if vertex and vertex["max_width"] <= 1e-9:  # measured: one point, and how degenerate
+        vertex = self.single_point_vertex()
+        if vertex:  # measured: one point, and how degenerate
             low, high = vertex["active"]
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
             p += sentence(
