@@ -160,6 +160,41 @@ def test_precompile_loads_every_loop_kernel_once(monkeypatch):
     emdm.precompile()  # a second call does nothing
 
 
+def _signatures() -> dict[str, int]:
+    """How many specializations every kernel of emdm has compiled (or loaded) in this process."""
+    import sys
+
+    from numba.core.dispatcher import Dispatcher
+
+    found = {}
+    for name, module in list(sys.modules.items()):
+        if name.startswith("emdm"):
+            for attr, value in vars(module).items():
+                if isinstance(value, Dispatcher):
+                    found[f"{value.py_func.__module__}.{attr}"] = len(value.signatures)
+    return found
+
+
+def test_after_precompile_batches_and_the_per_step_api_compile_nothing_more():
+    """precompile() warms what users meet first: a batch given one goal or start row for many
+    (broadcast views are read-only, and read-only arrays were a specialization of their own:
+    20 s of compiling in the first batch of a process), and the per-step API of the lab."""
+    from emdm.core.controllers import get_controller, program_at
+    from emdm.solvers import DEFAULT_SOLVER, solve_chain
+
+    emdm.precompile()
+    before = _signatures()
+    for task in ("task1", "panda"):
+        sc = emdm.load_scenario(task)
+        emdm.simulate_batch(sc, "C-EMDM", goals=[sc.motion.goal] * 2)  # q0s: one row for two
+        emdm.simulate_batch(sc, "UC-IVKC", q0s=[sc.motion.q0] * 2)  # goals: one row for two
+        for name in ("UC-IVKC", "C-EMDM"):
+            program = program_at(get_controller(name), sc, np.asarray(sc.motion.q0))
+            solve_chain(program.qp, [DEFAULT_SOLVER])
+    after = _signatures()
+    assert {k: (before.get(k, 0), v) for k, v in after.items() if v != before.get(k, 0)} == {}
+
+
 def test_buffer_estimates_and_a_run_too_large_for_the_machine_is_refused_up_front(monkeypatch):
     """An arm whose buffers would not fit is one ScenarioError naming the key, before anything
     is allocated (a 2,000-link planar arm needs about 32 GB: its gradient's minors grow with the

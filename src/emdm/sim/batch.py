@@ -135,6 +135,25 @@ def precompile() -> None:
     ensure_compiled(_warm_up, helper=_warm_up_share)
     ensure_compiled(_warm_up_batch_plain, what="the batch loop")
     ensure_compiled(_warm_up_batch, what="the batch loop")
+    ensure_compiled(_warm_up_steps, what="the per-step API")
+
+
+def _warm_up_steps() -> None:
+    """Compile (or load) the kernels of the per-step API that the loop does not share (the
+    path of the solver lab, the Pareto study and the benchmark):
+    :func:`~emdm.core.controllers.state_at`, :func:`~emdm.core.controllers.program_at` and the
+    default solver with its certificate, at the start of each kind of preset, for both kinds
+    of program."""
+    from ..core.controllers import program_at
+    from ..core.loading import load_scenario
+    from ..solvers import DEFAULT_SOLVER
+    from ..solvers.base import solve_chain
+
+    for task in WARM_UP_PRESETS:
+        sc = load_scenario(task)
+        for name in (Name.UC_IVKC, Name.C_EMDM):
+            program = program_at(get_controller(name), sc, np.asarray(sc.motion.q0))
+            solve_chain(program.qp, [DEFAULT_SOLVER])
 
 
 def _warm_up_batch(plain: bool = False) -> None:
@@ -262,8 +281,10 @@ def simulate_batch(
     ensure_compiled(_warm_up_batch_plain if full is None else _warm_up_batch, what="the batch loop")
     n = scenario.n
     runs = 0 if 0 in (g.shape[0], q.shape[0]) else max(g.shape[0], q.shape[0])
-    g = np.ascontiguousarray(np.broadcast_to(g, (runs, scenario.nt)))
-    q = np.ascontiguousarray(np.broadcast_to(q, (runs, n)))
+    # writable copies: a broadcast view is read-only, and numba would compile the kernel again
+    # for read-only arrays (a specialization precompile() does not warm)
+    g = np.array(np.broadcast_to(g, (runs, scenario.nt)), order="C")
+    q = np.array(np.broadcast_to(q, (runs, n)), order="C")
     out = np.empty((runs, len(OUTCOMES)))
     codes = np.full(runs, Exit.HANDOFF, dtype=np.int64)
     if scenario.controller.on_infeasible is Policy.SCALE and runs:
