@@ -8,6 +8,7 @@ import json
 import matplotlib.colors
 import numpy as np
 import pytest
+from matplotlib.lines import Line2D
 from matplotlib.offsetbox import AnnotationBbox
 from PIL import Image
 
@@ -406,23 +407,31 @@ def test_speed_strips_far_beyond_the_limit_show_the_whole_run(tmp_path, drawn):
         lo, hi = ax.get_ylim()
         assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
         # every run's extreme on each side far beyond the limit is written, in its run's
-        # colour (reading 92 could not read UC-IVKC's 7.26 rad/s beside UC-EMDM's 8.73)
-        written = sorted(
-            (area.get_text(), matplotlib.colors.to_hex(area._text.get_color()))
-            for box in ax.artists
-            if isinstance(box, AnnotationBbox)
-            for area in box.offsetbox.get_children()
-        )
-        expected = sorted(
-            (
-                pf._plain(float(f"{v:.2g}")),
-                matplotlib.colors.to_hex(pf._style(r, pf.PAPER)["color"]),
-            )
-            for r in runs
-            for v in (r.qd[:, j].min(), r.qd[:, j].max())
-            if abs(v) > pf.FAR_BEYOND * sc.arm.qd_max[j]
-        )
-        assert written == expected, j
+        # colour (reading 92 could not read UC-IVKC's 7.26 rad/s beside UC-EMDM's 8.73) and
+        # underlined in its run's line style (reading 105 could not tell them apart in grey)
+        written = []
+        for box in ax.artists:
+            if isinstance(box, AnnotationBbox):
+                for label in box.offsetbox.get_children():
+                    text, underline = label.get_children()
+                    (line,) = underline.get_children()
+                    written.append(
+                        (
+                            text.get_text(),
+                            matplotlib.colors.to_hex(text._text.get_color()),
+                            matplotlib.colors.to_hex(line.get_color()),
+                            line.get_linestyle(),
+                        )
+                    )
+        expected = []
+        for r in runs:
+            style = pf._style(r, pf.PAPER)
+            drawn_style = Line2D([], [], linestyle=style["linestyle"]).get_linestyle()
+            colour = matplotlib.colors.to_hex(style["color"])
+            for v in (r.qd[:, j].min(), r.qd[:, j].max()):
+                if abs(v) > pf.FAR_BEYOND * sc.arm.qd_max[j]:
+                    expected.append((pf._plain(float(f"{v:.2g}")), colour, colour, drawn_style))
+        assert sorted(written) == sorted(expected), j
     assert any(ax.get_yscale() == "symlog" for ax in strips)  # the case this guards
 
 

@@ -35,8 +35,9 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
-from matplotlib.offsetbox import AnnotationBbox, HPacker, TextArea
+from matplotlib.offsetbox import AnnotationBbox, DrawingArea, HPacker, TextArea, VPacker
 from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
@@ -261,7 +262,7 @@ def pair_figure(
         ax_path = fig.add_subplot(upper[0, 3]) if path else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
-        far_peaks: list[tuple[Axes, list[tuple[float, str]]]] = []
+        far_peaks: list[tuple[Axes, list[tuple[float, dict[str, Any]]]]] = []
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
@@ -339,9 +340,9 @@ def pair_figure(
             # velocity limits on the left and, beyond them, the peaks themselves on the right
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # every run's extreme on each side far beyond the limit, in its colour
+            if far:  # every run's extreme on each side far beyond the limit, in its style
                 peaks = [
-                    (v, _style(r, medium)["color"])
+                    (v, _style(r, medium))
                     for r in runs
                     if r.steps
                     for v in (float(r.qd[:, j].min()), float(r.qd[:, j].max()))
@@ -407,11 +408,17 @@ PEAK_GAP = 1.1
 written side by side, in their runs' colours, at the farther one."""
 
 
-def _label_peaks(ax: Any, peaks: list[tuple[float, str]], medium: Medium) -> None:
+PEAK_UNDERLINE = 1.2
+"""Gap (points) between a far peak's value and its underline, drawn in its run's line style so
+that the runs' values are told apart without colour (in a greyscale print)."""
+
+
+def _label_peaks(ax: Any, peaks: list[tuple[float, dict[str, Any]]], medium: Medium) -> None:
     """Mark each far peak with a tick on the right of its strip and its value in its run's
-    colour; peaks whose labels would touch (one-step spikes of two runs on the same joint, say
-    7.3 and 8.7 rad/s on a log scale) share one label, their values side by side. The figure
-    is drawn first: the strip's height decides which labels touch."""
+    colour, underlined in its run's line style; peaks whose labels would touch (one-step spikes
+    of two runs on the same joint, say 7.3 and 8.7 rad/s on a log scale) share one label, their
+    values side by side in the order of the legend. The figure is drawn first: the strip's
+    height decides which labels touch."""
     if not peaks:
         return
     right = ax.secondary_yaxis("right")
@@ -426,26 +433,23 @@ def _label_peaks(ax: Any, peaks: list[tuple[float, str]], medium: Medium) -> Non
         return float(to_axes.transform(ax.transData.transform((0.0, v)))[1])
 
     for side in (-1, 1):
-        group: list[tuple[float, str]] = []
+        group: list[tuple[float, dict[str, Any]]] = []
         ordered = sorted((p for p in peaks if np.sign(p[0]) == side), key=lambda p: abs(p[0]))
-        for i, (v, colour) in enumerate(ordered):
-            group.append((v, colour))
+        for i, (v, style) in enumerate(ordered):
+            group.append((v, style))
             last = i == len(ordered) - 1
             if last or abs(frac(ordered[i + 1][0]) - frac(v)) > gap:
-                texts: list[Artist] = [
-                    TextArea(
-                        _plain(float(f"{u:.2g}")),
-                        textprops={"color": c, "fontsize": medium.tiny},
-                    )
-                    for u, c in group
-                ]
-                box = HPacker(children=texts, pad=0, sep=1.5)
+                order = [s["label"] for _, s in peaks]  # the legend's order
+                group.sort(key=lambda p: order.index(p[1]["label"]))
+                box = HPacker(
+                    children=[_peak_label(ax, u, st, medium) for u, st in group], pad=0, sep=2.5
+                )
                 ax.add_artist(
                     AnnotationBbox(
                         box,
-                        (1.0, v),  # at the farthest of the group
+                        (1.0, v),  # at the farthest of the group, the values at its level
                         xycoords=("axes fraction", "data"),
-                        xybox=(4.5, 0.0),
+                        xybox=(4.5, -0.5 * (PEAK_UNDERLINE + medium.line)),
                         boxcoords="offset points",
                         box_alignment=(0.0, 0.5),
                         frameon=False,
@@ -454,6 +458,31 @@ def _label_peaks(ax: Any, peaks: list[tuple[float, str]], medium: Medium) -> Non
                     )
                 )
                 group = []
+
+
+def _peak_label(ax: Axes, value: float, style: dict[str, Any], medium: Medium) -> Artist:
+    """One far peak's label: its value in its run's colour, underlined in its run's line style
+    (a line beside it would read as a minus sign)."""
+    label = _plain(float(f"{value:.2g}"))
+    renderer = ax.figure.canvas.get_renderer()  # type: ignore[attr-defined]
+    width_px, _, _ = renderer.get_text_width_height_descent(
+        label, FontProperties(size=medium.tiny), ismath=False
+    )
+    width = width_px * 72.0 / ax.figure.dpi
+    line = DrawingArea(width, style["linewidth"])
+    line.add_artist(
+        Line2D(
+            [0.0, width],
+            [0.5 * style["linewidth"]] * 2,
+            color=style["color"],
+            linestyle=style["linestyle"],
+            linewidth=style["linewidth"],
+            solid_capstyle="butt",
+            dash_capstyle="butt",
+        )
+    )
+    text = TextArea(label, textprops={"color": style["color"], "fontsize": medium.tiny})
+    return VPacker(children=[text, line], pad=0, sep=PEAK_UNDERLINE, align="left")
 
 
 def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:
