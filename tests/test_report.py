@@ -816,3 +816,34 @@ def test_the_single_point_claim_is_made_only_where_measured(quick_report, tmp_pa
     path.write_text(json.dumps(lab), encoding="utf-8")
     assert not Pitch(Data(root), document(root)).build().single_point
     assert "each admissible set is one point" not in said()
+
+
+def test_task1_slide_title_says_its_idea_only_where_measured(quick_report, tmp_path):
+    """The pitch's Task 1 title is an idea in words ('EMDM pays for dexterity with effort, not
+    with tracking') only while both pairs measure it: more m and more effort, arriving within
+    one control period of each other; otherwise the slide is titled with the numbers."""
+    from emdm.outputs.report.pitch import Pitch
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task1" / "metrics.json"
+    metrics = json.loads(path.read_text(encoding="utf-8"))
+    runs = metrics["controllers"]
+    dt = metrics["scenario"]["motion"]["dt"]
+
+    def title() -> str:
+        return render_latex(Pitch(Data(root), document(root)).task1_title())
+
+    holds = all(
+        runs[e]["reached"]
+        and runs[i]["reached"]
+        and runs[e]["mean_manipulability"] > runs[i]["mean_manipulability"]
+        and runs[e]["total_effort"] > runs[i]["total_effort"]
+        and abs(runs[e]["time_to_goal"] - runs[i]["time_to_goal"]) <= dt + 1e-9
+        for i, e in (("UC-IVKC", "UC-EMDM"), ("C-IVKC", "C-EMDM"))
+    )
+    assert ("not with tracking" in title()) == holds
+    runs["C-EMDM"]["time_to_goal"] = runs["C-IVKC"]["time_to_goal"] + 2 * dt  # tracking differs
+    path.write_text(json.dumps(metrics), encoding="utf-8")
+    assert "not with tracking" not in title() and "dexterity for" in title()

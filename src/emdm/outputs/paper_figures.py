@@ -1257,12 +1257,16 @@ def manipulability_figure(
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(1, len(pairs), squeeze=False, sharey=True)[0]
         for ax, (title, runs) in zip(axes, pairs.items(), strict=True):
-            _shade(ax, _common_scaled(runs))
+            spans = _common_scaled(runs)
+            _shade(ax, spans)
             for run in runs:
                 ax.plot(run.t, run.m, **_style(run, medium))
             ax.set_title(title)
             ax.set_xlabel(r"$t$ (s)")
-            ax.legend(loc="best", frameon=True, framealpha=0.9)  # where it hides least
+            handles, _ = ax.get_legend_handles_labels()
+            if spans:  # the shading says what it is where it is drawn
+                handles.append(Patch(color="#999999", alpha=0.35, label="tip slowed (both)"))
+            ax.legend(handles=handles, loc="best", frameon=True, framealpha=0.9)
         axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
     return stem
 
