@@ -847,3 +847,35 @@ def test_task1_slide_title_says_its_idea_only_where_measured(quick_report, tmp_p
     runs["C-EMDM"]["time_to_goal"] = runs["C-IVKC"]["time_to_goal"] + 2 * dt  # tracking differs
     path.write_text(json.dumps(metrics), encoding="utf-8")
     assert "not with tracking" not in title() and "dexterity for" in title()
+
+
+def test_task2_slack_headline_stands_on_its_three_evidence_runs(quick_report, tmp_path):
+    """'The slack, not the dexterity term, gets the arm there' (the pitch's Task 2 title and
+    third take-away) needs its three evidence runs: C-IVKC arrives with a free slack, C-EMDM
+    arrives sooner without the term, C-EMDM with too little slack stalls. A tight-slack run
+    that arrives takes the claim off both slides."""
+    from emdm.outputs.report.pitch import Pitch
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "evidence.json"
+    evidence = json.loads(path.read_text(encoding="utf-8"))
+
+    def slides() -> tuple[str, list[str]]:
+        built = Pitch(Data(root), document(root)).build()
+        return render_latex(built.titles["evidence"]), [
+            render_latex(b) for b in built.bullets["takeaways"]
+        ]
+
+    tight = evidence["runs"]["t2-c-emdm-tight-slack"]["runs"]["C-EMDM"]
+    story = Pitch(Data(root), document(root))
+    holds = bool(story.s.ivkc_with_slack() and story.s.emdm_without_term()) and not tight["reached"]
+    title, takeaways = slides()
+    assert ("not the dexterity term" in title) == holds
+    assert any("not the dexterity term" in t for t in takeaways) == holds
+    tight["reached"], tight["time_to_goal"] = True, 20.0  # too little slack, yet it arrives
+    path.write_text(json.dumps(evidence), encoding="utf-8")
+    title, takeaways = slides()
+    assert "not the dexterity term" not in title and "what changes it" in title
+    assert not any("not the dexterity term" in t for t in takeaways)
