@@ -350,6 +350,31 @@ def test_the_byline_from_a_config_file(tmp_path, capsys):
         read_byline(tmp_path / "missing.toml")
 
 
+def test_the_derivative_check_finds_a_wrong_jacobian(monkeypatch):
+    """The paper's 'J and J_m match central differences within X at every state' is measured
+    on every state of a run, and a Jacobian off by 1e-6 at one state shows in it."""
+    from emdm.core.arm import Kinematics, PlanarArm
+    from emdm.outputs.report import explain
+
+    run = emdm.simulate(emdm.load_scenario("task1", {"motion.max_time": 1.0}), "C-EMDM")
+    right = explain.derivatives(run)
+    assert right["states"] == run.q.shape[0]
+    assert 0 < right["max_error_J"] < 1e-8 and 0 < right["max_error_Jm"] < 1e-8
+    exact = PlanarArm.kinematics
+    odd = run.q[run.q.shape[0] // 2]
+
+    def wrong(self: PlanarArm, q: np.ndarray) -> Kinematics:
+        kin = exact(self, q)
+        if np.array_equal(q, odd):  # one state's J_m, 1e-6 off
+            return Kinematics(p=kin.p, J=kin.J, m=kin.m, Jm=kin.Jm + 1e-6)
+        return kin
+
+    monkeypatch.setattr(PlanarArm, "kinematics", wrong)
+    found = explain.derivatives(run)
+    assert found["max_error_Jm"] == pytest.approx(1e-6, rel=1e-3)
+    assert found["max_error_J"] == right["max_error_J"]
+
+
 def test_limits_and_pair_events_per_joint_and_over_a_common_window():
     """The excursion past each joint's limits, and a pair's mean manipulability over the states
     both runs have, from the records (the paper quotes them for Task 2)."""
@@ -879,3 +904,29 @@ def test_task2_slack_headline_stands_on_its_three_evidence_runs(quick_report, tm
     title, takeaways = slides()
     assert "not the dexterity term" not in title and "what changes it" in title
     assert not any("not the dexterity term" in t for t in takeaways)
+
+
+def test_the_paper_quotes_the_largest_derivative_error_of_every_run(quick_report):
+    """Section I's derivative check quotes the largest difference over every run's states and
+    both Jacobians (a reader without the brief's code checks the derivatives by it)."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    story = Story(Data(quick_report))
+    said = story.derivatives_checked()
+    paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    assert said and render_latex(said) in paper
+    worst = max(
+        json.loads((quick_report / "data" / task / "events.json").read_text())["controllers"][c][
+            "derivatives"
+        ][key]
+        for task in ("task1", "task2")
+        for c in ("UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM")
+        for key in ("max_error_J", "max_error_Jm")
+    )
+    (src,) = [seg.src for seg in said if hasattr(seg, "src")]
+    file, path = src.split("#")
+    quoted = json.loads((quick_report / file).read_text())
+    for key in path.split("/"):
+        quoted = quoted[key]
+    assert quoted == worst < 1e-8

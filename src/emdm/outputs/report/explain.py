@@ -336,6 +336,35 @@ def solver_work(run: Run) -> dict[str, Any]:
     }
 
 
+FD_STEP = 1e-6
+"""Step (rad) of the central differences that check a run's Jacobians (:func:`derivatives`):
+truncation about ``h^2`` and rounding about ``eps/h``, both below 1e-9 here."""
+
+
+def derivatives(run: Run) -> dict[str, Any]:
+    """``J`` and ``J_m`` as the compiled kinematics give them, against central differences of
+    the tip position ``f(q)`` and of ``m(q)``, at every state of the run: the largest absolute
+    differences (m/rad and m^2/rad), so that a reader without the brief's code knows the
+    derivatives the controllers used are right."""
+    arm = run.scenario.planar_arm
+    h, n = FD_STEP, run.scenario.n
+    worst_J = worst_Jm = 0.0
+    for q in run.q:
+        kin = arm.kinematics(q)
+        for i in range(n):
+            step = np.zeros(n)
+            step[i] = h
+            up, down = arm.kinematics(q + step), arm.kinematics(q - step)
+            worst_J = max(worst_J, float(np.abs((up.p - down.p) / (2 * h) - kin.J[:, i]).max()))
+            worst_Jm = max(worst_Jm, abs((up.m - down.m) / (2 * h) - float(kin.Jm[i])))
+    return {
+        "states": int(run.q.shape[0]),
+        "step": h,
+        "max_error_J": worst_J,
+        "max_error_Jm": worst_Jm,
+    }
+
+
 def run_events(run: Run) -> dict[str, Any]:
     """Every detected event of one run (see the module docstring)."""
     mt = metrics(run)
@@ -359,6 +388,7 @@ def run_events(run: Run) -> dict[str, Any]:
         "planes": planes(run),
         "singular": singular(run),
         "conditioning": conditioning(run),
+        "derivatives": derivatives(run),
         "effort": effort(run),
         "limits": limits(run),
         "solver": solver_work(run),

@@ -97,6 +97,7 @@ EventKey = Literal[
     "planes",
     "singular",
     "conditioning",
+    "derivatives",
     "effort",
     "limits",
     "solver",
@@ -127,6 +128,8 @@ class RunEvents:
     planes: dict[str, Any] | None
     singular: dict[str, Any]
     conditioning: dict[str, Any]
+    derivatives: dict[str, Any]
+    """``J`` and ``J_m`` against central differences at every state (:func:`..explain.derivatives`)."""
     effort: dict[str, Any]
     limits: dict[str, Any]
     solver: dict[str, Any]

@@ -89,9 +89,9 @@ class Task1(StoryBase):
         p = sentence(
             "Both impose ",
             Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so the tips follow one path up to the Euler step's ",
+            " exactly, so their tips differ only through the Euler steps' ",
             Math(r"O(\Delta t^2)", "<i>O</i>(Δ<i>t</i><sup>2</sup>)"),
-            " term. Only null-space motion differs, ",
+            " terms. Only null-space motion differs, ",
             Math(
                 r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
                 "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
