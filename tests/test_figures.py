@@ -564,3 +564,25 @@ def test_the_power_folded_into_an_axis_label_is_the_one_its_ticks_left_out(low, 
     ax.ticklabel_format(axis="x", style="sci", scilimits=(-2, 3), useMathText=True)
     fig.canvas.draw()
     assert pf._offset_power(ax.xaxis.get_major_formatter()) == power
+
+
+def test_scaled_spans_are_hatched_apart_from_the_damper_tint(tmp_path, drawn):
+    """Reading 111: in a greyscale print the task-scaled span and the damper zones were one
+    grey. The span is hatched (in the axes and in the legend); the damper zones stay plain."""
+    from matplotlib.patches import Rectangle
+
+    from emdm.outputs import paper_figures as pf
+
+    sc = emdm.load_scenario("task1", {"motion.max_time": 5.0})
+    runs = [emdm.simulate(sc, name) for name in ("C-IVKC", "C-EMDM")]
+    assert pf._common_scaled(runs)  # the case this guards
+    with formats((".png",)):
+        pf.pair_figure(runs, tmp_path / "pair", path=True)
+    fig = drawn[-1]
+    spans = [p for ax in fig.axes for p in ax.patches if isinstance(p, Rectangle) and p.get_hatch()]
+    tints = [
+        p for ax in fig.axes for p in ax.patches if isinstance(p, Rectangle) and not p.get_hatch()
+    ]
+    assert spans and tints  # the scaled spans hatched, the damper zones plain
+    (legend,) = fig.legends
+    assert any(getattr(h, "get_hatch", lambda: None)() == "////" for h in legend.legend_handles)

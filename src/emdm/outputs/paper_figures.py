@@ -160,9 +160,27 @@ def _common_scaled(runs: Sequence[Run]) -> list[tuple[float, float]]:
     return out
 
 
+SCALED_SPAN: dict[str, Any] = {
+    "facecolor": "#F0F0F0",
+    "edgecolor": "#A8A8A8",
+    "hatch": "////",
+    "linewidth": 0,
+}
+"""How the task-scaled time spans are drawn, and their legend patch: light grey hatched, so
+that in a greyscale print they stay apart from the damper zones' plain tint."""
+
+
+def _scaled_patch(label: str) -> Patch:
+    """The legend entry of :func:`_shade`'s spans."""
+    patch = Patch(**SCALED_SPAN, label=label)
+    patch.set_hatch_linewidth(0.4)
+    return patch
+
+
 def _shade(ax: Any, spans: list[tuple[float, float]]) -> None:
     for a, b in spans:
-        ax.axvspan(a, b, color="#999999", alpha=0.18, linewidth=0, zorder=0)
+        span = ax.axvspan(a, b, **SCALED_SPAN, zorder=0)
+        span.set_hatch_linewidth(0.4)
 
 
 def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
@@ -372,9 +390,7 @@ def pair_figure(
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
         if spans:
-            handles.append(
-                Patch(color="#999999", alpha=0.35, label=r"both task-scaled ($\alpha<1$)")
-            )
+            handles.append(_scaled_patch(r"both task-scaled ($\alpha<1$)"))
         fig.legend(
             handles=handles,
             loc="outside upper center",
@@ -1265,7 +1281,7 @@ def manipulability_figure(
             ax.set_xlabel(r"$t$ (s)")
             handles, _ = ax.get_legend_handles_labels()
             if spans:  # the shading says what it is where it is drawn
-                handles.append(Patch(color="#999999", alpha=0.35, label="tip slowed (both)"))
+                handles.append(_scaled_patch("tip slowed (both)"))
             ax.legend(handles=handles, loc="best", frameon=True, framealpha=0.9)
         axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
     return stem

@@ -458,7 +458,7 @@ class StoryBase:
         ):
             scaled = self.evv(task, emdm, "scaling")
             if scaled and not scaled["whole_run"]:
-                notes.append(sentence("grey: both scaled"))
+                notes.append(sentence("hatched: both scaled"))
         # time axes end at the last arrival when the one run that missed had stalled by then
         # (paper_figures.time_end, the same rule on the same records)
         missed = [c for c in (ivkc, emdm) if not self.mv(task, c, "reached")]
