@@ -547,18 +547,19 @@ def workspace_figure(
                 pts[:, 0],
                 pts[:, 1],
                 color="black" if sol["within_limits"] else "#888888",
-                linestyle="-" if sol["within_limits"] else "--",
-                linewidth=medium.line,
+                # dash-dot: in a greyscale print, not to be taken for a dashed run's path
+                linestyle="-" if sol["within_limits"] else "-.",
+                linewidth=0.8 * medium.line,
                 marker="o",
                 markersize=2.5,
             )
         start = _arm_points(runs[0], runs[0].q[0])
         drawn.append(start[:, :2])
-        ax.plot(
+        ax.plot(  # thinner than the paths, which may run along its links (C-IVKC's does)
             start[:, 0],
             start[:, 1],
             color="black",
-            linewidth=medium.line * 1.4,
+            linewidth=medium.line * 0.8,
             marker="o",
             markersize=3,
         )
@@ -616,13 +617,21 @@ def workspace_figure(
                 hatch="////",
                 label=rf"$\|p\|<{inner:.3f}$ m",
             ),
-            Line2D([], [], color="black", marker="o", markersize=2.5, label="arm: start, goal"),
+            Line2D(
+                [],
+                [],
+                color="black",
+                linewidth=0.8 * medium.line,
+                marker="o",
+                markersize=2.5,
+                label="arm: start, goal",
+            ),
             Line2D([], [], color="black", marker="*", markersize=6, linestyle="none", label="goal"),
             Line2D(
                 [],
                 [],
                 color="#888888",
-                linestyle="--",
+                linestyle="-.",
                 marker="o",
                 markersize=2.5,
                 label="goal past $q_1$ limit",
