@@ -1075,8 +1075,23 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
         ax.set_xlim(min(times) / 3, 3 * max(max(times), dt * 1e3))
         ax.set_ylim(-0.6, len(order) - 0.4)
         ax.grid(axis="y", visible=False)
+        handles = _family_handles(rows, order)
+        if any(
+            not exact_answer(abs(rows[k]["max_abs_gap"]), rows[k]["max_violation"]) for k in order
+        ):
+            handles.append(  # the verdicts' fill, said once here rather than on the slide
+                Line2D(
+                    [],
+                    [],
+                    marker="o",
+                    color="#666666",
+                    markerfacecolor="white",
+                    linestyle="none",
+                    label="hollow: not exact",
+                )
+            )
         fig.legend(  # two columns: three family names in one row overrun the figure
-            handles=_family_handles(rows, order),
+            handles=handles,
             loc="outside lower center",
             ncols=2,
             fontsize=medium.tiny,
