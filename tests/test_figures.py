@@ -507,6 +507,7 @@ def test_a_convergence_panel_is_built_from_the_histories_record():
 
     record = {
         "scenario": "task1",
+        "controller": "C-EMDM",
         "representative_steps": {"first": 0, "least dexterous": 4},
         "optimum": {"first": 0.0, "least dexterous": -1.0},
         "solvers": {
@@ -536,7 +537,9 @@ def test_a_convergence_panel_is_built_from_the_histories_record():
         },
     }
     panel = convergence_panel(record, "iteration")
-    assert panel is not None and panel.title == "Task 1, $k=4$" and panel.xlabel == "iterations"
+    assert (
+        panel is not None and panel.title == "Task 1 C-EMDM, $k=4$" and panel.xlabel == "iterations"
+    )
     assert list(panel.curves) == ["interior-point"]
     family, counts, error, returned = panel.curves["interior-point"]
     assert (family, counts, returned) == ("exact", [1, 2, 3], 0.0)

@@ -789,6 +789,16 @@ def _front_axes(
         ax.set_ylim(low - 0.3 * (high - low) - 1e-3, high + 0.3 * (high - low) + 1e-3)
     if slack:  # the same state under the free slack (6): a front again, hollow
         ax.plot([p["M"] for p in slack], [p["E"] for p in slack], color="grey", lw=0.5, zorder=1)
+        size = 14 if medium is PAPER else 30
+        ax.scatter(  # a thin dark ring around each: a light colour stays visible in grey
+            [p["M"] for p in slack],
+            [p["E"] for p in slack],
+            facecolors="none",
+            edgecolors="#333333",
+            s=size * 1.9,
+            linewidths=0.35,
+            zorder=2,
+        )
         ax.scatter(
             [p["M"] for p in slack],
             [p["E"] for p in slack],
@@ -796,8 +806,8 @@ def _front_axes(
             edgecolors=matplotlib.colormaps["viridis"](
                 norm(np.log10(np.maximum([p["w_manip"] / p["w_effort"] for p in slack], 1e-4)))
             ),
-            s=9 if medium is PAPER else 22,
-            linewidths=0.6,
+            s=size,
+            linewidths=0.9,
             zorder=2,
         )
     elif info["degenerate"]:

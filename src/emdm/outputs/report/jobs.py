@@ -472,7 +472,7 @@ def convergence_panel(histories: dict[str, Any], count: str) -> pf.ConvergencePa
         return None
     task = "Task 1" if histories["scenario"] == "task1" else "Task 2"
     return pf.ConvergencePanel(
-        f"{task}, $k={steps[rep]}$",
+        f"{task} {histories['controller']}, $k={steps[rep]}$",  # whose program it is
         "iterations" if count == "iteration" else "objective evaluations",
         curves,
     )

@@ -300,11 +300,11 @@ class Pitch:
         if not gains:
             return [sentence("Task scaling keeps the tip on its line at no cost we could measure")]
         return [
-            sentence(
+            sentence(  # two short sentences: the policy's gain, then its costs
                 "Where the limits forbid the asked tip velocity, slowing the tip keeps its path "
-                "straight; a slack instead made our Task 1 C-EMDM ",
+                "straight. A slack made our Task 1 C-EMDM ",
                 listed(gains),
-                ", and slowing stalls Task 2's C-IVKC",
+                "; slowing stalls Task 2's C-IVKC",
             )
         ]
 
