@@ -930,3 +930,31 @@ def test_the_paper_quotes_the_largest_derivative_error_of_every_run(quick_report
     for key in path.split("/"):
         quoted = quoted[key]
     assert quoted == worst < 1e-8
+
+
+def test_park_is_called_rrmc_on_the_ur5_only_when_their_outcomes_are_equal(quick_report, tmp_path):
+    """Reading 112: the page said 'PARK is RRMC' on the UR5 while its own table showed 31 and
+    33 runs not reached. The sentence says 'is' only when every outcome agrees, and otherwise
+    'nearly matches', with both counts."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "mmc.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    if "ur5" not in record["results"]:
+        pytest.skip("the quick study has no UR5 benchmark")
+
+    def said() -> str:
+        section = Story(Data(root)).beyond()
+        return " ".join(render_latex(p) for p in section.paragraphs)
+
+    ur5 = record["results"]["ur5"]
+    ur5["PARK"] = dict(ur5["RRMC"])  # equal outcomes
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert "PARK is RRMC" in said()
+    ur5["PARK"]["not_reached"] = ur5["RRMC"]["not_reached"] - 2
+    path.write_text(json.dumps(record), encoding="utf-8")
+    text = said()
+    assert "PARK is RRMC" not in text and "nearly matches RRMC" in text

@@ -6,7 +6,7 @@ from typing import Any
 
 from ....core.controllers import Name
 from ..document import Section, Table
-from ..trace import Num, Sentence, sentence, traced
+from ..trace import Math, Num, Sentence, sentence, traced
 from .base import (
     StoryBase,
 )
@@ -137,13 +137,30 @@ class Beyond(StoryBase):
             )
         if "ur5" in arms:
             u = "ur5"
+            same = all(  # every outcome the table shows, equal: then PARK *is* RRMC here
+                rv(u, Name.PARK, key) == rv(u, Name.RRMC, key)
+                for key in ("not_reached", "left_joint_limits", "mean_manipulability")
+            )
             sec.paragraphs.append(
                 sentence(
-                    "On the non-redundant UR5 the null space is empty, so PARK is RRMC (failure "
-                    "rates ",
+                    "On the non-redundant UR5 the null space is empty wherever ",
+                    Math("J", "<i>J</i>"),
+                    " has full rank, so PARK "
+                    + ("is RRMC" if same else "nearly matches RRMC")
+                    + " (failure rates ",
                     r(u, Name.PARK, "failure_rate", ".1f", "%"),
                     " and ",
                     r(u, Name.RRMC, "failure_rate", ".1f", "%"),
+                    *(
+                        ()
+                        if same
+                        else (
+                            "; not reached ",
+                            r(u, Name.PARK, "not_reached", "d"),
+                            " and ",
+                            r(u, Name.RRMC, "not_reached", "d"),
+                        )
+                    ),
                     "), as in the published table; its manipulability is lower than published (",
                     r(u, Name.RRMC, "mean_manipulability", ".4f"),
                     " against ",
