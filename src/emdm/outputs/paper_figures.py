@@ -376,6 +376,10 @@ def pair_figure(
         if end is not None:  # the stalled runs' flat tails add nothing: the arrivals get room
             for ax in (ax_m, q_axes[0], qd_axes[0]):  # each shares its time axis with others
                 ax.set_xlim(-0.02 * end, 1.03 * end)
+        # the two joint columns side by side read one time axis: the same ticks (each column
+        # would pick its own for its width, 0/5/10/15 beside 0/10)
+        for ax in (q_axes[0], qd_axes[0]):
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=3, steps=[1, 2, 5, 10]))
         q_axes[-1].set_xlabel(r"$t$ (s)")
         qd_axes[-1].set_xlabel(r"$t$ (s)")
         joint_q, joint_qd = ("(e)", "(f)") if gap or path else ("(d)", "(e)")
