@@ -1406,8 +1406,10 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
     sc = runs[0].scenario
     arm = sc.planar_arm
     reach = arm.reach
-    width = medium.wide if medium is SLIDE else medium.column
-    height = 2.75 if medium is SLIDE else 1.9
+    # on a slide: drawn at about the size shown (0.72-0.78 of the text width), so that its
+    # text is projected at its own size (at the full width it shrank to about 7 pt)
+    width = 4.4 if medium is SLIDE else medium.column
+    height = 2.3 if medium is SLIDE else 1.9
     biggest = max(
         float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(q) @ arm.jacobian(q).T)[-1]))
         for run in runs
