@@ -958,3 +958,37 @@ def test_park_is_called_rrmc_on_the_ur5_only_when_their_outcomes_are_equal(quick
     path.write_text(json.dumps(record), encoding="utf-8")
     text = said()
     assert "PARK is RRMC" not in text and "nearly matches RRMC" in text
+
+
+def test_the_benchmark_sentences_name_whom_they_compare(quick_report, tmp_path):
+    """Reading 114: 'MMC fails least on both arms' while C-EMDM tied it on the UR5, and 'its
+    manipulability' (PARK's, by the sentence) quoted RRMC's value. MMC is compared with the
+    published table's RRMC and PARK, strictly, and the UR5 value is said to be RRMC's."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "mmc.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    arms = [a for a in ("panda", "ur5") if a in record["results"]]
+    if not arms:
+        pytest.skip("the quick study has no benchmark")
+
+    def said() -> str:
+        section = Story(Data(root)).beyond()
+        return " ".join(render_latex(p) for p in (section.answer, *section.paragraphs))
+
+    for a in arms:
+        results = record["results"][a]
+        results["MMC"]["failure_rate"] = (
+            min(results[c]["failure_rate"] for c in ("RRMC", "PARK")) - 1.0
+        )
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert "fails less often than RRMC and PARK on both arms" in said()
+    results = record["results"][arms[-1]]
+    results["MMC"]["failure_rate"] = results["RRMC"]["failure_rate"]  # a tie is not 'less'
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert "not always less often than RRMC and PARK" in said()
+    if "ur5" in arms:
+        assert "RRMC's manipulability is lower than published" in said()
