@@ -164,6 +164,7 @@ SCALED_SPAN: dict[str, Any] = {
     "facecolor": "#F0F0F0",
     "edgecolor": "#A8A8A8",
     "hatch": "////",
+    "hatch_linewidth": 0.4,
     "linewidth": 0,
 }
 """How the task-scaled time spans are drawn, and their legend patch: light grey hatched, so
@@ -172,15 +173,12 @@ that in a greyscale print they stay apart from the damper zones' plain tint."""
 
 def _scaled_patch(label: str) -> Patch:
     """The legend entry of :func:`_shade`'s spans."""
-    patch = Patch(**SCALED_SPAN, label=label)
-    patch.set_hatch_linewidth(0.4)
-    return patch
+    return Patch(**SCALED_SPAN, label=label)
 
 
 def _shade(ax: Any, spans: list[tuple[float, float]]) -> None:
     for a, b in spans:
-        span = ax.axvspan(a, b, **SCALED_SPAN, zorder=0)
-        span.set_hatch_linewidth(0.4)
+        ax.axvspan(a, b, **SCALED_SPAN, zorder=0)
 
 
 def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
