@@ -221,8 +221,8 @@ def _damper_zones(ax: Any, lo: float, hi: float, influence: float, stop: float) 
     """Shade a joint's damper zones against its position limits ``lo``, ``hi``: the influence
     zone light, the stop zone dark (the pair figures' (d) and Fig. 7's (c))."""
     for a, b, shade in (
-        (hi - influence, hi, 0.2),
-        (lo, lo + influence, 0.2),
+        (hi - influence, hi, 0.3),
+        (lo, lo + influence, 0.3),
         (hi - stop, hi, 0.55),
         (lo, lo + stop, 0.55),
     ):

@@ -1,7 +1,8 @@
 """Figures of runs: time series and workspace paths, overlaid for comparison (brief Task 1 and 2).
 
 Every figure is one IEEE column wide (3.5 in), in the shared style (:mod:`emdm.style`), saved as
-PNG, PDF and SVG. Controllers keep their colour and dash in every figure: EMDM blue, IVKC orange,
+PNG, PDF and SVG. Controllers keep their colour and dash in every figure: EMDM blue (UC-EMDM indigo, so that
+it prints darker than UC-IVKC's orange in greyscale), IVKC orange (C-IVKC vermilion),
 constrained solid, unconstrained dashed.
 """
 

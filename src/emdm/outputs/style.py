@@ -31,7 +31,8 @@ OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "
 CONTROLLER_STYLE: dict[str, dict[str, Any]] = {
     Name.UC_IVKC: {"color": "#E69F00", "linestyle": "--"},
     Name.C_IVKC: {"color": "#D55E00", "linestyle": "-"},
-    Name.UC_EMDM: {"color": "#56B4E9", "linestyle": "--"},
+    Name.UC_EMDM: {"color": "#332288", "linestyle": "--"},  # Tol's indigo: sky blue printed as
+    # UC-IVKC's orange does in greyscale (both about 160 of 255); indigo prints at about 50
     Name.C_EMDM: {"color": "#0072B2", "linestyle": "-"},
     Name.RRMC: {"color": "#999999", "linestyle": ":"},
     Name.PARK: {"color": "#CC79A7", "linestyle": "-."},
