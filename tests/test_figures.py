@@ -487,6 +487,18 @@ def test_convergence_panels_share_each_solvers_style_and_the_table_is_their_lege
                 dashed = panel.curves[line.get_label()][0] == "gradient-free"
                 assert (line.get_linestyle() == "--") == dashed
     assert len(set(styles.values())) == 3  # three solvers, three styles
+    # split by family: Task 2's gradient-free solvers get an axes of their own, on one scale
+    panels[1] = pf.ConvergencePanel("Task 2, $k=9$", "objective evaluations", task2, True)
+    with formats((".png",)):
+        pf.convergence_figure(panels, tmp_path / "split", glyphs=tmp_path / "glyphs")
+    fig = next(f for f in reversed(drawn) if len(f.axes) == 3)
+    named = [{ln.get_label() for ln in ax.get_lines()} & {"slsqp", "cobyla"} for ax in fig.axes]
+    assert named == [{"slsqp"}, {"slsqp"}, {"cobyla"}]
+    assert len({ax.get_ylim() for ax in fig.axes}) == 1
+    assert [t.get_text() for t in fig.axes[2].texts] == ["gradient-free"]
+    assert pf.ConvergencePanel("t", "x", {"slsqp": task2["slsqp"]}, True).parts() == [
+        ("", {"slsqp": task2["slsqp"]})
+    ]  # one family only: not split
     twelve = pf.solver_styles([f"s{i}" for i in range(12)])  # (the paper draws twelve)
     assert len({colour for colour, _ in twelve.values()}) == 12
     assert sorted(p.stem for p in (tmp_path / "glyphs").glob("*.png")) == [

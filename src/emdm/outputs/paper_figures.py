@@ -1145,6 +1145,20 @@ class ConvergencePanel:
     title: str
     xlabel: str
     curves: Mapping[str, Curve]
+    by_family: bool = False
+    """Draw the gradient-free solvers in an axes of their own beside the others (under one
+    title): nine curves in one column-wide panel could not be told apart."""
+
+    def parts(self) -> list[tuple[str, Mapping[str, Curve]]]:
+        """The panel's axes: (name, curves) each, the name empty for a whole panel; two when
+        split by family and both are present, the gradient-free ones second."""
+        if not self.by_family:
+            return [("", self.curves)]
+        free = {k: c for k, c in self.curves.items() if c[0] == "gradient-free"}
+        rest = {k: c for k, c in self.curves.items() if c[0] != "gradient-free"}
+        if not free or not rest:
+            return [("", self.curves)]
+        return [("gradient-based", rest), ("gradient-free", free)]
 
 
 def solver_styles(names: Sequence[str]) -> dict[str, tuple[str, str]]:
@@ -1181,40 +1195,34 @@ def convergence_figure(
     width = medium.column if medium is PAPER else 3.3 * len(panels)
     with _figure(stem, medium, width, height) as fig:
         # a busier panel gets more room (Task 2's nine solvers against Task 1's four)
-        widths = [max(1, len(panel.curves)) ** 0.5 for panel in panels]
-        axes = fig.subplots(1, len(panels), squeeze=False, width_ratios=widths)[0]
-        for ax, panel in zip(axes, panels, strict=True):
-            for name, (kind, counts, error, returned) in panel.curves.items():
-                # the marker at the solver's last count, at its returned answer's error: one
-                # done in a few evaluations (slsqp) is a short trace ending in its marker
-                colour, mark = styles[name]
-                ax.loglog(
-                    counts,
-                    error,
-                    color=colour,
-                    linestyle=FAMILY_DASH.get(kind, ":"),
-                    linewidth=medium.line,
-                    marker=mark,
-                    markevery=[],  # the legend's marker; the plotted one below
-                    markersize=size,
-                    label=name,
-                )
-                end = error[-1] if returned is None else max(returned, 1e-17)  # (the floor)
-                ax.plot(
-                    [counts[-1]],
-                    [end],
-                    linestyle="none",
-                    color=colour,
-                    marker=mark,
-                    markersize=size,
-                )
-            ax.set_xlabel(panel.xlabel, labelpad=1)
-            ax.set_title(panel.title, fontsize=medium.small, pad=2)
-            # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this size
-            ax.yaxis.set_major_locator(
-                matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)])
-            )
-            ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+        parts = [panel.parts() for panel in panels]
+        widths = [sum(max(1, len(c)) ** 0.5 for _, c in part) for part in parts]
+        subs = fig.subfigures(1, len(panels), squeeze=False, width_ratios=widths, wspace=0)[0]
+        axes: list[Axes] = []
+        for sub, panel, part in zip(subs, panels, parts, strict=True):
+            own = sub.subplots(
+                1,
+                len(part),
+                squeeze=False,
+                sharey=True,
+                width_ratios=[max(1, len(c)) ** 0.5 for _, c in part],
+            )[0]
+            for ax, (name, curves) in zip(own, part, strict=True):
+                _convergence_axes(ax, curves, styles, medium, size)
+                if name:  # which family, where the curves leave room (they fall left to right)
+                    ax.text(0.04, 0.05, name, transform=ax.transAxes, fontsize=medium.tiny)
+            if len(own) == 1:  # over the axes (a subfigure's title would centre on its label too)
+                own[0].set_title(panel.title, fontsize=medium.small, pad=2)
+                own[0].set_xlabel(panel.xlabel, labelpad=1)
+            else:
+                sub.suptitle(panel.title, fontsize=medium.small)
+                sub.supxlabel(panel.xlabel, fontsize=matplotlib.rcParams["axes.labelsize"])
+            axes.extend(own)
+        bottom = min(min(ax.get_ylim()) for ax in axes)
+        top = max(max(ax.get_ylim()) for ax in axes)
+        for ax in axes:  # one error scale across the programs, its ticks labelled once
+            ax.set_ylim(bottom, top)
+            ax.tick_params(labelleft=ax is axes[0])
         axes[0].set_ylabel(
             r"best $|f-f^*|$ + viol." if medium is not PAPER else r"$|f-f^*|$ + viol.", labelpad=1
         )
@@ -1232,6 +1240,37 @@ def convergence_figure(
         for name, (colour, mark) in styles.items():
             solver_glyph(colour, mark, FAMILY_DASH.get(family[name], ":"), glyphs / name, medium)
     return stem
+
+
+def _convergence_axes(
+    ax: Axes,
+    curves: Mapping[str, Curve],
+    styles: Mapping[str, tuple[str, str]],
+    medium: Medium,
+    size: float,
+) -> None:
+    """One axes of :func:`convergence_figure`: each solver's running best and, at its last
+    count, the error of the answer it returns."""
+    for name, (kind, counts, error, returned) in curves.items():
+        # the marker at the solver's last count, at its returned answer's error: one done in a
+        # few evaluations (slsqp) is a short trace ending in its marker
+        colour, mark = styles[name]
+        ax.loglog(
+            counts,
+            error,
+            color=colour,
+            linestyle=FAMILY_DASH.get(kind, ":"),
+            linewidth=medium.line,
+            marker=mark,
+            markevery=[],  # the legend's marker; the plotted one below
+            markersize=size,
+            label=name,
+        )
+        end = error[-1] if returned is None else max(returned, 1e-17)  # (the floor)
+        ax.plot([counts[-1]], [end], linestyle="none", color=colour, marker=mark, markersize=size)
+    # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this size
+    ax.yaxis.set_major_locator(matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)]))
+    ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
 
 
 def solver_glyph(colour: str, mark: str, dash: str, stem: Path, medium: Medium = PAPER) -> Path:

@@ -475,6 +475,7 @@ def convergence_panel(histories: dict[str, Any], count: str) -> pf.ConvergencePa
         f"{task} {histories['controller']}, $k={steps[rep]}$",  # whose program it is
         "iterations" if count == "iteration" else "objective evaluations",
         curves,
+        by_family=count == "evaluations",  # the gradient-free ones beside the others
     )
 
 
