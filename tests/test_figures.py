@@ -601,3 +601,44 @@ def test_scaled_spans_are_hatched_apart_from_the_damper_tint(tmp_path, drawn):
     assert spans and tints  # the scaled spans hatched, the damper zones plain
     (legend,) = fig.legends
     assert any(getattr(h, "get_hatch", lambda: None)() == "////" for h in legend.legend_handles)
+
+
+def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point_on_linear_axes(tmp_path, drawn):
+    """The pitch's Pareto slide, for peers: one front and the whole runs on linear axes, no
+    colour scale; the ends and the nominal weights named at their points, the runs that miss
+    the goal named in a note and not drawn."""
+    from emdm.outputs import paper_figures as pf
+
+    ratios = [0.0, 1.0, 50.0, 1e4]
+    points = [
+        {"w_effort": 0.1, "w_manip": 0.1 * r, "E": 40 + r**1.3, "M": 2 + r / 300} for r in ratios
+    ]
+    front = {"nominal_ratio": 50.0, "steps": [{"k": 0, "points": points}]}
+    grid = [
+        {
+            "w_effort": 0.1,
+            "w_manip": 0.1 * r,
+            "reached": r < 1e3,
+            "total_effort": 5 + r / 100,
+            "mean_manipulability": 0.25 + r / 2e4,
+        }
+        for r in (0.0, 50.0, 351.0, 1e3)
+    ]
+    with formats((".png",)):
+        pf.pareto_slide_figure(front, {"nominal_index": 2}, grid, tmp_path / "p")
+    fig = drawn[-1]
+    assert len(fig.axes) == 2  # no colour bar
+    for ax in fig.axes:
+        assert ax.get_xscale() == ax.get_yscale() == "linear"
+    named = [{t.get_text(): t.xy for t in ax.texts if hasattr(t, "xy")} for ax in fig.axes]
+    assert named[0] == {
+        "effort only": (2.0, 40.0),
+        "nominal": (points[2]["M"], points[2]["E"]),
+        "$w_M/w_E=10^{4}$": (points[3]["M"], points[3]["E"]),
+    }
+    assert named[1]["$w_M/w_E=351$"] == (0.25 + 351 / 2e4, 5 + 3.51)
+    assert named[1]["nominal"] == (0.25 + 50 / 2e4, 5.5)
+    notes = [t.get_text() for t in fig.axes[1].texts if not hasattr(t, "xy")]
+    assert notes == ["$w_M/w_E=10^{3}$:\nmisses the goal"]
+    drawn_x = {float(x) for c in fig.axes[1].collections for x, _ in c.get_offsets()}
+    assert 0.25 + 1e3 / 2e4 not in drawn_x  # the missed run is not drawn

@@ -828,17 +828,15 @@ def pareto_figure(
     grids: dict[str, list[dict[str, Any]]],
     stem: Path,
     medium: Medium = PAPER,
-    steps: Sequence[int] = (0, 1, 2, 3),
-    width: float | None = None,
 ) -> Path:
-    """Rows: controllers (``fronts`` keys); columns: the fronts of the chosen ``steps`` (indices
-    into the four of the brief) and the whole-run trade-off (mean m against total effort per
-    weight setting; the settings that fail to reach are named). ``width`` (in): the width it is
-    shown at, so that its text keeps its size (default: the medium's full width)."""
+    """Rows: controllers (``fronts`` keys); columns: the fronts of the brief's four steps and the
+    whole-run trade-off (mean m against total effort per weight setting; the settings that fail
+    to reach are named). The paper's Fig. 2 (the pitch's is :func:`pareto_slide_figure`)."""
     names = list(fronts)
     norm = matplotlib.colors.Normalize(vmin=-3, vmax=4)
-    width = medium.wide if width is None else width
-    height = (0.92 * len(names) + 0.2) if medium is PAPER else 2.7 * width / medium.wide
+    width = medium.wide
+    height = (0.92 * len(names) + 0.2) if medium is PAPER else 2.7
+    steps = range(len(next(iter(fronts.values()))["steps"]))
     whole = len(steps)
     with _figure(stem, medium, width, height) as fig:
         axes = fig.subplots(len(names), whole + 1, squeeze=False)
@@ -908,6 +906,100 @@ def pareto_figure(
             if power:
                 ax.xaxis.get_offset_text().set_visible(False)
                 ax.set_xlabel(rf"$M$ ($10^{{{power}}}$ m$^2$/s)")
+    return stem
+
+
+def pareto_slide_figure(
+    front: dict[str, Any],
+    info: dict[str, Any],
+    grid: list[dict[str, Any]],
+    stem: Path,
+    step: int = 0,
+    width: float | None = None,
+    medium: Medium = SLIDE,
+) -> Path:
+    """The pitch's trade-off, for peers: one step's front (``step``, an index into the brief's
+    four) and the whole runs, on linear axes, with no colour scale: the ends and the nominal
+    weights are named where they are (effort only, nominal, the most dexterity-weighted), and
+    the settings that miss the goal are named in a note. The paper's :func:`pareto_figure`
+    shows every front on log axes."""
+    width = medium.wide if width is None else width
+    nominal = float(front["nominal_ratio"])
+    data, near = front["steps"][step], int(info["nominal_index"])
+    pts = data["points"]
+    ok = [r for r in grid if "error" not in r and r.get("reached")]
+    bad = [r for r in grid if "error" in r or not r.get("reached")]
+
+    def ratio(r: dict[str, Any]) -> float:
+        return float(r["w_manip"] / r["w_effort"])
+
+    with _figure(stem, medium, width, 2.2 * width / medium.wide) as fig:
+        left, right = fig.subplots(1, 2)
+        panels = (
+            (left, [p["M"] for p in pts], [p["E"] for p in pts], [ratio(p) for p in pts], near),
+            (
+                right,
+                [r["mean_manipulability"] for r in ok],
+                [r["total_effort"] for r in ok],
+                [ratio(r) for r in ok],
+                next((i for i, r in enumerate(ok) if np.isclose(ratio(r), nominal)), None),
+            ),
+        )
+        places_of = {
+            left: ((0.08, 0.45, "left"), (0.25, 0.2, "left")),
+            right: ((0.05, 0.22, "left"), (0.78, 0.32, "right")),
+        }
+        for ax, x, y, ratios, nom in panels:
+            ax.plot(x, y, color="grey", linewidth=0.6, zorder=1)
+            ax.scatter(x, y, s=14, color="#0072B2", zorder=2, linewidths=0)
+            if nom is not None:
+                _ring(ax, x[nom], y[nom], medium)
+            ends = [(0, "effort only"), (len(x) - 1, rf"$w_M/w_E={_ratio_tex(ratios[-1])}$")]
+            if nom is not None:
+                ends.insert(1, (nom, "nominal"))
+            # each name in the axes' empty upper left (the fronts run along the bottom and up
+            # the right): effort only above the foot, nominal beside it, the last to its left
+            places = dict(zip(("effort only", "nominal"), places_of[ax], strict=True))
+            to_axes = ax.transAxes + ax.transData.inverted()
+            for at, label in ends:
+                x_text, y_text, ha = places.get(label, (0.62, 0.92, "right"))
+                ax.annotate(
+                    label,
+                    (x[at], y[at]),
+                    xytext=to_axes.transform((x_text, y_text)),
+                    fontsize=medium.tiny,
+                    ha=ha,
+                    va="center",
+                    arrowprops={"arrowstyle": "-", "color": "grey", "linewidth": 0.6},
+                )
+            ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useMathText=True)
+            ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+            ax.set_xlim(min(x) - 0.06 * (max(x) - min(x)), max(x) + 0.06 * (max(x) - min(x)))
+        left.set_title(f"one step: the start ($k={data['k']}$)", fontsize=medium.small)
+        left.set_xlabel(r"dexterity gain $M$ (m$^2$/s)")
+        left.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
+        right.set_title("whole runs", fontsize=medium.small)
+        right.set_xlabel(r"mean manipulability $m$ (m$^2$)")
+        right.set_ylabel(r"total effort (rad$^2$/s)")
+        if bad:  # not drawn: their effort would flatten the others
+            text = ", ".join(_ratio_tex(ratio(r)) for r in bad)
+            right.text(
+                0.03,
+                0.78,
+                rf"$w_M/w_E={text}$:" + "\nmisses the goal",
+                transform=right.transAxes,
+                ha="left",
+                va="top",
+                fontsize=medium.tiny,
+                color="#A0410A",
+            )
+        fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
+        for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):
+            power = _offset_power(ax.yaxis.get_major_formatter())
+            if power:
+                ax.yaxis.get_offset_text().set_visible(False)
+                label = ax.get_ylabel().split(" (")[0]
+                ax.set_ylabel(rf"{label} ($10^{{{power}}}$ {unit})")
     return stem
 
 

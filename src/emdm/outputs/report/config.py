@@ -58,9 +58,9 @@ QUICK = ReportConfig(
     mmc_trials=40,
 )
 
-SLIDE_PARETO_STEPS = (0, 3)
-"""The pitch's Pareto slide: the first and the last front (k = 0 and T), the cheapest and, in
-this study, the dearest nominal step, each said on the slide."""
+SLIDE_PARETO_STEP = 0
+"""The pitch's Pareto slide: the front it draws, the first (k = 0), beside the whole runs; a
+later front the slide speaks of is said to be not shown."""
 
 GLYPHS = "figures/glyphs"
 """Under ``paper/``: each solver's line and marker in the convergence figure, drawn beside its

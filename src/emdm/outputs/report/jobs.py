@@ -57,7 +57,7 @@ from .config import (
     GLYPHS,
     PAIRS,
     QUICK,
-    SLIDE_PARETO_STEPS,
+    SLIDE_PARETO_STEP,
     TASKS,
     Evidence,
     ReportConfig,
@@ -405,13 +405,12 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     out.append(str(pf.pareto_figure(fronts, infos, grids, stage / PAPER_FIGURES / "pareto")))
     out.append(
         str(
-            pf.pareto_figure(
-                {Name.UC_EMDM: fronts[Name.UC_EMDM]},
-                {Name.UC_EMDM: infos[Name.UC_EMDM]},
-                {Name.UC_EMDM: grids[Name.UC_EMDM]},
+            pf.pareto_slide_figure(
+                fronts[Name.UC_EMDM],
+                infos[Name.UC_EMDM][SLIDE_PARETO_STEP],
+                grids[Name.UC_EMDM],
                 stage / SLIDE_FIGURES / "pareto",
-                pf.SLIDE,
-                steps=SLIDE_PARETO_STEPS,
+                step=SLIDE_PARETO_STEP,
                 width=SLIDE_PARETO_WIDTH,
             )
         )

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...core.controllers import Name
-from .config import SLIDE_PARETO_STEPS
+from .config import SLIDE_PARETO_STEP
 from .document import Document
 from .findings import DT, M_SYM, MRATE, RATIO, Story
 from .findings.base import C_S, T_EQ, eq
@@ -42,12 +42,11 @@ class Pitch:
                 "Move the end effector to a goal, tracking the velocity a proportional "
                 "controller asks for,"
             ),
-            sentence(
-                "while spending little joint-velocity effort and staying dexterous (large ",
+            sentence(  # one bullet: the costs and the bounds are one idea, the program
+                "while spending little joint-speed effort and staying dexterous (large ",
                 M_SYM,
-                ")",
+                "), within joint-speed limits and position dampers",
             ),
-            sentence("within joint-velocity limits and position dampers"),
             sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
             sentence(
                 "Why: a dexterous arm can still move its tip in every direction, ready for the "
@@ -291,7 +290,7 @@ class Pitch:
             " later (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
-            ")" if i in SLIDE_PARETO_STEPS else ", not shown)",
+            ")" if i == SLIDE_PARETO_STEP else ", not shown)",
         )
 
     def policy(self) -> list[Sentence]:
