@@ -174,8 +174,9 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
         assert own == {"C-IVKC": {"weights.slack": w.slack / w.effort}}, key
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
     text = (root / "index.html").read_text(encoding="utf-8")
-    # both outcomes first (the stall is the policy's), then where the scaled run stops
-    assert "under task scaling cannot, and stalls. With a free slack, C-IVKC arrives" in text
+    # both policies' outcomes first (the stall is the policy's), then where the scaled run stops
+    assert "Under task scaling, C-EMDM leaves the straight line" in text
+    assert "C-IVKC cannot leave it, and stalls. With a free slack, C-IVKC arrives" in text
     assert " on the scaled C-IVKC stalls " in text
     assert "evidence" in text.lower()
 

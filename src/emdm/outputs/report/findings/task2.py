@@ -92,11 +92,11 @@ class Task2(Claims):
         )
         stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
         both_first = stalled and first
-        if both_first:  # both outcomes in the first sentence: the stall is the policy's
+        if both_first:  # both policies' outcomes, side by side, first: the stall is the policy's
             answer = sentence(
-                f"{emdm} can leave the straight line to the goal and reaches it in ",
+                f"Under task scaling, {emdm} leaves the straight line and reaches the goal in ",
                 self.ttg(t, emdm),
-                f"; {ivkc} under task scaling cannot, and stalls. ",
+                f"; {ivkc} cannot leave it, and stalls. ",
                 *cap(self.ivkc_with_slack()),  # the shared claim, cites Table I
             )
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
