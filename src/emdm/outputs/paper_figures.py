@@ -636,7 +636,7 @@ def workspace_figure(
                 linestyle="-.",
                 marker="o",
                 markersize=2.5,
-                label="goal past $q_1$ limit",
+                label="elbow-up goal (past $q_1$ limit)",
             ),
             Line2D(  # in the colour of the run that stalls, as drawn
                 [],
@@ -665,6 +665,11 @@ def workspace_figure(
             labelspacing=0.35,
         )
     return stem
+
+
+NOTE_COLOR = "#A0410A"
+"""A warning note in a figure (runs not reached): a dark vermilion, which prints at about a
+third of full grey, where the vermilion of the lines (#D55E00) printed pale."""
 
 
 def _plain(v: float) -> str:
@@ -891,7 +896,7 @@ def pareto_figure(
                     ha="left",
                     va="top",
                     fontsize=medium.tiny,
-                    color="#D55E00",
+                    color=NOTE_COLOR,
                 )
             ax.set_title("whole runs", fontsize=medium.small)
             ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
@@ -991,7 +996,7 @@ def pareto_slide_figure(
                 ha="left",
                 va="top",
                 fontsize=medium.tiny,
-                color="#A0410A",
+                color=NOTE_COLOR,
             )
         fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
         for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):

@@ -259,7 +259,7 @@ class Task1(StoryBase):
             Math("w_M=0", "<i>w</i><sub>M</sub> = 0"),
             " at the bar's foot; circle: nominal",
             *(  # the nominal ratio, in neither sweep's count (readings took it for missing)
-                (", ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
+                (" ratio ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
                 if self.d.exists(PARETO_RECORD)
                 else ()
             ),
