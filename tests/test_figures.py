@@ -642,3 +642,36 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point_on_linear_axes
     assert notes == ["$w_M/w_E=10^{3}$:\nmisses the goal"]
     drawn_x = {float(x) for c in fig.axes[1].collections for x, _ in c.get_offsets()}
     assert 0.25 + 1e3 / 2e4 not in drawn_x  # the missed run is not drawn
+
+
+def test_the_workspace_figure_names_start_and_goal_on_a_slide_and_keeps_the_full_legend_in_print(
+    tmp_path, drawn
+):
+    """Fig. 4 and its slide: the paper's legend names every mark (the arm, the goal, the
+    reachable disc among them); the slide's names the start and the goal where they are, leaves
+    the grey disc unnamed and puts its legend under the axes (a ten-entry legend beside the
+    axes took their width)."""
+    from emdm.outputs import paper_figures as pf
+    from emdm.outputs.report import explain
+
+    sc = emdm.load_scenario("task2")
+    pair = [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")]
+    geometry = explain.geometry(sc, pair[0].p[0])
+    assert geometry is not None
+    labels = {}
+    for medium in (pf.PAPER, pf.SLIDE):
+        with formats((".png",)):
+            pf.workspace_figure(pair, geometry, tmp_path / medium.name, medium)
+        fig = drawn[-1]
+        (legend,) = fig.legends
+        labels[medium.name] = [t.get_text() for t in legend.get_texts()]
+        named = {t.get_text(): t.xy for t in fig.axes[0].texts if hasattr(t, "xy")}
+        if medium is pf.SLIDE:
+            assert named.keys() == {"start", "goal"}
+            assert np.allclose(named["start"], pair[0].p[0][:2])
+            assert np.allclose(named["goal"], sc.motion.goal)
+        else:
+            assert not named
+    assert {"reachable", "arm: start, goal", "goal"} <= set(labels["paper"])
+    assert set(labels["slide"]) == set(labels["paper"]) - {"reachable", "arm: start, goal", "goal"}
+    assert len(labels["slide"]) == 7

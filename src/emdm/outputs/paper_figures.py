@@ -516,7 +516,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.9  # on a slide: 0.62 of its width
-    height = 1.42 if medium is PAPER else 2.7
+    height = 1.42 if medium is PAPER else 3.3
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -610,8 +610,23 @@ def workspace_figure(
         ax.set_xlabel(r"$x$ (m)")
         ax.set_ylabel(r"$y$ (m)")
         handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
+        if medium is not PAPER:  # a slide names the start and the goal where they are, and
+            # leaves the grey disc unnamed: a legend of ten entries was too much to read in a talk
+            for xy, name, offset, ha in (
+                (p0[:2], "start", (-6, 6), "right"),
+                (goal, "goal", (-7, 8), "right"),
+            ):
+                ax.annotate(
+                    name,
+                    xy,
+                    xytext=offset,
+                    textcoords="offset points",
+                    fontsize=medium.tiny,
+                    ha=ha,
+                    va="center",
+                )
         handles += [
-            Patch(color="#BBBBBB", alpha=0.25, label="reachable"),
+            *([Patch(color="#BBBBBB", alpha=0.25, label="reachable")] if medium is PAPER else []),
             Line2D([], [], **line_style, label="straight line"),
             Patch(
                 facecolor="none",
@@ -619,16 +634,30 @@ def workspace_figure(
                 hatch="////",
                 label=rf"$\|p\|<{inner:.3f}$ m",
             ),
-            Line2D(
-                [],
-                [],
-                color="black",
-                linewidth=0.8 * medium.line,
-                marker="o",
-                markersize=2.5,
-                label="arm: start, goal",
+            *(
+                [
+                    Line2D(
+                        [],
+                        [],
+                        color="black",
+                        linewidth=0.8 * medium.line,
+                        marker="o",
+                        markersize=2.5,
+                        label="arm: start, goal",
+                    ),
+                    Line2D(
+                        [],
+                        [],
+                        color="black",
+                        marker="*",
+                        markersize=6,
+                        linestyle="none",
+                        label="goal",
+                    ),
+                ]
+                if medium is PAPER
+                else []
             ),
-            Line2D([], [], color="black", marker="*", markersize=6, linestyle="none", label="goal"),
             Line2D(
                 [],
                 [],
@@ -656,13 +685,15 @@ def workspace_figure(
                 label=r"elbow flip",
             ),
         ]
-        fig.legend(
+        fig.legend(  # on a slide under the axes, in two columns: beside them it took their width
             handles=handles,
-            loc="outside right center",
+            loc="outside right center" if medium is PAPER else "outside lower center",
+            ncols=1 if medium is PAPER else 2,
             frameon=False,
             fontsize=medium.tiny,
             handlelength=1.6,
             labelspacing=0.35,
+            columnspacing=1.0,
         )
     return stem
 
