@@ -618,7 +618,7 @@ def workspace_figure(
             ):
                 ax.annotate(
                     name,
-                    xy,
+                    (float(xy[0]), float(xy[1])),
                     xytext=offset,
                     textcoords="offset points",
                     fontsize=medium.tiny,
