@@ -603,10 +603,11 @@ def test_scaled_spans_are_hatched_apart_from_the_damper_tint(tmp_path, drawn):
     assert any(getattr(h, "get_hatch", lambda: None)() == "////" for h in legend.legend_handles)
 
 
-def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point_on_linear_axes(tmp_path, drawn):
-    """The pitch's Pareto slide, for peers: one front and the whole runs on linear axes, no
-    colour scale; the ends and the nominal weights named at their points, the runs that miss
-    the goal named in a note and not drawn."""
+def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, drawn):
+    """The pitch's Pareto slide, for peers: one front (its effort on a log axis, as it spans
+    decades) and the whole runs (linear), no colour scale; the ends and the nominal weights
+    named at their points, one name for two that would overlap, the runs that miss the goal
+    named in a note and not drawn."""
     from emdm.outputs import paper_figures as pf
 
     ratios = [0.0, 1.0, 50.0, 1e4]
@@ -628,8 +629,10 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point_on_linear_axes
         pf.pareto_slide_figure(front, {"nominal_index": 2}, grid, tmp_path / "p")
     fig = drawn[-1]
     assert len(fig.axes) == 2  # no colour bar
-    for ax in fig.axes:
-        assert ax.get_xscale() == ax.get_yscale() == "linear"
+    assert [(ax.get_xscale(), ax.get_yscale()) for ax in fig.axes] == [
+        ("linear", "log"),
+        ("linear", "linear"),
+    ]
     named = [{t.get_text(): t.xy for t in ax.texts if hasattr(t, "xy")} for ax in fig.axes]
     assert named[0] == {
         "effort only": (2.0, 40.0),
@@ -642,6 +645,11 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point_on_linear_axes
     assert notes == ["$w_M/w_E=10^{3}$:\nmisses the goal"]
     drawn_x = {float(x) for c in fig.axes[1].collections for x, _ in c.get_offsets()}
     assert 0.25 + 1e3 / 2e4 not in drawn_x  # the missed run is not drawn
+    front["nominal_ratio"] = 1.0  # its point next to the effort-only one: one name for both
+    with formats((".png",)):
+        pf.pareto_slide_figure(front, {"nominal_index": 1}, grid, tmp_path / "p")
+    names = [t.get_text() for t in drawn[-1].axes[0].texts if hasattr(t, "xy")]
+    assert names == ["effort only, nominal", "$w_M/w_E=10^{4}$"]
 
 
 def test_the_workspace_figure_names_start_and_goal_on_a_slide_and_keeps_the_full_legend_in_print(

@@ -36,6 +36,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.font_manager import FontProperties
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
 from matplotlib.offsetbox import AnnotationBbox, DrawingArea, HPacker, TextArea, VPacker
 from matplotlib.patches import Circle, Patch
@@ -828,12 +829,13 @@ def _front_axes(
     if slack:  # the same state under the free slack (6): a front again, hollow
         ax.plot([p["M"] for p in slack], [p["E"] for p in slack], color="grey", lw=0.5, zorder=1)
         size = 14 if medium is PAPER else 30
-        ax.scatter(  # a thin dark ring around each: a light colour stays visible in grey
+        ax.scatter(  # a thin dark ring around each (a light colour stays visible in grey),
+            # white within: points that overlap (a front of nearly one point) stay hollow
             [p["M"] for p in slack],
             [p["E"] for p in slack],
-            facecolors="none",
+            facecolors="white",
             edgecolors="#333333",
-            s=size * 1.9,
+            s=size * 3.0,
             linewidths=0.35,
             zorder=2,
         )
@@ -844,7 +846,7 @@ def _front_axes(
             edgecolors=matplotlib.colormaps["viridis"](
                 norm(np.log10(np.maximum([p["w_manip"] / p["w_effort"] for p in slack], 1e-4)))
             ),
-            s=size,
+            s=size * 1.8,
             linewidths=0.9,
             zorder=2,
         )
@@ -990,12 +992,23 @@ def pareto_slide_figure(
             ax.scatter(x, y, s=14, color="#0072B2", zorder=2, linewidths=0)
             if nom is not None:
                 _ring(ax, x[nom], y[nom], medium)
+            if ax is left:  # one step's effort spans decades (Fig. 2's axis); the runs' do not
+                _value_axis(ax, y)
+            else:
+                ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useMathText=True)
+            ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+            ax.set_xlim(min(x) - 0.06 * (max(x) - min(x)), max(x) + 0.06 * (max(x) - min(x)))
             ends = [(0, "effort only"), (len(x) - 1, rf"$w_M/w_E={_ratio_tex(ratios[-1])}$")]
             if nom is not None:
                 ends.insert(1, (nom, "nominal"))
+                to_frac = ax.transData + ax.transAxes.inverted()
+                apart = to_frac.transform((x[nom], y[nom])) - to_frac.transform((x[0], y[0]))
+                if float(np.hypot(*apart)) < 0.05:  # one blob at this size: one name for both
+                    ends[:2] = [(nom, "effort only, nominal")]
             # each name in the axes' empty upper left (the fronts run along the bottom and up
             # the right): effort only above the foot, nominal beside it, the last to its left
             places = dict(zip(("effort only", "nominal"), places_of[ax], strict=True))
+            places["effort only, nominal"] = places["nominal"]
             to_axes = ax.transAxes + ax.transData.inverted()
             for at, label in ends:
                 x_text, y_text, ha = places.get(label, (0.62, 0.92, "right"))
@@ -1008,9 +1021,6 @@ def pareto_slide_figure(
                     va="center",
                     arrowprops={"arrowstyle": "-", "color": "grey", "linewidth": 0.6},
                 )
-            ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useMathText=True)
-            ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
-            ax.set_xlim(min(x) - 0.06 * (max(x) - min(x)), max(x) + 0.06 * (max(x) - min(x)))
         left.set_title(f"one step: the start ($k={data['k']}$)", fontsize=medium.small)
         left.set_xlabel(r"dexterity gain $M$ (m$^2$/s)")
         left.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
@@ -1031,6 +1041,8 @@ def pareto_slide_figure(
             )
         fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
         for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):
+            if ax.get_yscale() == "log":
+                continue
             power = _offset_power(ax.yaxis.get_major_formatter())
             if power:
                 ax.yaxis.get_offset_text().set_visible(False)
@@ -1326,6 +1338,10 @@ def convergence_figure(
         parts = [panel.parts() for panel in panels]
         widths = [sum(max(1, len(c)) ** 0.5 for _, c in part) for part in parts]
         subs = fig.subfigures(1, len(panels), squeeze=False, width_ratios=widths, wspace=0)[0]
+        engine = fig.get_layout_engine()
+        if isinstance(engine, ConstrainedLayoutEngine) and any(len(p) > 1 for p in parts):
+            # split axes side by side: room between them, or their end ticks (10^1, 10^0) meet
+            engine.set(wspace=0.08)
         axes: list[Axes] = []
         for sub, panel, part in zip(subs, panels, parts, strict=True):
             own = sub.subplots(
@@ -1338,7 +1354,15 @@ def convergence_figure(
             for ax, (name, curves) in zip(own, part, strict=True):
                 _convergence_axes(ax, curves, styles, medium, size)
                 if name:  # which family, where the curves leave room (they fall left to right)
-                    ax.text(0.04, 0.05, name, transform=ax.transAxes, fontsize=medium.tiny)
+                    ax.text(
+                        0.04,
+                        0.05,
+                        name,
+                        transform=ax.transAxes,
+                        fontsize=medium.tiny,
+                        bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.8},
+                        zorder=1.5,  # under the curves: a marker is never hidden
+                    )
             if len(own) == 1:  # over the axes (a subfigure's title would centre on its label too)
                 own[0].set_title(panel.title, fontsize=medium.small, pad=2)
                 own[0].set_xlabel(panel.xlabel, labelpad=1)
