@@ -907,6 +907,40 @@ def test_task2_slack_headline_stands_on_its_three_evidence_runs(quick_report, tm
     assert not any("not the dexterity term" in t for t in takeaways)
 
 
+def test_the_policy_take_away_is_one_message_from_the_free_slack_runs(quick_report, tmp_path):
+    """Take-away 2 says one thing, a slack did better than slowing the tip, with what it
+    gained in Task 1 and whether Task 2's C-IVKC arrives with one; 'slowing only keeps the
+    path straight' only while the slack wins on every outcome (as the paper's conclusion)."""
+    from emdm.outputs.report.pitch import Pitch
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "evidence.json"
+    evidence = json.loads(path.read_text(encoding="utf-8"))
+
+    def policy() -> str:
+        return " ".join(render_latex(b) for b in Pitch(Data(root), document(root)).policy())
+
+    story = Pitch(Data(root), document(root)).s
+    gains = story.slack_gains()
+    text = policy()
+    if gains:
+        assert text.startswith("Where the limits forbid the asked tip velocity, a slack did better")
+        assert ("let Task 2's C-IVKC arrive" in text) == bool(story.ivkc_with_slack())
+        assert ("Slowing only keeps" in text) == (len(gains) == 3)
+    slack = evidence["runs"]["t1-c-slack-policy"]["runs"]["C-EMDM"]
+    metrics = json.loads((root / "data" / "task1" / "metrics.json").read_text(encoding="utf-8"))
+    nominal = metrics["controllers"]["C-EMDM"]
+    slack["time_to_goal"] = nominal["time_to_goal"] - 1.0  # faster
+    slack["total_effort"] = nominal["total_effort"] * 2.0  # dearer
+    slack["mean_manipulability"] = nominal["mean_manipulability"] * 1.1  # more dexterous
+    path.write_text(json.dumps(evidence), encoding="utf-8")
+    text = policy()
+    assert "C-EMDM faster and more dexterous" in text
+    assert "Slowing keeps the path straighter" in text and "only" not in text
+
+
 def test_the_paper_quotes_the_largest_derivative_error_of_every_run(quick_report):
     """Section I's derivative check quotes the largest difference over every run's states and
     both Jacobians (a reader without the brief's code checks the derivatives by it)."""

@@ -43,9 +43,8 @@ class Pitch:
                 "controller asks for,"
             ),
             sentence(  # one bullet: the costs and the bounds are one idea, the program
-                "while spending little joint-speed effort and staying dexterous (large ",
-                M_SYM,
-                "), within joint-speed limits and position dampers",
+                "while spending little joint-speed effort and keeping the arm dexterous; the "
+                "constrained versions also keep within joint-speed limits and position dampers",
             ),
             sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
             sentence(
@@ -299,11 +298,14 @@ class Pitch:
         if not gains:
             return [sentence("Task scaling keeps the tip on its line at no cost we could measure")]
         return [
-            sentence(  # two short sentences: the policy's gain, then its costs
-                "Where the limits forbid the asked tip velocity, slowing the tip keeps its path "
-                "straight. A slack made our Task 1 C-EMDM ",
+            sentence(  # one message (a slack did better), then what slowing keeps (as the paper)
+                "Where the limits forbid the asked tip velocity, a slack did better than slowing "
+                "the tip: it made Task 1's C-EMDM ",
                 listed(gains),
-                "; slowing stalls Task 2's C-IVKC",
+                ", and let Task 2's C-IVKC arrive" if self.s.ivkc_with_slack() else "",
+                ". Slowing only keeps the path straight"
+                if self.s.slack_better_on_all()
+                else ". Slowing keeps the path straighter",
             )
         ]
 

@@ -91,6 +91,11 @@ class Claims(StoryBase):
         }
         return [adjectives[m] for m, better in self._policy_terms() if better]
 
+    def slack_better_on_all(self) -> bool:
+        """Task 1's C-EMDM with a free slack beats task scaling on every outcome weighed (time,
+        effort, mean m): scaling's only gain is then its straighter path."""
+        return all(better for _, better in self._policy_terms())
+
     def uc_slack_saving(self, speeds: bool = True) -> Sentence:
         """Task 2.2: what UC-EMDM's slack does against UC-IVKC (``speeds``: and the peak joint
         speeds, which the pitch leaves to its figure)."""

@@ -145,7 +145,7 @@ class Front(Claims):
         if gains:
             p += sentence(
                 "In Task 1 task scaling's only gain is a straighter path: "
-                if len(gains) == len(self._policy_terms())  # the slack wins on every other
+                if self.slack_better_on_all()
                 else "In Task 1 task scaling keeps a straighter path, but ",
                 "a free slack makes C-EMDM ",
                 listed(gains),
