@@ -633,7 +633,7 @@ def workspace_figure(
                 facecolor="none",
                 edgecolor="#D55E00",
                 hatch="////",
-                label=rf"$\|p\|<{inner:.3f}$ m",
+                label=rf"blocked: $\|p\|<{inner:.3f}$ m",
             ),
             *(
                 [
