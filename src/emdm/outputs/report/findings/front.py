@@ -152,9 +152,7 @@ class Front(Claims):
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 " (",
                 Ref("tab", "outcomes"),
-                "). Here a slack did better; only task scaling keeps the tip moving along ",
-                Math("v_d", "<i>v</i><sub>d</sub>"),
-                ". ",
+                "). ",
             )
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(
