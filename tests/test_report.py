@@ -1027,3 +1027,17 @@ def test_the_benchmark_sentences_name_whom_they_compare(quick_report, tmp_path):
     assert "not always less often than RRMC and PARK" in said()
     if "ur5" in arms:
         assert "RRMC's manipulability is lower than published" in said()
+
+
+def test_a_solver_is_named_with_what_kind_of_method_it_is():
+    """The paper glosses a solver at its first mention from the registry (reading 119: slsqp,
+    cma-es were never explained); a solver whose name says it, or one not registered, is left
+    as it is."""
+    from emdm.outputs.report.findings.base import glossed
+    from emdm.solvers import registered_solvers
+
+    assert glossed("slsqp") == "slsqp (sequential quadratic programming)"
+    assert glossed("active-set") == "active-set"
+    assert glossed("no-such-solver") == "no-such-solver"
+    free = [spec for spec in registered_solvers().values() if spec.family == "gradient-free"]
+    assert free and all(spec.method for spec in free)  # the family the paper compares

@@ -56,6 +56,7 @@ register(
         solve_interior_point,
         "primal-dual interior point, Mehrotra predictor-corrector (custom)",
         loop=Loop.PYTHON,
+        method="a barrier method",
     )
 )
 register(
@@ -65,6 +66,7 @@ register(
         solve_admm,
         "ADMM operator splitting, first order (custom; OSQP's scheme)",
         loop=Loop.PYTHON,
+        method="operator splitting",
     )
 )
 register_backends()
@@ -75,6 +77,7 @@ register(
         solve_slsqp,
         "scipy SLSQP, exact gradients and constraint Jacobian",
         loop=Loop.PYTHON,  # scipy's Python driver calls the compiled step once per iteration
+        method="sequential quadratic programming",
     )
 )
 register(
@@ -84,6 +87,7 @@ register(
         solve_slsqp_reduced,
         "scipy SLSQP on the reduced program the gradient-free methods search, exact gradient",
         loop=Loop.PYTHON,
+        method="sequential quadratic programming",
     )
 )
 register(
@@ -93,6 +97,7 @@ register(
         solve_trust_constr,
         "scipy trust-constr, exact gradient and Hessian",
         loop=Loop.PYTHON,
+        method="a trust-region method",
     )
 )
 
@@ -103,15 +108,38 @@ def _cma_installed() -> bool:
     return importlib.util.find_spec("cma") is not None
 
 
-for _method, _text in (
-    ("nelder-mead", "scipy Nelder-Mead simplex on the reduced program, l1 penalty"),
-    ("powell", "scipy Powell on the reduced program, l1 penalty"),
-    ("cobyqa", "scipy COBYQA (quadratic models) on the reduced program, native constraints"),
-    ("cobyla", "scipy COBYLA (linear models) on the reduced program, native constraints"),
-    ("differential-evolution", "scipy differential evolution, native constraints, seeded"),
+for _method, _text, _kind in (
+    (
+        "nelder-mead",
+        "scipy Nelder-Mead simplex on the reduced program, l1 penalty",
+        "a simplex search",
+    ),
+    ("powell", "scipy Powell on the reduced program, l1 penalty", "line searches"),
+    (
+        "cobyqa",
+        "scipy COBYQA (quadratic models) on the reduced program, native constraints",
+        "quadratic models",
+    ),
+    (
+        "cobyla",
+        "scipy COBYLA (linear models) on the reduced program, native constraints",
+        "linear models",
+    ),
+    (
+        "differential-evolution",
+        "scipy differential evolution, native constraints, seeded",
+        "a population search",
+    ),
 ):
     register(
-        SolverSpec(_method, Family.GRADIENT_FREE, gradient_free(_method), _text, loop=Loop.PYTHON)
+        SolverSpec(
+            _method,
+            Family.GRADIENT_FREE,
+            gradient_free(_method),
+            _text,
+            loop=Loop.PYTHON,
+            method=_kind,
+        )
     )
 register(
     SolverSpec(
@@ -122,6 +150,7 @@ register(
         extra="lab",
         is_available=_cma_installed,
         loop=Loop.PYTHON,
+        method="an evolution strategy",
     )
 )
 

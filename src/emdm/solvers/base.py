@@ -173,6 +173,9 @@ class SolverSpec:
     extra: str | None = None
     is_available: Callable[[], bool] = field(default=lambda: True)
     loop: Loop = Loop.COMPILED
+    method: str = ""
+    """What kind of method it is, in a few plain words, for a reader who does not know its name
+    ("sequential quadratic programming"); empty where the name says it (active-set)."""
 
 
 _REGISTRY: dict[str, SolverSpec] = {}

@@ -19,6 +19,7 @@ import numpy as np
 
 from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
+from ....solvers import registered_solvers
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
@@ -111,6 +112,14 @@ ABLATIONS: tuple[str | tuple[str, ...], ...] = (
 """Table II's runs in order, each changing one thing in a nominal run; :func:`run_label` names
 them E1, E2, ..., and the runs of a group E2a, E2b, ... (the free-slack policy runs are Table
 I's rows, not ablations)."""
+
+
+def glossed(solver: str) -> str:
+    """A solver's name with what kind of method it is, at its first mention in the paper's
+    text ("slsqp (sequential quadratic programming)"); the name alone where the registry says
+    nothing more (:attr:`SolverSpec.method`)."""
+    spec = registered_solvers().get(solver)
+    return f"{solver} ({spec.method})" if spec is not None and spec.method else solver
 
 
 def run_label(key: str) -> str:

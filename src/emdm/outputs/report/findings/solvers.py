@@ -16,6 +16,7 @@ from .base import (
     DT,
     StoryBase,
     bare,
+    glossed,
 )
 from .claims import listed
 from .records import LabName, SeedRun, SolverRow
@@ -86,7 +87,7 @@ class Solvers(StoryBase):
                     else (Ref("tab", "solvers"),)
                 ),
                 ") the gradient-based ",
-                grad,
+                glossed(grad),
                 " wins on both counts: it",
                 " reaches the exact optimum (largest gap ",
                 self.sn(lab, grad, "max_abs_gap", ".1e"),
@@ -107,7 +108,11 @@ class Solvers(StoryBase):
             )
             for i, k in enumerate(exact_free):
                 answer += sentence(
-                    *((k, " ") if len(exact_free) > 1 else (k, ", needs a median of ")),
+                    *(
+                        (glossed(k), " ")
+                        if len(exact_free) > 1
+                        else (glossed(k), ", needs a median of ")
+                    ),
                     self.sn(lab, k, "median_evaluations", ".4g"),
                     " evaluations and ",
                     self.sn(lab, k, "median_time", unit="ms"),
