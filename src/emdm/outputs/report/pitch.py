@@ -44,7 +44,8 @@ class Pitch:
             ),
             sentence(  # one bullet: the costs and the bounds are one idea, the program
                 "while spending little joint-speed effort and keeping the arm dexterous; the "
-                "constrained versions also keep within joint-speed limits and position dampers",
+                "constrained versions also keep within joint-speed limits and slow each joint "
+                "near its position limit",
             ),
             sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
             sentence(
