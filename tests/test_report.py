@@ -669,7 +669,7 @@ def test_table_one_names_each_rows_program_by_its_equations(report):
     # Task 2's rows come last and overwrite Task 1's: the two-link arm's EMDM is the slack program
     assert rows["UC-IVKC"] == "1" and rows["UC-EMDM"] == "3"
     assert rows["C-IVKC"] == "1, 4, 5" and rows["C-EMDM"] == "3, 4, 5"
-    assert rows["C-IVKC, slack"] == "1, 4, 6" and rows["C-EMDM, slack"] == "3, 4, 6"
+    assert rows["C-IVKC, free slack"] == "1, 4, 6" and rows["C-EMDM, free slack"] == "3, 4, 6"
 
 
 def test_references_are_numbered_alike_in_the_paper_and_the_page():

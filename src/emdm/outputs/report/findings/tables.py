@@ -137,7 +137,7 @@ class Tables(Claims):
                 run = self.evid(key, "runs", name)
                 table.rows.append(
                     [
-                        sentence(name, ", slack"),
+                        sentence(name, ", free slack"),  # (the nominal C-EMDM has one too)
                         sentence(self.program(task, name, slack=True)),
                         sentence(bare(self.evid_goal(key, name)))
                         if run["reached"]
