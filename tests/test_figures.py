@@ -381,7 +381,7 @@ def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     stalled = runs[0].stalled_from
     assert stalled is not None and runs[1].stalled_from is None
     labels = [ax.get_xlabel() for ax in drawn[-1].axes]
-    assert f"{runs[0].t[stalled]:.2f}".rstrip("0").rstrip(".") + " s, then still" in labels[0]
+    assert f"$t$ = 0 to {runs[0].t[stalled]:.2f} s, then still" in labels[0]  # as titles: 2 dp
     assert "then still" not in labels[1]
 
 

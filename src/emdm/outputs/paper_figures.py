@@ -1654,8 +1654,7 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
             ax.set_xlabel(  # below the workspace, where no arm can cover it; short enough to
                 # be set large (the list of every instant was unreadable from a room)
                 f"arm at {len(drawn)} instants, darker later\n"
-                + rf"$t$ = 0 to {run.t[drawn[-1]]:.2f}".rstrip("0").rstrip(".")
-                + " s"
+                + rf"$t$ = 0 to {run.t[drawn[-1]]:.2f} s"  # as the title's times (8.20 s)
                 + (", then still" if last < run.steps else ""),
                 fontsize=medium.font,
                 color="#444444",

@@ -127,9 +127,7 @@ class Pitch:
             ev.append(cap(s.ivkc_with_slack(label=False, defined=True)))
             e4 = s.evid("t2-c-slack-policy", "runs", Name.C_EMDM)
             if e4.get("reached"):  # the same freedom for both: C-EMDM's time beside it
-                ev[-1] += sentence(
-                    ", C-EMDM with one in ", s.evid_goal("t2-c-slack-policy", Name.C_EMDM)
-                )
+                ev[-1] += sentence(", C-EMDM in ", s.evid_goal("t2-c-slack-policy", Name.C_EMDM))
         if s.emdm_without_term():
             ev.append(cap(s.emdm_without_term(label=False)))
         if self.tight_slack_stalls():

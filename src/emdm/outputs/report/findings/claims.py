@@ -50,8 +50,8 @@ class Claims(StoryBase):
         if not self.evid(key, "runs", Name.C_IVKC).get("reached"):
             return []
         return sentence(  # free: unbounded (Section II), as C-EMDM's is in the same run
-            "with a free slack",
-            " (unbounded, instead of task scaling)" if defined else "",
+            # (said in one line of a slide: what "free" means, and what it replaces)
+            "with an unbounded slack instead of task scaling" if defined else "with a free slack",
             ", C-IVKC arrives in ",
             self.evid_goal(key, Name.C_IVKC),
             *((" (", Ref("tab", "outcomes"), ")") if label else ()),
