@@ -93,17 +93,17 @@ class Task2(Claims):
         stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
         both_first = stalled and first
         if both_first:  # both policies' outcomes, side by side, first: the stall is the policy's
-            answer = sentence(
+            answer = sentence(  # one sentence: the two policies' outcomes side by side
                 f"Under task scaling, {emdm} leaves the straight line and reaches the goal in ",
                 self.ttg(t, emdm),
-                f"; {ivkc} cannot leave it, and stalls. ",
-                *cap(self.ivkc_with_slack()),  # the shared claim, cites Table I
+                f" while {ivkc} cannot leave it and stalls; ",
+                *self.ivkc_with_slack(),  # the shared claim, cites Table I
             )
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
             if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
                 answer += sentence(" with a higher mean ", M_SYM)
             answer += sentence(
-                f"; {emdm}, given one too, takes ",
+                f", and {emdm}, given one too, in ",
                 self.evid_goal(key, emdm),
                 ". From ",
                 *stall_told,
