@@ -499,6 +499,14 @@ def test_convergence_panels_share_each_solvers_style_and_the_table_is_their_lege
     assert pf.ConvergencePanel("t", "x", {"slsqp": task2["slsqp"]}, True).parts() == [
         ("", {"slsqp": task2["slsqp"]})
     ]  # one family only: not split
+    # greyscale: each gradient-free solver its own broken line, every other one solid
+    family = {"active-set": "exact", "slsqp": "gradient"} | {
+        f"free{i}": "gradient-free" for i in range(7)
+    }
+    dashes = pf.solver_dashes(family)
+    assert dashes["active-set"] == dashes["slsqp"] == "-"
+    free = [dashes[f"free{i}"] for i in range(7)]
+    assert len({str(d) for d in free}) == 7 and "-" not in free
     twelve = pf.solver_styles([f"s{i}" for i in range(12)])  # (the paper draws twelve)
     assert len({colour for colour, _ in twelve.values()}) == 12
     assert sorted(p.stem for p in (tmp_path / "glyphs").glob("*.png")) == [

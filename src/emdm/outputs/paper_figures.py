@@ -1270,7 +1270,28 @@ SOLVER_COLORS = (
 """One colour per solver of a figure (Okabe-Ito without its yellow, grey, then four of Tol's):
 six shades of one family colour could not be told apart in print; twelve, so that the paper's
 convergence figure repeats none (cma-es had interior-point's gold)."""
-FAMILY_DASH = {"exact": "-", "gradient": "-", "gradient-free": "--"}
+FREE_DASHES: tuple[Any, ...] = (
+    (0, (4.0, 1.5)),
+    (0, (1.0, 1.2)),
+    (0, (4.0, 1.5, 1.0, 1.5)),
+    (0, (7.0, 1.5)),
+    (0, (4.0, 1.2, 1.0, 1.2, 1.0, 1.2)),
+    (0, (2.0, 1.2)),
+    (0, (7.0, 1.5, 1.0, 1.5)),
+)
+"""The gradient-free solvers' line patterns, one each (in units of the line width): broken
+lines all, so that they read as one family, and each its own, so that their curves are told apart
+in a greyscale print, where their colours are not."""
+
+
+def solver_dashes(family: Mapping[str, str]) -> dict[str, Any]:
+    """Each solver's line pattern (``family``: name -> family, in the figure's order): solid
+    for exact and gradient-based methods, one of :data:`FREE_DASHES` per gradient-free one."""
+    free = [name for name, kind in family.items() if kind == "gradient-free"]
+    return {
+        name: FREE_DASHES[free.index(name) % len(FREE_DASHES)] if name in free else "-"
+        for name in family
+    }
 
 
 Curve = tuple[str, Sequence[float], Sequence[float], float | None]
@@ -1330,6 +1351,7 @@ def convergence_figure(
     names = list(dict.fromkeys(name for panel in panels for name in panel.curves))
     styles = solver_styles(names)
     family = {name: f for panel in panels for name, (f, *_rest) in panel.curves.items()}
+    dashes = solver_dashes(family)
     size = 3.5 if medium is PAPER else 6
     height = 1.0 if medium is PAPER else 2.7
     width = medium.column if medium is PAPER else 3.3 * len(panels)
@@ -1352,7 +1374,7 @@ def convergence_figure(
                 width_ratios=[max(1, len(c)) ** 0.5 for _, c in part],
             )[0]
             for ax, (name, curves) in zip(own, part, strict=True):
-                _convergence_axes(ax, curves, styles, medium, size)
+                _convergence_axes(ax, curves, styles, dashes, medium, size)
                 if name:  # which family, where the curves leave room (they fall left to right)
                     ax.text(
                         0.04,
@@ -1390,7 +1412,7 @@ def convergence_figure(
             )
     if glyphs is not None:
         for name, (colour, mark) in styles.items():
-            solver_glyph(colour, mark, FAMILY_DASH.get(family[name], ":"), glyphs / name, medium)
+            solver_glyph(colour, mark, dashes[name], glyphs / name, medium)
     return stem
 
 
@@ -1398,12 +1420,13 @@ def _convergence_axes(
     ax: Axes,
     curves: Mapping[str, Curve],
     styles: Mapping[str, tuple[str, str]],
+    dashes: Mapping[str, Any],
     medium: Medium,
     size: float,
 ) -> None:
     """One axes of :func:`convergence_figure`: each solver's running best and, at its last
     count, the error of the answer it returns."""
-    for name, (kind, counts, error, returned) in curves.items():
+    for name, (_kind, counts, error, returned) in curves.items():
         # the marker at the solver's last count, at its returned answer's error: one done in a
         # few evaluations (slsqp) is a short trace ending in its marker
         colour, mark = styles[name]
@@ -1411,7 +1434,7 @@ def _convergence_axes(
             counts,
             error,
             color=colour,
-            linestyle=FAMILY_DASH.get(kind, ":"),
+            linestyle=dashes[name],
             linewidth=medium.line,
             marker=mark,
             markevery=[],  # the legend's marker; the plotted one below
@@ -1425,7 +1448,7 @@ def _convergence_axes(
     ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
 
 
-def solver_glyph(colour: str, mark: str, dash: str, stem: Path, medium: Medium = PAPER) -> Path:
+def solver_glyph(colour: str, mark: str, dash: Any, stem: Path, medium: Medium = PAPER) -> Path:
     """A curve's line and marker alone, as a legend draws them (0.17 x 0.06 in: set about
     1.3 em wide in 7 pt text, its marker keeps about the figure's size)."""
     with _figure(stem, medium, 0.17, 0.06) as fig:

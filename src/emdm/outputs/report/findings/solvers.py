@@ -204,7 +204,7 @@ class Solvers(StoryBase):
                     if 0 < len(unplotted) < len(rows)
                     else ()
                 ),
-                "; dashed: gradient-free; marker: answer returned).",
+                "; broken: gradient-free; marker: answer returned).",
             ),
         )
         if self.has_figure("convergence"):
