@@ -29,7 +29,8 @@ DOUBLE = 7.16
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000"]
 
 CONTROLLER_STYLE: dict[str, dict[str, Any]] = {
-    Name.UC_IVKC: {"color": "#E69F00", "linestyle": "--"},
+    Name.UC_IVKC: {"color": "#C17A00", "linestyle": "--"},  # a dark orange: Okabe-Ito's
+    # (#E69F00) printed at about 160 of 255, its peak labels faint in greyscale; this one at 130
     Name.C_IVKC: {"color": "#D55E00", "linestyle": "-"},
     Name.UC_EMDM: {"color": "#332288", "linestyle": "--"},  # Tol's indigo: sky blue printed as
     # UC-IVKC's orange does in greyscale (both about 160 of 255); indigo prints at about 50
