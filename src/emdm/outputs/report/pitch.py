@@ -69,6 +69,17 @@ class Pitch:
                 " constrained (IVKC / EMDM)",
             ),
         ]
+        out.titles["task1-stills"] = sentence("Task 1: the constrained pair in motion")
+        more_m = s.mv(t1, Name.C_EMDM, "mean_manipulability") > s.mv(
+            t1, Name.C_IVKC, "mean_manipulability"
+        )
+        if s.pair(t1, "C", "coincide_steps") and more_m:  # the slide's message, measured
+            out.titles["task1-stills"] = sentence(
+                "Task 1 with limits: the same first ",
+                s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
+                ", then EMDM raises ",
+                M_SYM,
+            )
         if s.pair(t1, "C", "coincide_steps"):  # said under the constrained pair's stills
             out.bullets["task1-stills"].append(
                 sentence(
