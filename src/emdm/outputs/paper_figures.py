@@ -207,10 +207,11 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 
 FAR_BEYOND = 1.5
-"""A joint whose speeds go beyond this multiple of its limit has its speed strip drawn on a
-symmetric-log axis beyond this multiple (linear within it), each such extreme named on the right
-(:func:`pair_figure`): the whole run shows, and a spike of a step or two does not squash the
-motion within the limits into a thin band."""
+"""A joint whose speeds go beyond this multiple of its limit has its speed strip cut there (a
+plain linear axis), each such extreme written on the right at the edge it leaves through
+(:func:`pair_figure`): a spike of a step or two does not squash the motion within the limits
+into a thin band, and no axis changes its scale part-way (readings found a log band beyond
+the limits hard to read)."""
 
 
 GAP_FLOOR = 1e-6
@@ -336,15 +337,16 @@ def pair_figure(
                 qd_axes[j].axhline(bound, color="black", linewidth=0.6, linestyle=":")
             low, high, limit = extents[j]
             far = j in far_joints
-            # linear within FAR_BEYOND times the limits (dotted); a run far beyond them on a
-            # symmetric-log axis past that, so the whole of it shows and the motion within the
-            # limits keeps most of the strip, its far peaks named on the right in the colour of
-            # their run. Linear up to FAR_BEYOND, not to the limit: an excursion just past the
-            # limit on the other side would otherwise be squashed into a sliver at the frame
-            qd_axes[j].set_ylim(1.15 * min(low, -limit), 1.15 * max(high, limit))
-            if far:  # beyond the limits lightly shaded
-                qd_axes[j].set_yscale("symlog", linthresh=FAR_BEYOND * limit, linscale=1.5)
-                lo_view, hi_view = qd_axes[j].get_ylim()
+            # a run far beyond the limits (dotted) is cut at FAR_BEYOND times them, so the
+            # motion within the limits keeps the strip, its far peaks written on the right in
+            # the colour of their run. Cut at FAR_BEYOND, not at the limit: an excursion just
+            # past the limit on the other side stays in view
+            lo_view, hi_view = 1.15 * min(low, -limit), 1.15 * max(high, limit)
+            if far:  # cut at FAR_BEYOND times the limit, beyond the limits lightly shaded
+                lo_view = max(lo_view, -FAR_BEYOND * limit)
+                hi_view = min(hi_view, FAR_BEYOND * limit)
+            qd_axes[j].set_ylim(lo_view, hi_view)
+            if far:
                 for start, stop in ((limit, hi_view), (lo_view, -limit)):
                     if stop > start:
                         qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
@@ -434,14 +436,16 @@ that the runs' values are told apart without colour (in a greyscale print)."""
 
 def _label_peaks(ax: Any, peaks: list[tuple[float, dict[str, Any]]], medium: Medium) -> None:
     """Mark each far peak with a tick on the right of its strip and its value in its run's
-    colour, underlined in its run's line style; peaks whose labels would touch (one-step spikes
-    of two runs on the same joint, say 7.3 and 8.7 rad/s on a log scale) share one label, their
-    values side by side in the order of the legend. The figure is drawn first: the strip's
-    height decides which labels touch."""
+    colour, underlined in its run's line style, at its level or, beyond a cut axis, at the edge
+    its curve leaves through; peaks whose labels would touch (two runs' spikes past the same
+    edge, say 7.3 and 8.7 rad/s) share one label, their values side by side in the order of the
+    legend. The figure is drawn first: the strip's height decides which labels touch."""
     if not peaks:
         return
+    low, high = ax.get_ylim()
+    at = {v: min(max(v, low), high) for v, _ in peaks}  # beyond a cut axis: at its edge
     right = ax.secondary_yaxis("right")
-    right.set_yticks([v for v, _ in peaks], [""] * len(peaks))
+    right.set_yticks(sorted(set(at.values())), [""] * len(set(at.values())))
     right.yaxis.set_minor_locator(NullLocator())
     right.tick_params(pad=1)
     to_axes = ax.transAxes.inverted()
@@ -457,7 +461,7 @@ def _label_peaks(ax: Any, peaks: list[tuple[float, dict[str, Any]]], medium: Med
         for i, (v, style) in enumerate(ordered):
             group.append((v, style))
             last = i == len(ordered) - 1
-            if last or abs(frac(ordered[i + 1][0]) - frac(v)) > gap:
+            if last or abs(frac(at[ordered[i + 1][0]]) - frac(at[v])) > gap:
                 order = [s["label"] for _, s in peaks]  # the legend's order
                 group.sort(key=lambda p: order.index(p[1]["label"]))
                 box = HPacker(
@@ -466,7 +470,7 @@ def _label_peaks(ax: Any, peaks: list[tuple[float, dict[str, Any]]], medium: Med
                 ax.add_artist(
                     AnnotationBbox(
                         box,
-                        (1.0, v),  # at the farthest of the group, the values at its level
+                        (1.0, at[v]),  # at the farthest of the group's level (or the edge)
                         xycoords=("axes fraction", "data"),
                         xybox=(4.5, -0.5 * (PEAK_UNDERLINE + medium.line)),
                         boxcoords="offset points",
