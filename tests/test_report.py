@@ -176,7 +176,9 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     text = (root / "index.html").read_text(encoding="utf-8")
     # both policies' outcomes first (the stall is the policy's), then where the scaled run stops
     assert "Under task scaling, C-EMDM leaves the straight line" in text
-    assert "while C-IVKC cannot leave it and stalls; with a free slack, C-IVKC arrives" in text
+    assert "cannot leave it and stalls; with a free slack, C-IVKC arrives" in text
+    scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
+    assert ("while C-IVKC, infeasible from step 0, cannot" in text) == scaled_at_start
     assert " on the scaled C-IVKC stalls " in text
     assert "evidence" in text.lower()
 

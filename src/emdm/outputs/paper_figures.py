@@ -533,7 +533,7 @@ def workspace_figure(
                 edgecolor="#D55E00",
                 hatch="////",
                 linewidth=0.6,
-                alpha=0.6,
+                alpha=0.4,  # light: C-IVKC's path, in the same hue, stays clear of it in grey
             )
         )
         p0 = runs[0].p[0]
@@ -839,7 +839,7 @@ def _front_axes(
             [p["E"] for p in slack],
             facecolors="white",
             edgecolors="#333333",
-            s=size * 3.0,
+            s=size * 4.0,
             linewidths=0.35,
             zorder=2,
         )
@@ -850,8 +850,8 @@ def _front_axes(
             edgecolors=matplotlib.colormaps["viridis"](
                 norm(np.log10(np.maximum([p["w_manip"] / p["w_effort"] for p in slack], 1e-4)))
             ),
-            s=size * 1.8,
-            linewidths=0.9,
+            s=size * 3.0,  # a ring much wider than its line: it reads as hollow in print
+            linewidths=0.8,
             zorder=2,
         )
     elif info["degenerate"]:
@@ -1453,9 +1453,10 @@ def _convergence_axes(
 
 
 def solver_glyph(colour: str, mark: str, dash: Any, stem: Path, medium: Medium = PAPER) -> Path:
-    """A curve's line and marker alone, as a legend draws them (0.17 x 0.06 in: set about
-    1.3 em wide in 7 pt text, its marker keeps about the figure's size)."""
-    with _figure(stem, medium, 0.17, 0.06) as fig:
+    """A curve's line and marker alone, as a legend draws them (0.17 x 0.08 in: set about
+    1.3 em wide in 7 pt text, its marker keeps about the figure's size; 0.06 in tall cut a
+    diamond's corners into a hexagon)."""
+    with _figure(stem, medium, 0.17, 0.08) as fig:
         fig.set_layout_engine("none")
         ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
         ax.set_axis_off()

@@ -91,6 +91,20 @@ class Pitch:
                     " of the asked speed",
                 )
             )
+        if s.pair(t1, "C", "coincide_steps") and more_m:  # the title's second half, measured
+            out.bullets["task1-stills"].append(
+                sentence(
+                    "Then EMDM raises ",
+                    M_SYM,
+                    ": mean ",
+                    s.mt(t1, Name.C_EMDM, "mean_manipulability", ".3f"),
+                    " against ",
+                    s.mt(t1, Name.C_IVKC, "mean_manipulability", ".3f", "m²"),
+                    " (",
+                    s.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+                    ")",
+                )
+            )
         t2c = [
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
             sentence(

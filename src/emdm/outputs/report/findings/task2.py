@@ -96,7 +96,13 @@ class Task2(Claims):
             answer = sentence(  # one sentence: the two policies' outcomes side by side
                 f"Under task scaling, {emdm} leaves the straight line and reaches the goal in ",
                 self.ttg(t, emdm),
-                f" while {ivkc} cannot leave it and stalls; ",
+                f" while {ivkc}",
+                # the brief's exact program has no solution there: what the policy is for
+                ", infeasible from step 0,"
+                if self.evv(t, ivkc, "scaling")
+                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
+                else "",
+                " cannot leave it and stalls; ",
                 *self.ivkc_with_slack(),  # the shared claim, cites Table I
             )
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
