@@ -1059,7 +1059,11 @@ def test_the_constrained_stills_slide_is_titled_with_its_message_when_measured(
     metrics = json.loads(path.read_text(encoding="utf-8"))
 
     def title() -> str:
-        return render_latex(Pitch(Data(root), document(root)).build().titles["task1-stills"])
+        built = Pitch(Data(root), document(root)).build()
+        bullets = [render_latex(b) for b in built.bullets["task1-stills"]]
+        said = any(b.startswith("Then EMDM raises") for b in bullets)  # the title's evidence
+        assert said == ("then EMDM raises" in render_latex(built.titles["task1-stills"]))
+        return render_latex(built.titles["task1-stills"])
 
     runs = metrics["controllers"]
     story = Pitch(Data(root), document(root)).s
