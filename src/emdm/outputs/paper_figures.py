@@ -618,7 +618,7 @@ def workspace_figure(
         if medium is not PAPER:  # a slide names the start and the goal where they are, and
             # leaves the grey disc unnamed: a legend of ten entries was too much to read in a talk
             for xy, name, offset, ha in (
-                (p0[:2], "start", (-6, 6), "right"),
+                (p0[:2], "start", (5, -8), "left"),  # right of it: above, the frame cut it
                 (goal, "goal", (-7, 8), "right"),
             ):
                 ax.annotate(
@@ -629,6 +629,8 @@ def workspace_figure(
                     fontsize=medium.tiny,
                     ha=ha,
                     va="center",
+                    # on white: a name that reaches over the frame is not struck through
+                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.6},
                 )
         handles += [
             *([Patch(color="#BBBBBB", alpha=0.25, label="reachable")] if medium is PAPER else []),

@@ -144,9 +144,11 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "In Task 1 task scaling's only gain is a straighter path: "
+                "In Task 1 task scaling's only gain is a tip moving along "
                 if self.slack_better_on_all()
-                else "In Task 1 task scaling keeps a straighter path, but ",
+                else "In Task 1 task scaling keeps the tip moving along ",
+                Math("v_d", "<i>v</i><sub>d</sub>"),
+                ": " if self.slack_better_on_all() else ", but ",
                 "a free slack makes C-EMDM ",
                 listed(gains),
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
