@@ -318,6 +318,8 @@ def pair_figure(
         ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
         if ax_gap is not None:
             ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
+            # the floor inside the frame: a run on it (an exact task) is a line, not the frame
+            ax_gap.set_ylim(bottom=GAP_FLOOR / 4)
         for ax in upper_axes:
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
@@ -1028,7 +1030,7 @@ def pareto_slide_figure(
                     arrowprops={"arrowstyle": "-", "color": "grey", "linewidth": 0.6},
                 )
         left.set_title(f"one step: the start ($k={data['k']}$)", fontsize=medium.small)
-        left.set_xlabel(r"dexterity gain $M$ (m$^2$/s)")
+        left.set_xlabel(r"manipulability rate $M$ (m$^2$/s)")
         left.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
         right.set_title("whole runs", fontsize=medium.small)
         right.set_xlabel(r"mean manipulability $m$ (m$^2$)")

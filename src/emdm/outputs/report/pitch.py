@@ -226,8 +226,8 @@ class Pitch:
             *(
                 [
                     sentence(
-                        "Task 2's non-redundant arm: the slack, not the dexterity term, reaches "
-                        "the goal"
+                        "Task 2's non-redundant arm: the slack, not the dexterity term, lets the "
+                        "arm reach the goal"
                     )
                 ]
                 if self.slack_decides()
