@@ -1531,6 +1531,7 @@ def manipulability_figure(
     height = 2.6 if medium is SLIDE else 1.8
     with _figure(stem, medium, medium.wide, height) as fig:
         axes = fig.subplots(1, len(pairs), squeeze=False, sharey=True)[0]
+        handles: list[Artist] = []
         for ax, (title, runs) in zip(axes, pairs.items(), strict=True):
             spans = _common_scaled(runs)
             _shade(ax, spans)
@@ -1538,10 +1539,19 @@ def manipulability_figure(
                 ax.plot(run.t, run.m, **_style(run, medium))
             ax.set_title(title)
             ax.set_xlabel(r"$t$ (s)")
-            handles, _ = ax.get_legend_handles_labels()
-            if spans:  # the shading says what it is where it is drawn
+            handles += ax.get_legend_handles_labels()[0]
+            if spans and not any(isinstance(h, Patch) for h in handles):
                 handles.append(_scaled_patch("tip slowed (both)"))
-            ax.legend(handles=handles, loc="best", frameon=True, framealpha=0.9)
+        # one row above the panels, clear of every curve (a legend inside sat on C-IVKC's
+        # falling curve, reading 125)
+        fig.legend(
+            handles=handles,
+            loc="outside upper center",
+            ncols=len(handles),
+            frameon=False,
+            handlelength=1.8,
+            columnspacing=1.0,
+        )
         axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
     return stem
 
