@@ -1524,21 +1524,30 @@ def conditioning_figure(
     return stem
 
 
+def _effort_so_far(run: Run) -> np.ndarray:
+    """The effort a run has spent up to each sample, sum E dt (rad^2/s), from 0 at t = 0."""
+    return np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
+
+
 def manipulability_figure(
     pairs: dict[str, Sequence[Run]], stem: Path, medium: Medium = SLIDE
 ) -> Path:
-    """m(t) of each pair side by side (the pitch's headline for a task)."""
-    height = 2.6 if medium is SLIDE else 1.8
+    """m(t) of each pair side by side, and under it the effort spent so far (the pitch's
+    headline for a task: what EMDM buys, and what it pays)."""
+    height = 3.3 if medium is SLIDE else 2.4
     with _figure(stem, medium, medium.wide, height) as fig:
-        axes = fig.subplots(1, len(pairs), squeeze=False, sharey=True)[0]
+        grid = fig.subplots(2, len(pairs), squeeze=False, sharex="col", sharey="row")
         handles: list[Artist] = []
-        for ax, (title, runs) in zip(axes, pairs.items(), strict=True):
+        for col, (title, runs) in enumerate(pairs.items()):
+            ax, ax_e = grid[0, col], grid[1, col]
             spans = _common_scaled(runs)
-            _shade(ax, spans)
+            for a in (ax, ax_e):
+                _shade(a, spans)
             for run in runs:
                 ax.plot(run.t, run.m, **_style(run, medium))
+                ax_e.plot(run.t, _effort_so_far(run), **_style(run, medium))
             ax.set_title(title)
-            ax.set_xlabel(r"$t$ (s)")
+            ax_e.set_xlabel(r"$t$ (s)")
             handles += ax.get_legend_handles_labels()[0]
             if spans and not any(isinstance(h, Patch) for h in handles):
                 handles.append(_scaled_patch("tip slowed (both)"))
@@ -1552,7 +1561,8 @@ def manipulability_figure(
             handlelength=1.8,
             columnspacing=1.0,
         )
-        axes[0].set_ylabel(r"manipulability $m$ (m$^2$)")
+        grid[0, 0].set_ylabel(r"$m$ (m$^2$)")
+        grid[1, 0].set_ylabel(r"effort so far (rad$^2$/s)")
     return stem
 
 
@@ -1564,8 +1574,7 @@ def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Pa
         ax_e, ax_m = fig.subplots(1, 2)
         for run in runs:
             st = _style(run, medium)
-            spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
-            ax_e.plot(run.t, spent, **st)
+            ax_e.plot(run.t, _effort_so_far(run), **st)
             ax_m.plot(run.t, run.m, **st)
         ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
         ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
