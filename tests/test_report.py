@@ -1074,3 +1074,27 @@ def test_the_constrained_stills_slide_is_titled_with_its_message_when_measured(
     runs["C-EMDM"]["mean_manipulability"] = runs["C-IVKC"]["mean_manipulability"] * 0.9
     path.write_text(json.dumps(metrics), encoding="utf-8")
     assert title() == "Task 1: the constrained pair in motion"
+
+
+def test_the_task2_slide_is_titled_with_the_blocked_line_only_when_the_geometry_says_so(
+    quick_report, tmp_path
+):
+    """Slide 8 names the problem (the straight line is blocked) only when events.json's
+    geometry found it blocked; slide 9 gives the cause (reading 127: both said 'the slack')."""
+    from emdm.outputs.report.pitch import Pitch
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2" / "events.json"
+    events = json.loads(path.read_text(encoding="utf-8"))
+
+    def title() -> str:
+        return render_latex(Pitch(Data(root), document(root)).build().titles["task2"])
+
+    blocked = bool(events.get("geometry") and events["geometry"]["line_blocked"])
+    assert ("is blocked" in title()) == blocked
+    if events.get("geometry"):
+        events["geometry"]["line_blocked"] = not blocked
+        path.write_text(json.dumps(events), encoding="utf-8")
+        assert ("is blocked" in title()) == (not blocked)

@@ -147,6 +147,12 @@ class Pitch:
                 )
             )
         out.bullets["task2"] = t2c
+        # the slide shows the problem (the next one its cause): titled so when measured
+        out.titles["task2"] = (
+            sentence("Task 2 (two links): the straight line to the goal is blocked")
+            if geo and geo["line_blocked"]
+            else sentence("Task 2 (two links): C-EMDM against C-IVKC")
+        )
         ev: list[Sentence] = []
         if s.ivkc_with_slack():  # (the evidence labels are the paper's, not the talk's)
             ev.append(cap(s.ivkc_with_slack(label=False, defined=True)))
