@@ -712,6 +712,24 @@ NOTE_COLOR = "#A0410A"
 third of full grey, where the vermilion of the lines (#D55E00) printed pale."""
 
 
+def _missed_note(
+    ax: Axes, bad: Sequence[dict[str, Any]], what: str, top: float, medium: Medium
+) -> None:
+    """Name the weight settings whose runs are not drawn, at the axes' left from ``top``
+    (an axes fraction): ``w_M/w_E = 10^3:`` and, below, ``what`` befell them."""
+    text = ", ".join(_ratio_tex(r["w_manip"] / r["w_effort"]) for r in bad)
+    ax.text(
+        0.03,
+        top,
+        rf"$w_M/w_E={text}$:" + "\n" + what,
+        transform=ax.transAxes,
+        ha="left",
+        va="top",
+        fontsize=medium.tiny,
+        color=NOTE_COLOR,
+    )
+
+
 def _plain(v: float) -> str:
     """A tick label in shortest form with a true minus sign, as matplotlib's own ticks have
     (a fixed label is written as given: ``f"{-2:g}"`` would print a hyphen)."""
@@ -926,19 +944,8 @@ def pareto_figure(
             if nom:
                 _ring(ax, nom[0]["mean_manipulability"], nom[0]["total_effort"], medium)
             _value_axis(ax, [r["total_effort"] for r in ok])
-            if bad:
-                text = ", ".join(_ratio_tex(r["w_manip"] / r["w_effort"]) for r in bad)
-                # the runs that fail are not drawn (their effort would flatten the others)
-                ax.text(
-                    0.03,
-                    0.97,
-                    rf"$w_M/w_E={text}$:" + "\nnot reached,\nnot drawn",
-                    transform=ax.transAxes,
-                    ha="left",
-                    va="top",
-                    fontsize=medium.tiny,
-                    color=NOTE_COLOR,
-                )
+            if bad:  # the runs that fail are not drawn (their effort would flatten the others)
+                _missed_note(ax, bad, "not reached,\nnot drawn", 0.97, medium)
             ax.set_title("whole runs", fontsize=medium.small)
             ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(3))
             ax.set_xlabel(r"mean $m$ (m$^2$)", labelpad=1)
@@ -1036,17 +1043,7 @@ def pareto_slide_figure(
         right.set_xlabel(r"mean manipulability $m$ (m$^2$)")
         right.set_ylabel(r"total effort (rad$^2$/s)")
         if bad:  # not drawn: their effort would flatten the others
-            text = ", ".join(_ratio_tex(ratio(r)) for r in bad)
-            right.text(
-                0.03,
-                0.78,
-                rf"$w_M/w_E={text}$:" + "\nmisses the goal",
-                transform=right.transAxes,
-                ha="left",
-                va="top",
-                fontsize=medium.tiny,
-                color=NOTE_COLOR,
-            )
+            _missed_note(right, bad, "misses the goal", 0.78, medium)
         fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
         for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):
             if ax.get_yscale() == "log":

@@ -93,17 +93,7 @@ class Pitch:
             )
         if s.pair(t1, "C", "coincide_steps") and more_m:  # the title's second half, measured
             out.bullets["task1-stills"].append(
-                sentence(
-                    "Then EMDM raises ",
-                    M_SYM,
-                    ": mean ",
-                    s.mt(t1, Name.C_EMDM, "mean_manipulability", ".3f"),
-                    " against ",
-                    s.mt(t1, Name.C_IVKC, "mean_manipulability", ".3f", "m²"),
-                    " (",
-                    s.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-                    ")",
-                )
+                sentence("Then EMDM raises ", M_SYM, ": mean ", *s.mean_m_pair(t1))
             )
         t2c = [
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
@@ -113,12 +103,7 @@ class Pitch:
                 ", at a mean ",
                 M_SYM,
                 " of ",
-                s.mt(t2, Name.C_EMDM, "mean_manipulability", ".3f"),
-                " against ",
-                s.mt(t2, Name.C_IVKC, "mean_manipulability", ".3f", "m²"),
-                " (",
-                s.pct(t2, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-                ")",
+                *s.mean_m_pair(t2),
             ),
         ]
         if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):

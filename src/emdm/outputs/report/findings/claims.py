@@ -42,6 +42,17 @@ class Claims(StoryBase):
             " effort",
         )
 
+    def mean_m_pair(self, task: str) -> Sentence:
+        """The constrained pair's mean m side by side: ``0.300 against 0.246 m² (+22%)``."""
+        return sentence(
+            self.mt(task, Name.C_EMDM, "mean_manipulability", ".3f"),
+            " against ",
+            self.mt(task, Name.C_IVKC, "mean_manipulability", ".3f", "m²"),
+            " (",
+            self.pct(task, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+            ")",
+        )
+
     def ivkc_with_slack(self, label: bool = True, defined: bool = False) -> Sentence:
         """The like-for-like Task 2 comparison: C-IVKC given a free slack instead of scaling
         (empty when that run did not arrive; ``label``: cite Table I, where its row is;
