@@ -165,6 +165,12 @@ CASES = [
      "fallback", BEFORE),
     ("simulate(certify str)", lambda E: E.em.simulate(E.t1, "C-EMDM", certify="no"), SE,
      "certify", BEFORE),
+    ("simulate(budget 0)", lambda E: E.em.simulate(E.t1, "C-EMDM", budget=0), SE, "budget",
+     BEFORE),
+    ("simulate(budget 2.5)", lambda E: E.em.simulate(E.t1, "C-EMDM", budget=2.5), SE, "budget",
+     BEFORE),
+    ("simulate(budget True)", lambda E: E.em.simulate(E.t1, "C-EMDM", budget=True), SE,
+     "budget", BEFORE),
     # ------------------------------------------------------------------ simulate_batch
     ("simulate_batch(None)", lambda E: E.em.simulate_batch(None, "C-EMDM"), SE, "scenario",
      BEFORE),
@@ -294,6 +300,8 @@ CASES = [
      "tol", BEFORE),
     ("solve_chain(tol -1)", lambda E: E.em.solve_chain(E.qp, ["active-set"], tol=-1.0), SE,
      "tol", BEFORE),
+    ("solve_chain(budget -3)", lambda E: E.em.solve_chain(E.qp, ["active-set"], budget=-3), SE,
+     "budget", BEFORE),
     ("solve_chain(chain unknown)", lambda E: E.em.solve_chain(E.qp, ["nope"]), SolverNotFound,
      "nope", False),
     # -------------------------------------------------------------------- step_program

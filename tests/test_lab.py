@@ -179,6 +179,8 @@ def test_closed_loop_records_inexact_solvers_honestly(small_lab):
     # its answers are used as they are; their KKT residuals are recorded, not hidden
     assert run.kkt.max() > 1e-9
     assert set(run.solver) <= {"nelder-mead", "active-set"}
+    # run at the budget its table row was measured at (200), not at its own default (2000)
+    assert run.iterations.max() <= small_lab.budget
 
 
 def test_lab_is_parallel_and_serial_alike():

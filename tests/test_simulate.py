@@ -109,6 +109,39 @@ def test_run_that_times_out_is_a_result():
     assert not run.reached and run.steps == 20 and run.time_to_goal is None
 
 
+def test_a_budget_reaches_the_gradient_free_solvers_of_the_chain_and_no_other(monkeypatch):
+    """``simulate(..., budget=N)`` gives every gradient-free solver of its chain N evaluations
+    per step (the solver lab runs each solver's closed loop at the budget it measured it at)."""
+    import dataclasses
+
+    from emdm.solvers import base
+
+    calls: list[tuple[str, dict]] = []
+
+    def spy(name):
+        spec = base.get_solver(name)
+
+        def solve(qp, **kwargs):
+            calls.append((name, kwargs))
+            return spec.solve(qp, **kwargs)
+
+        return dataclasses.replace(spec, solve=solve)
+
+    for name in ("nelder-mead", "active-set"):
+        monkeypatch.setitem(base._REGISTRY, name, spy(name))
+    sc = emdm.load_scenario("task2", {"motion.max_time": 0.15})
+    run = emdm.simulate(sc, "C-EMDM", solver="nelder-mead", certify=False, budget=37)
+    assert run.steps == 3 and [n for n, _ in calls] == ["nelder-mead"] * 3
+    assert all(kwargs == {"budget": 37} for _, kwargs in calls)
+    assert run.iterations.max() <= 37  # nelder-mead iterates at most once per evaluation
+    calls.clear()
+    emdm.simulate(sc, "C-EMDM", solver="nelder-mead", certify=False)
+    assert [kwargs for _, kwargs in calls] == [{}] * 3  # no budget: each solver's own default
+    calls.clear()
+    emdm.simulate(sc, "C-EMDM", solver="nelder-mead", fallback=("active-set",), budget=37)
+    assert {n: kw for n, kw in calls} == {"nelder-mead": {"budget": 37}, "active-set": {}}
+
+
 def test_goal_at_the_start_needs_no_step():
     sc = emdm.load_scenario("task2")
     start = sc.planar_arm.forward(sc.motion.q0)

@@ -62,7 +62,7 @@ from ..core.validation import Policy
 from ..core.zonotope import feasible_point, task_scale
 from ..errors import NoSolution
 from ..solvers import BOUND_TOL, DEFAULT_FALLBACK, DEFAULT_SOLVER, KKT_TOL, get_solver
-from ..solvers.base import _solve_chain
+from ..solvers.base import MAX_BUDGET, _solve_chain
 from ..solvers.kernels import (
     INFEASIBLE,
     OK,
@@ -442,6 +442,7 @@ def simulate(
     solver: str = DEFAULT_SOLVER,
     fallback: Sequence[str] = DEFAULT_FALLBACK,
     certify: bool = True,
+    budget: int | None = None,
 ) -> Run:
     """Run ``controller`` on ``scenario`` from ``q0`` until the goal or ``max_time``.
 
@@ -449,16 +450,20 @@ def simulate(
     settle goes through ``[solver, *fallback]``, the first answer whose KKT report is optimal being
     used. Another ``solver`` is tried first at every step, then each of ``fallback`` in order; with
     ``certify=False`` the first finite answer is used as it is (to study inexact solvers in
-    closed loop; its KKT residual is recorded). Raises :class:`~emdm.errors.NoSolution` when a step
+    closed loop; its KKT residual is recorded). ``budget`` is the evaluation budget of the chain's
+    gradient-free solvers (None: each one's default). Raises :class:`~emdm.errors.NoSolution` when a step
     has no admissible command (``on_infeasible = "error"``, or no solver succeeds); the exception
     carries the partial run (``.run``), the controller and the step. Before the first step, raises
     :class:`~emdm.errors.ScenarioError` naming the argument that is not valid (``scenario`` a
     Scenario, ``controller`` a name or a Controller, ``solver`` a name, ``fallback`` a list of
-    names, ``certify`` True or False), :class:`~emdm.errors.EmdmError` for an unknown controller
+    names, ``certify`` True or False, ``budget`` None or an integer >= 1),
+    :class:`~emdm.errors.EmdmError` for an unknown controller
     and :class:`~emdm.errors.SolverNotFound` for an unknown solver.
     """
     ctrl, fallback = _arguments("simulate", scenario, controller, solver, fallback)
     _Checker("simulate").flag("certify", certify)
+    if budget is not None:
+        budget = _Checker("simulate").count("budget", budget, 1, MAX_BUDGET)
     chain = [solver, *[f for f in fallback if f != solver]]
     for name in chain:
         get_solver(name)  # fail before the loop on an unknown solver
@@ -500,7 +505,7 @@ def simulate(
         if code != Exit.HANDOFF:
             break
         try:
-            _chain_step(scenario, ctrl, chain, certify, rec, k, work, steps)
+            _chain_step(scenario, ctrl, chain, certify, rec, k, work, steps, budget)
         except NoSolution as exc:
             exc.run = _run(scenario, ctrl, rec, k, steps, reached=False)
             exc.controller, exc.step = ctrl.name, k
@@ -580,6 +585,7 @@ def _chain_step(
     k: int,
     w: StepWork,
     steps: _Steps,
+    budget: int | None = None,
 ) -> None:
     """Step ``k`` through the policy and the solver chain; its nominal program is in ``w``."""
     n = scenario.n
@@ -601,7 +607,7 @@ def _chain_step(
     context = f"step {k} (t = {t:g} s): "
     try:
         program = _admissible(nominal, policy, slack_weight=weight, step=k)
-        result = _solve_chain(program.qp, chain, context=context, certify=certify)
+        result = _solve_chain(program.qp, chain, context=context, certify=certify, budget=budget)
     except NoSolution:
         if not (scenario.obstacles and ctrl.has(TermKind.OBSTACLE)):
             raise
@@ -613,10 +619,14 @@ def _chain_step(
         )
         try:
             program = _admissible(nominal, policy, slack_weight=weight, step=k)
-            result = _solve_chain(program.qp, chain, context=context, certify=certify)
+            result = _solve_chain(
+                program.qp, chain, context=context, certify=certify, budget=budget
+            )
         except NoSolution:
             program = _standstill(nominal, policy)
-            result = _solve_chain(program.qp, chain, context=context, certify=certify)
+            result = _solve_chain(
+                program.qp, chain, context=context, certify=certify, budget=budget
+            )
         rec.lo[k], rec.hi[k] = nominal.lb[:n], nominal.ub[:n]
     x = result.x
     rec.qd[k] = x[:n]

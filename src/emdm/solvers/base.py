@@ -245,17 +245,24 @@ class ChainResult:
 
 
 def solve_chain(
-    qp: QP, chain: Sequence[str], *, tol: float = KKT_TOL, context: str = "", certify: bool = True
+    qp: QP,
+    chain: Sequence[str],
+    *,
+    tol: float = KKT_TOL,
+    context: str = "",
+    certify: bool = True,
+    budget: int | None = None,
 ) -> ChainResult:
     """Try each solver of ``chain`` in turn; accept the first answer whose KKT report is optimal.
 
     With ``certify=False`` the first finite answer is accepted whatever its KKT report (used to
-    study inexact solvers in closed loop; the report is still recorded). Raises
+    study inexact solvers in closed loop; the report is still recorded). ``budget`` is the
+    evaluation budget of the chain's gradient-free solvers (None: each one's default). Raises
     :class:`~emdm.errors.NoSolution` when no answer is accepted, naming every attempt;
     :class:`~emdm.errors.SolverNotFound` for an unknown solver; and
     :class:`~emdm.errors.ScenarioError` naming the argument that is not valid: ``qp`` a QP,
     ``chain`` a non-empty list of solver names, ``tol`` a finite number > 0, ``context`` a
-    string, ``certify`` True or False.
+    string, ``certify`` True or False, ``budget`` None or an integer >= 1.
     """
     check = _Checker("solve_chain")
     check.instance("qp", qp, QP, "a QP")
@@ -264,11 +271,23 @@ def solve_chain(
     tol = check.real("tol", tol, positive=True)
     check.instance("context", context, str, "a string")
     check.flag("certify", certify)
-    return _solve_chain(qp, chain, tol=tol, context=context, certify=certify)
+    if budget is not None:
+        budget = check.count("budget", budget, 1, MAX_BUDGET)
+    return _solve_chain(qp, chain, tol=tol, context=context, certify=certify, budget=budget)
+
+
+MAX_BUDGET = 10**9
+"""The largest evaluation budget a caller may give (a typo's guard, far above any use)."""
 
 
 def _solve_chain(
-    qp: QP, chain: Sequence[str], *, tol: float = KKT_TOL, context: str = "", certify: bool = True
+    qp: QP,
+    chain: Sequence[str],
+    *,
+    tol: float = KKT_TOL,
+    context: str = "",
+    certify: bool = True,
+    budget: int | None = None,
 ) -> ChainResult:
     """:func:`solve_chain` of checked arguments (the per-step path)."""
     attempts: list[tuple[str, str]] = []
@@ -276,7 +295,10 @@ def _solve_chain(
     for position, name in enumerate(chain):
         spec = get_solver(name)
         try:
-            result = spec.solve(qp)
+            if budget is not None and spec.family == "gradient-free":
+                result = spec.solve(qp, budget=budget)
+            else:
+                result = spec.solve(qp)
         except Exception as exc:  # a faulty solver must not end the run: record and fall back
             attempts.append((name, f"raised {type(exc).__name__}: {exc}"))
             continue

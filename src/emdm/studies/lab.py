@@ -440,7 +440,9 @@ def _study(
     run, error = None, None
     if closed_loop:
         try:
-            run = simulate(scenario, ctrl, solver=name, fallback=("active-set",), certify=False)
+            run = simulate(  # each solver as the lab measured it: the same evaluation budget
+                scenario, ctrl, solver=name, fallback=("active-set",), certify=False, budget=budget
+            )
         except NoSolution as exc:
             error = str(exc)
     return solves, histories, run, error, seeds
