@@ -19,7 +19,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -295,10 +295,10 @@ def _solve_chain(
     for position, name in enumerate(chain):
         spec = get_solver(name)
         try:
+            options: dict[str, Any] = {}
             if budget is not None and spec.family == "gradient-free":
-                result = spec.solve(qp, budget=budget)
-            else:
-                result = spec.solve(qp)
+                options["budget"] = budget
+            result = spec.solve(qp, **options)
         except Exception as exc:  # a faulty solver must not end the run: record and fall back
             attempts.append((name, f"raised {type(exc).__name__}: {exc}"))
             continue
