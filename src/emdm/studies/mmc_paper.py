@@ -93,28 +93,30 @@ PROTOCOLS = {
 }
 
 
-def rpy_zyx(R: np.ndarray) -> np.ndarray:
+def rpy_zyx(R: np.ndarray) -> tuple[float, float, float]:
     """Roll, pitch, yaw (rad) with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (spatialmath's ``zyx``)."""
-    if abs(abs(R[2, 0]) - 1.0) < 1e-12:  # pitch at +-90 degrees: roll taken as 0
-        pitch = -math.copysign(math.pi / 2, R[2, 0])
-        return np.array([0.0, pitch, math.atan2(-R[0, 1], R[1, 1])])
-    return np.array(
-        [
-            math.atan2(R[2, 1], R[2, 2]),
-            -math.asin(max(-1.0, min(1.0, R[2, 0]))),
-            math.atan2(R[1, 0], R[0, 0]),
-        ]
+    r20 = float(R[2, 0])
+    if abs(abs(r20) - 1.0) < 1e-12:  # pitch at +-90 degrees: roll taken as 0
+        return 0.0, -math.copysign(math.pi / 2, r20), math.atan2(-R[0, 1], R[1, 1])
+    return (
+        math.atan2(R[2, 1], R[2, 2]),
+        -math.asin(max(-1.0, min(1.0, r20))),
+        math.atan2(R[1, 0], R[0, 0]),
     )
 
 
 def servo(T: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, bool, float]:
     """``(v, arrived, e_s)``: robotics-toolbox-python's ``p_servo`` (method ``rpy``, gain 1,
-    threshold 0.17) and the script's slack error ``e_s`` (module notes)."""
-    rel = np.linalg.solve(T, goal)
-    rpy = rpy_zyx(rel[:3, :3])
-    e = np.concatenate((rel[:3, 3], rpy))
-    e_s = float(np.abs(np.concatenate((rel[:3, 3], rpy * math.pi / 180.0))).sum())
-    return GAIN * e, bool(np.abs(e).sum() < THRESHOLD), e_s
+    threshold 0.17) and the script's slack error ``e_s`` (module notes). ``T^-1 T*`` is taken
+    as the rigid transform it is (spatialmath's inverse: ``R^T``, ``-R^T t``)."""
+    Rt = T[:3, :3].T
+    t = Rt @ (goal[:3, 3] - T[:3, 3])
+    rpy = rpy_zyx(Rt @ goal[:3, :3])
+    e = np.array((t[0], t[1], t[2], *rpy))
+    moved = abs(e[0]) + abs(e[1]) + abs(e[2])
+    turned = abs(rpy[0]) + abs(rpy[1]) + abs(rpy[2])
+    e_s = moved + turned * math.pi / 180.0
+    return GAIN * e, bool(moved + turned < THRESHOLD), e_s
 
 
 class Singular(Exception):
@@ -146,26 +148,31 @@ def command(
         if name == Paper.MMC:
             import daqp
 
-            upper, lower = np.full(n + 6, 1e30), np.full(n + 6, -1e30)
+            # n + 6 simple bounds (qd's dampers, delta free), then the 6 rows J qd + delta = v
+            upper, lower = np.full(n + 12, 1e30), np.full(n + 12, -1e30)
             near_low, near_high = q - lo <= PI, hi - q <= PI
             lower[:n][near_low] = -((q - lo - PS) / (PI - PS))[near_low]
             upper[:n][near_high] = ((hi - q - PS) / (PI - PS))[near_high]
-            H = np.diag(np.concatenate((np.full(n, Y), np.full(6, 1.0 / max(e_s, 1e-300)))))
-            f = np.concatenate((-Jm, np.zeros(6)))
-            A = np.hstack((J, np.eye(6)))
-            sense = np.concatenate((np.zeros(n + 6), np.full(6, 5))).astype(np.int32)
-            x, _, flag, _ = daqp.solve(
-                H, f, A, np.concatenate((upper, v)), np.concatenate((lower, v)), sense
-            )
+            upper[n + 6 :] = lower[n + 6 :] = v
+            sense = np.zeros(n + 12, dtype=np.int32)
+            sense[n + 6 :] = 5
+            weights = np.full(n + 6, Y)
+            weights[n:] = 1.0 / max(e_s, 1e-300)
+            f = np.zeros(n + 6)
+            f[:n] = -Jm
+            A = np.zeros((6, n + 6))
+            A[:, :n] = J
+            A[:, n:] = np.eye(6)
+            x, _, flag, _ = daqp.solve(np.diag(weights), f, A, upper, lower, sense)
             if flag < 1:
                 raise Singular
             qd = np.asarray(x[:n], dtype=float)
         else:
             pinv = np.linalg.pinv(J)
             qd = pinv @ v
-            if name in (Paper.PARK, Paper.BAUR):
+            if name in (Paper.PARK, Paper.BAUR):  # (I - J^+ J) g, without forming I - J^+ J
                 gradient = Jm - (_joint_limit_terms(q, lo, hi) if name == Paper.BAUR else 0.0)
-                qd = qd + (np.eye(n) - pinv @ J) @ gradient / Y
+                qd = qd + (gradient - pinv @ (J @ gradient)) / Y
     except np.linalg.LinAlgError:
         raise Singular from None
     if not np.all(np.isfinite(qd)):
@@ -197,8 +204,7 @@ def run_trial(
                 continue
             q = s["q"]
             T, J0, m, Jm = arm.state(q)
-            R = T[:3, :3]
-            J = np.vstack((R.T @ J0[:3], R.T @ J0[3:]))  # the end-effector frame
+            J = (T[:3, :3].T @ J0.reshape(2, 3, n)).reshape(6, n)  # the end-effector frame
             v, s["arrived"], e_s = servo(T, goal)
             try:
                 qd = command(c, J, Jm, v, e_s, q, lo, hi)
@@ -208,7 +214,7 @@ def run_trial(
             s["m"] += m
             s["it"] += 1
             limit = n - 2
-            if np.any(q[:limit] <= lo[:limit]) or np.any(q[:limit] >= hi[:limit]):
+            if (q[:limit] <= lo[:limit]).any() or (q[:limit] >= hi[:limit]).any():
                 s["failed"] = True
             s["qd"] = qd
         for c in controllers:  # the simulator integrates every robot's command together
