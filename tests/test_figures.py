@@ -166,6 +166,18 @@ def test_gif_read_back_matches_the_run(tmp_path, speedup):
     assert sum(durations[:-1]) == pytest.approx(steps * dt / speedup * 1000, abs=1)
 
 
+def test_the_gif_and_the_mp4_share_frames_drawn_once(tmp_path, monkeypatch):
+    pytest.importorskip("imageio_ffmpeg")
+    sc = emdm.load_scenario("task2", {"motion.max_time": 0.5})
+    runs = [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")]
+    drawn: list[int] = []
+    draw = Animator.draw
+    monkeypatch.setattr(Animator, "draw", lambda self, i: drawn.append(i) or draw(self, i))
+    written = animate(runs, tmp_path / "anim")
+    assert [p.suffix for p in written] == [".gif", ".mp4"]
+    assert drawn == list(range(len(frame_schedule(10, 0.05, 1.0, 20.0)[0])))
+
+
 def test_ellipse_drawn_matches_the_eigen_decomposition(task2_runs):
     runs = [task2_runs["UC-EMDM"]]
     animator = Animator(runs)

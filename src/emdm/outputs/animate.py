@@ -94,6 +94,7 @@ class Animator:
         self.box = self.views.limits(self.runs)
         size = 0.5 * float((self.box[:, 1] - self.box[:, 0]).max()) / 1.08
         self.scale = 0.3 * size / biggest if biggest > 0 else 1.0
+        self._frames: list[np.ndarray] | None = None
         with matplotlib.rc_context(RC):
             self._build(sc)
 
@@ -247,7 +248,10 @@ class Animator:
         return np.asarray(first["ellipse"].get_xy())
 
     def frames(self) -> list[np.ndarray]:
-        return [self.draw(i) for i in range(len(self.indices))]
+        """Every frame's pixels, drawn once and kept: the GIF and the MP4 share them."""
+        if self._frames is None:
+            self._frames = [self.draw(i) for i in range(len(self.indices))]
+        return self._frames
 
     def save_gif(self, path: Path) -> Path:
         """Write the animation as a looping GIF with the true frame durations."""
@@ -294,8 +298,10 @@ class Animator:
         return path
 
     def close(self) -> None:
-        """Release the figure's artists (the figure is not registered anywhere else)."""
+        """Release the figure's artists (the figure is not registered anywhere else) and the
+        frames drawn."""
         self.fig.clear()
+        self._frames = None
 
 
 def run_is_pose(run: Run) -> bool:
