@@ -1098,3 +1098,38 @@ def test_the_task2_slide_is_titled_with_the_blocked_line_only_when_the_geometry_
         events["geometry"]["line_blocked"] = not blocked
         path.write_text(json.dumps(events), encoding="utf-8")
         assert ("is blocked" in title()) == (not blocked)
+
+
+def test_the_closed_loop_arrivals_name_every_way_a_solver_differs():
+    """The solver answer names the gradient-free closed loops that arrive later, sooner or not
+    at all than the exact one (a budget-limited differential-evolution arrived sooner, and the
+    sentence had said only 'later')."""
+    from emdm.outputs.report.findings.records import SolverRow
+    from emdm.outputs.report.findings.solvers import Solvers
+
+    def row(reached, t):
+        fields = dict.fromkeys(("family", "loop", "description"), "x") | dict.fromkeys(
+            ("resolved_steps", "failures", "over_period", "limit_stops", "optimal_claims"), 0
+        )
+        numbers = ("median_time", "p95_time", "max_time", "median_iterations")
+        more = ("median_evaluations", "max_gap", "max_abs_gap", "max_violation")
+        return SolverRow(
+            **fields, **dict.fromkeys(numbers + more, 0.0), reached=reached, time_to_goal=t
+        )
+
+    def said(free, times):
+        rows = {k: row(t is not None, t) for k, t in times.items()}
+        return "".join(part.plain() for part in Solvers.closed_loop_arrivals(free, rows))
+
+    free = ["nelder-mead", "powell", "differential-evolution", "cobyla"]
+    base = {"active-set": 16.45, "nelder-mead": 16.8, "powell": 19.35}
+    assert said(free, base | {"differential-evolution": 16.3, "cobyla": None}) == (
+        "nelder-mead and powell arrive later, differential-evolution sooner, cobyla does not "
+        "arrive. "
+    )
+    assert said(free, base | {"differential-evolution": 16.45, "cobyla": 16.45}) == (
+        "nelder-mead and powell arrive later. "
+    )
+    same = dict.fromkeys(["active-set", *free], 16.45)
+    assert said(free, same) == "every solver reaches the goal at the same time. "
+    assert said(free, same | {"powell": 16.0}) == "powell arrives sooner. "
