@@ -1708,3 +1708,71 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
                 color="#444444",
             )
     return stem
+
+
+@dataclass(frozen=True)
+class EvidenceBar:
+    """One closed-loop run of the pitch's Task 2 evidence chart: whose, what was changed (or
+    ``as run``), and when it reached the goal (``None``: it did not, within ``max_time``)."""
+
+    controller: str
+    change: str
+    time_to_goal: float | None
+
+
+def evidence_figure(
+    bars: Sequence[EvidenceBar],
+    max_time: float,
+    stem: Path,
+    medium: Medium = SLIDE,
+    width: float = 2.6,
+    height: float = 2.5,
+) -> Path:
+    """The pitch's Task 2 evidence: each run's time to the goal as a bar, top to bottom in the
+    order given, in its controller's colour; a run that never arrives is a hatched bar to the
+    end of the run marked 'no arrival', so a stall is seen beside the arrivals (the slide had
+    said the runs in bullets, without drawing them). Drawn at the size shown beside the stills."""
+    with _figure(stem, medium, width, height) as fig:
+        ax = fig.subplots()
+        ys = np.arange(len(bars))[::-1]
+        for y, bar in zip(ys, bars, strict=True):
+            colour = CONTROLLER_STYLE.get(bar.controller, {"color": OKABE_ITO[0]})["color"]
+            # named above its bar, so that the bars keep the axes' whole width
+            name = f"{bar.controller}, {bar.change}"
+            ax.text(0.0, y + 0.27, name, ha="left", va="bottom", fontsize=medium.small)
+            if bar.time_to_goal is None:
+                ax.barh(
+                    y,
+                    max_time,
+                    height=0.46,
+                    color="white",
+                    edgecolor=colour,
+                    hatch="///",
+                    linewidth=0.8,
+                )
+                ax.text(
+                    0.5 * max_time,
+                    y,
+                    "no arrival",
+                    ha="center",
+                    va="center",
+                    fontsize=medium.small,
+                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 1.0},
+                )
+            else:
+                ax.barh(y, bar.time_to_goal, height=0.46, color=colour, linewidth=0)
+                ax.text(
+                    bar.time_to_goal + 0.02 * max_time,
+                    y,
+                    f"{bar.time_to_goal:.2f}",
+                    ha="left",
+                    va="center",
+                    fontsize=medium.small,
+                )
+        ax.set_yticks([])
+        ax.set_xlim(0.0, max_time * 1.001)
+        ax.set_ylim(-0.4, len(bars) - 0.2)
+        ax.set_xlabel(r"time to the goal (s)")
+        for side in ("top", "right", "left"):
+            ax.spines[side].set_visible(False)
+    return stem

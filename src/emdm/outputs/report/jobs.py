@@ -377,7 +377,42 @@ def _story_figures(stage: Path) -> list[str]:
                 )
             )
         )
+    bars = evidence_bars(t2, stage / "data" / "evidence.json")
+    if len(bars) > 2:  # the two as run, and at least one run with a cause changed
+        max_time = t2[Name.C_EMDM].scenario.motion.max_time
+        stem = stage / SLIDE_FIGURES / "task2-evidence"
+        out.append(str(pf.evidence_figure(bars, max_time, stem)))
     return out
+
+
+def evidence_bars(runs: dict[str, Run], record: Path) -> list[pf.EvidenceBar]:
+    """The pitch's Task 2 evidence chart: the constrained pair as run, then each of Task 2's
+    runs with one cause changed (``evidence.json``) that the slide names, those present."""
+    import json
+
+    ev = json.loads(record.read_text(encoding="utf-8"))["runs"] if record.exists() else {}
+
+    def goal(run: dict[str, Any]) -> float | None:
+        return run["time_to_goal"] if run.get("reached") else None
+
+    def arrival(run: Run) -> float | None:
+        return run.time_to_goal if run.reached else None
+
+    bars = []
+    for ctrl in (Name.C_IVKC, Name.C_EMDM):
+        bars.append(pf.EvidenceBar(ctrl, "as run", arrival(runs[ctrl])))
+        if ctrl in ev.get("t2-c-slack-policy", {}).get("runs", {}):
+            run = ev["t2-c-slack-policy"]["runs"][ctrl]
+            bars.append(pf.EvidenceBar(ctrl, "free slack", goal(run)))
+    if Name.C_EMDM in ev.get("t2-c-emdm-no-manip", {}).get("runs", {}):
+        run = ev["t2-c-emdm-no-manip"]["runs"][Name.C_EMDM]
+        bars.append(pf.EvidenceBar(Name.C_EMDM, "no dexterity term", goal(run)))
+    tight = ev.get("t2-c-emdm-tight-slack", {})
+    if Name.C_EMDM in tight.get("runs", {}):
+        bound = max(abs(v) for v in tight["overrides"]["slack.max"])
+        change = f"slack within ±{bound:g} m/s"
+        bars.append(pf.EvidenceBar(Name.C_EMDM, change, goal(tight["runs"][Name.C_EMDM])))
+    return bars
 
 
 def _read_rows(path: Path) -> list[dict[str, str]]:

@@ -246,6 +246,7 @@ class Pitch:
             "task1-UC",
             "task2-UC",
             "task2-UC-effort",
+            "task2-evidence",
         ):
             out.figures[name] = self.d.exists(f"paper/slides/{name}.png")
         out.single_point = s.single_point_vertex() is not None
