@@ -1162,3 +1162,31 @@ def test_the_task2_evidence_slide_draws_each_run_from_its_record(quick_report):
     assert r"\fig{\textwidth}{task2-evidence}" in (quick_report / "paper" / "pitch.tex").read_text()
     alone = evidence_bars(runs, quick_report / "no-such.json")  # no record: the pair alone
     assert [b.change for b in alone] == ["as run", "as run"]
+
+
+def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_runs(
+    quick_report, tmp_path
+):
+    """Reading 128: the abstract says that C-IVKC's stall comes from task scaling, the paper's
+    own choice, and what a free slack changes: both arrive, C-IVKC first, or C-IVKC alone
+    when C-EMDM's slack run does not arrive (as its record says)."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "evidence.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    runs = record["runs"]["t2-c-slack-policy"]["runs"]
+
+    def abstract() -> str:
+        return "".join(p.plain() for p in Story(Data(root)).abstract())
+
+    said = abstract()
+    assert "C-IVKC stalls under task scaling (our design choice)" in said
+    first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
+    assert ("both arrive, C-IVKC first" in said) == first
+    runs["C-EMDM"].update(reached=False, time_to_goal=None)
+    path.write_text(json.dumps(record), encoding="utf-8")
+    said = abstract()
+    assert "slack instead, C-IVKC arrives." in said and "both arrive" not in said
