@@ -209,5 +209,12 @@ EVIDENCE = (
     Evidence(
         "t2-uc-emdm-stiff-slack", "task2", (Name.UC_EMDM,), {"weights.slack": 1e4}, Name.UC_IVKC
     ),
+    Evidence(  # which of UC-EMDM's gains is the slack's and which the term's (reading 130)
+        "t2-uc-emdm-no-manip",
+        "task2",
+        (Name.UC_EMDM,),
+        {"weights.manipulability": 0.0},
+        Name.UC_EMDM,
+    ),
 )
 """The evidence runs (each isolates one cause; the report says what each shows)."""

@@ -348,7 +348,7 @@ class Pitch:
                 s.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
                 ")",
             )
-        out.append(s.uc_slack_saving(speeds=False))
+        out.append(s.uc_slack_saving())
         e8 = s.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
         if e8.get("reached"):
             out.append(

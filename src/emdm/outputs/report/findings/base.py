@@ -107,7 +107,7 @@ ABLATIONS: tuple[str | tuple[str, ...], ...] = (
     "t2-c-ivkc-wide-limits",
     "t2-c-emdm-no-manip",
     "t2-c-emdm-tight-slack",
-    "t2-uc-emdm-stiff-slack",
+    "t2-uc-emdm-no-manip",
 )
 """Table II's runs in order, each changing one thing in a nominal run; :func:`run_label` names
 them E1, E2, ..., and the runs of a group E2a, E2b, ... (the free-slack policy runs are Table

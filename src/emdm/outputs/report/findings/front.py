@@ -40,10 +40,11 @@ class Front(Claims):
             out += sentence(". ")
         uc = (Name.UC_EMDM, Name.UC_IVKC)
         if all(self.mv(t2, c, "reached") for c in uc):  # Task 2.2, in the same figures as the body
+            by_term = self.uc_term_raises_m()  # (an evidence run: whose gain is which)
             out += sentence(
                 "Without limits, UC-EMDM's slack gives ",
                 self.pct(t2, *uc, "total_effort"),
-                " effort and ",
+                " effort, its term " if by_term else " effort and ",
                 self.pct(t2, *uc, "mean_manipulability"),
                 " mean ",
                 M_SYM,

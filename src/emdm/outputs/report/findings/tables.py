@@ -8,7 +8,6 @@ from ....core.controllers import Name
 from ..document import Section, Table
 from ..trace import Eqs, Math, Ref, Sentence, Text, Unit, Upright, sentence
 from .base import (
-    C_S,
     DT,
     ERR,
     FINER_STEP,
@@ -234,19 +233,14 @@ class Tables(Claims):
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
                 ),
             ),
-            (
-                "t2-uc-emdm-stiff-slack",
-                Name.UC_EMDM,
-                sentence(
-                    *eq(C_S, self.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e"))
-                ),
-            ),
+            ("t2-uc-emdm-no-manip", Name.UC_EMDM, self.weight_off("t2-uc-emdm-no-manip")),
         ]
         table = Table(
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run (its outcomes in "
-                "brackets; " + STALL_NOTE,
+                "brackets; stall: as in ",
+                Ref("tab", "outcomes"),
                 MISS_NOTE,
                 "); ",
                 Upright(run_label(GRID_MISS)),
