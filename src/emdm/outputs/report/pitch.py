@@ -358,6 +358,15 @@ class Pitch:
                     ") removes the saving: it behaves like IVKC",
                 )
             )
+        if s.uc_term_raises_m():  # (the paper's Table II run, said as the talk says it)
+            out.append(
+                sentence(
+                    "Without the dexterity term it still saves effort, at about IVKC's mean ",
+                    M_SYM,
+                    ": the slack saves the effort, the term raises ",
+                    M_SYM,
+                )
+            )
         return out
 
     def pareto(self) -> list[Sentence]:
