@@ -104,7 +104,7 @@ class Task2(Claims):
             )
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
             if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
-                answer += sentence(" with a higher mean ", M_SYM)
+                answer += sentence(" with a higher mean ", M_SYM, f" than {emdm}")
             answer += sentence(
                 f", and {emdm}, given one too, in ",
                 self.evid_goal(key, emdm),
@@ -144,7 +144,7 @@ class Task2(Claims):
                 if first:
                     m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
                     if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
-                        answer += sentence(" with a higher mean ", M_SYM)
+                        answer += sentence(" with a higher mean ", M_SYM, f" than {emdm}")
                     answer += sentence(  # (both rows are in Table I, cited just before)
                         f"; {emdm}, given one too, takes ", self.evid_goal(key, emdm)
                     )
