@@ -30,6 +30,8 @@ class ReportConfig:
     mp4: bool
     compile: bool = True
     mmc_trials: int = 500
+    animation_fps: float = 20.0
+    """The animations' highest frame rate (the quick preview draws half the frames)."""
 
 
 FULL = ReportConfig(
@@ -55,7 +57,8 @@ QUICK = ReportConfig(
     grid=4,
     animation_seconds=4.0,
     mp4=False,
-    mmc_trials=40,
+    mmc_trials=20,
+    animation_fps=10.0,
 )
 
 SLIDE_PARETO_STEP = 0

@@ -521,7 +521,7 @@ def _job_animation(task: str, group: str, stem: Path, cfg: ReportConfig) -> dict
     speedup = 1.0
     while duration / speedup > cfg.animation_seconds:
         speedup *= 2.0
-    files = animate(pair, stem, speedup=speedup, mp4=cfg.mp4)
+    files = animate(pair, stem, speedup=speedup, mp4=cfg.mp4, max_fps=cfg.animation_fps)
     return {
         "task": task,
         "pair": group,
