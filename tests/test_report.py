@@ -1189,7 +1189,7 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "slack instead, C-IVKC arrives." in said and "both arrive" not in said
+    assert "free slack instead, C-IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):
@@ -1224,10 +1224,10 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
     )
     by_term, abstract, share = said()
     assert by_term == expected
-    assert ("effort, its term" in abstract) == by_term
-    assert ("the term raises m" in share) == by_term
+    assert ("effort, its dexterity term" in abstract) == by_term
+    assert ("the term adds" in share) == by_term
     assert share.startswith("Without the dexterity term (E6) UC-EMDM ")
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()
-    assert not by_term and "effort and" in abstract and "the term raises" not in share
+    assert not by_term and "effort and" in abstract and "the term adds" not in share

@@ -209,9 +209,6 @@ EVIDENCE = (
         (Name.C_EMDM,),
         {"slack.min": [-0.1, -0.1], "slack.max": [0.1, 0.1]},
     ),
-    Evidence(
-        "t2-uc-emdm-stiff-slack", "task2", (Name.UC_EMDM,), {"weights.slack": 1e4}, Name.UC_IVKC
-    ),
     Evidence(  # which of UC-EMDM's gains is the slack's and which the term's (reading 130)
         "t2-uc-emdm-no-manip",
         "task2",

@@ -9,7 +9,7 @@ from ...core.controllers import Name
 from .config import SLIDE_PARETO_STEP
 from .document import Document
 from .findings import DT, M_SYM, MRATE, RATIO, Story
-from .findings.base import C_S, T_EQ, eq
+from .findings.base import T_EQ
 from .findings.claims import cap, listed
 from .trace import Data, Sentence, Text, sentence
 
@@ -349,15 +349,6 @@ class Pitch:
                 ")",
             )
         out.append(s.uc_slack_saving())
-        e8 = s.evid("t2-uc-emdm-stiff-slack", "runs", emdm)
-        if e8.get("reached"):
-            out.append(
-                sentence(
-                    "A stiff slack (",
-                    *eq(C_S, s.override("t2-uc-emdm-stiff-slack", "weights.slack", fmt=".0e")),
-                    ") removes the saving: it behaves like IVKC",
-                )
-            )
         if s.uc_term_raises_m():  # (the paper's Table II run, said as the talk says it)
             out.append(
                 sentence(

@@ -33,7 +33,7 @@ class Front(Claims):
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "; given an unbounded slack instead, ",
+                    "; given a free slack instead, ",
                     "both arrive" if both else "C-IVKC arrives",
                     ", C-IVKC first" if both and self.ivkc_first_with_slack() else "",
                 )
@@ -44,7 +44,7 @@ class Front(Claims):
             out += sentence(
                 "Without limits, UC-EMDM's slack gives ",
                 self.pct(t2, *uc, "total_effort"),
-                " effort, its term " if by_term else " effort and ",
+                " effort, its dexterity term " if by_term else " effort and ",
                 self.pct(t2, *uc, "mean_manipulability"),
                 " mean ",
                 M_SYM,

@@ -173,7 +173,6 @@ EvidenceKey = Literal[
     "t2-c-ivkc-wide-limits",
     "t2-c-emdm-no-manip",
     "t2-c-emdm-tight-slack",
-    "t2-uc-emdm-stiff-slack",
     "t2-uc-emdm-no-manip",
 ]
 """The evidence runs the story cites (the keys of :data:`..config.EVIDENCE`)."""
