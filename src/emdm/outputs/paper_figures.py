@@ -1337,6 +1337,11 @@ def solver_styles(names: Sequence[str]) -> dict[str, tuple[str, str]]:
     }
 
 
+FAMILY_ROOM = 4
+"""Decades of error left free above the convergence curves, where a split panel names each
+axes' family (gradient-based, gradient-free)."""
+
+
 def convergence_figure(
     panels: Sequence[ConvergencePanel],
     stem: Path,
@@ -1380,11 +1385,12 @@ def convergence_figure(
             )[0]
             for ax, (name, curves) in zip(own, part, strict=True):
                 _convergence_axes(ax, curves, styles, dashes, medium, size)
-                if name:  # which family, where the curves leave room (they fall left to right)
+                if name:  # which family, in a band the curves leave free (see the limits below)
                     ax.text(
                         0.04,
-                        0.05,
+                        0.95,
                         name,
+                        va="top",
                         transform=ax.transAxes,
                         fontsize=medium.tiny,
                         bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.5, "alpha": 0.8},
@@ -1399,6 +1405,8 @@ def convergence_figure(
             axes.extend(own)
         bottom = min(min(ax.get_ylim()) for ax in axes)
         top = max(max(ax.get_ylim()) for ax in axes)
+        if any(len(p) > 1 for p in parts):  # a band of FAMILY_ROOM decades over the curves for
+            top *= 10.0**FAMILY_ROOM  # the family names (at the foot they sat on slsqp's curve)
         for ax in axes:  # one error scale across the programs, its ticks labelled once
             ax.set_ylim(bottom, top)
             ax.tick_params(labelleft=ax is axes[0])
