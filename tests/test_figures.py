@@ -708,3 +708,40 @@ def test_the_workspace_figure_names_start_and_goal_on_a_slide_and_keeps_the_full
     assert {"reachable", "arm: start, goal", "goal"} <= set(labels["paper"])
     assert set(labels["slide"]) == set(labels["paper"]) - {"reachable", "arm: start, goal", "goal"}
     assert len(labels["slide"]) == 7
+
+
+def test_the_task1_slide_shows_dexterity_effort_and_tracking_for_both_pairs(tmp_path, monkeypatch):
+    """Slide 5's title has three claims (EMDM raises m, pays with effort, not with tracking):
+    its figure draws each, per pair, from the runs: m(t), the effort spent so far and ||e||(t)
+    (reading 133: tracking was said, not shown)."""
+    from matplotlib.figure import Figure
+
+    from emdm.outputs import paper_figures as pf
+
+    drawn: list[Figure] = []
+    save = Figure.savefig
+    monkeypatch.setattr(
+        Figure, "savefig", lambda self, *a, **k: drawn.append(self) or save(self, *a, **k)
+    )
+    sc = emdm.load_scenario("task1")
+    pairs = {
+        "unconstrained": [emdm.simulate(sc, "UC-IVKC"), emdm.simulate(sc, "UC-EMDM")],
+        "constrained": [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")],
+    }
+    with pf.png_only():
+        pf.manipulability_figure(pairs, tmp_path / "task1-m")
+    assert (tmp_path / "task1-m.png").exists() and len(drawn) == 1
+    axes = [ax for ax in drawn[0].axes if ax.lines]
+    assert len(axes) == 6  # three rows, a column per pair
+    for col, runs in enumerate(pairs.values()):
+        m_ax, e_ax, d_ax = axes[col], axes[2 + col], axes[4 + col]
+        assert d_ax.get_yscale() == "log"
+        for ax, series in (
+            (m_ax, [r.m for r in runs]),
+            (e_ax, [np.r_[0.0, np.cumsum(r.effort) * r.scenario.motion.dt] for r in runs]),
+            (d_ax, [r.error_norm for r in runs]),
+        ):
+            lines = [ln for ln in ax.lines if len(ln.get_ydata()) > 2]
+            assert len(lines) == 2
+            for line, values in zip(lines, series, strict=True):
+                assert np.allclose(line.get_ydata(), values)

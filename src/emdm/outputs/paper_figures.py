@@ -66,6 +66,10 @@ PAPER = Medium("paper", column=3.5, wide=7.16, font=8.0, small=8.0, line=1.1, ti
 """Text at 8 pt at print size (ticks, labels, panel titles), 7 pt in legends and notes."""
 SLIDE = Medium("slide", column=5.9, wide=5.9, font=11.0, small=10.0, line=1.8, tiny=9.0)
 
+SLIDE_COLUMN = 0.62 * 398.34 / 72.27
+"""in: a slide column of 0.62 of the pitch's text width (398.34 pt), for a figure set beside
+its bullets at its own size."""
+
 FORMATS: tuple[str, ...] = (".pdf", ".png")
 """Formats every figure is saved in: PDF (LaTeX) and PNG (HTML); :func:`png_only` for drafts."""
 
@@ -1535,24 +1539,29 @@ def _effort_so_far(run: Run) -> np.ndarray:
 
 
 def manipulability_figure(
-    pairs: dict[str, Sequence[Run]], stem: Path, medium: Medium = SLIDE
+    pairs: dict[str, Sequence[Run]],
+    stem: Path,
+    medium: Medium = SLIDE,
+    width: float = SLIDE_COLUMN,
 ) -> Path:
-    """m(t) of each pair side by side, and under it the effort spent so far (the pitch's
-    headline for a task: what EMDM buys, and what it pays)."""
-    height = 3.3 if medium is SLIDE else 2.4
-    with _figure(stem, medium, medium.wide, height) as fig:
-        grid = fig.subplots(2, len(pairs), squeeze=False, sharex="col", sharey="row")
+    """m(t) of each pair side by side, under it the effort spent so far, and under that the
+    distance to the goal (the pitch's headline for a task: what EMDM buys, what it pays, and
+    that tracking does not pay: reading 133 asked to see 'not with tracking', not only read it)."""
+    height = 2.85 if medium is SLIDE else 2.8
+    with _figure(stem, medium, width, height) as fig:
+        grid = fig.subplots(3, len(pairs), squeeze=False, sharex="col", sharey="row")
         handles: list[Artist] = []
         for col, (title, runs) in enumerate(pairs.items()):
-            ax, ax_e = grid[0, col], grid[1, col]
+            ax, ax_e, ax_d = grid[0, col], grid[1, col], grid[2, col]
             spans = _common_scaled(runs)
-            for a in (ax, ax_e):
+            for a in (ax, ax_e, ax_d):
                 _shade(a, spans)
             for run in runs:
                 ax.plot(run.t, run.m, **_style(run, medium))
                 ax_e.plot(run.t, _effort_so_far(run), **_style(run, medium))
+                ax_d.semilogy(run.t, run.error_norm, **_style(run, medium))
             ax.set_title(title)
-            ax_e.set_xlabel(r"$t$ (s)")
+            ax_d.set_xlabel(r"$t$ (s)")
             handles += ax.get_legend_handles_labels()[0]
             if spans and not any(isinstance(h, Patch) for h in handles):
                 handles.append(_scaled_patch("tip slowed (both)"))
@@ -1561,13 +1570,16 @@ def manipulability_figure(
         fig.legend(
             handles=handles,
             loc="outside upper center",
-            ncols=len(handles),
+            ncols=math.ceil(len(handles) / 2),  # two rows: the figure is a column's width
             frameon=False,
             handlelength=1.8,
             columnspacing=1.0,
+            fontsize=medium.tiny,
         )
         grid[0, 0].set_ylabel(r"$m$ (m$^2$)")
-        grid[1, 0].set_ylabel(r"effort so far (rad$^2$/s)")
+        grid[1, 0].set_ylabel("effort\n" + r"(rad$^2$/s)")  # spent so far (short: a row is low)
+        grid[2, 0].set_ylabel(r"$\|e\|$ (m)")
+        fig.align_ylabels(grid[:, 0])  # one column of labels whatever the tick labels' widths
     return stem
 
 

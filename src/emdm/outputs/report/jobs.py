@@ -360,8 +360,8 @@ def _story_figures(stage: Path) -> list[str]:
         str(
             pf.manipulability_figure(
                 {
-                    "Task 1.1, unconstrained": [t1[Name.UC_IVKC], t1[Name.UC_EMDM]],
-                    "Task 1.2, constrained": [t1[Name.C_IVKC], t1[Name.C_EMDM]],
+                    "unconstrained": [t1[Name.UC_IVKC], t1[Name.UC_EMDM]],
+                    "constrained": [t1[Name.C_IVKC], t1[Name.C_EMDM]],
                 },
                 stage / SLIDE_FIGURES / "task1-m",
             )

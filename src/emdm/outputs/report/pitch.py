@@ -58,15 +58,15 @@ class Pitch:
         out.bullets["task1"] = [  # the title's two halves, in its order
             sentence("EMDM ", *s.dexterity_gain()),
             sentence(
-                "Tracking unchanged: goal at ",
+                "Tracking unchanged (bottom: distance to the goal): goal at ",
                 s.ttg(t1, Name.UC_IVKC),
                 " / ",
                 s.ttg(t1, Name.UC_EMDM),
-                " unconstrained, ",
+                " and ",
                 s.ttg(t1, Name.C_IVKC),
                 " / ",
                 s.ttg(t1, Name.C_EMDM),
-                " constrained (IVKC / EMDM)",
+                " (IVKC / EMDM)",
             ),
         ]
         out.titles["task1-stills"] = sentence("Task 1: the constrained pair in motion")
