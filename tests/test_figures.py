@@ -745,3 +745,27 @@ def test_the_task1_slide_shows_dexterity_effort_and_tracking_for_both_pairs(tmp_
             assert len(lines) == 2
             for line, values in zip(lines, series, strict=True):
                 assert np.allclose(line.get_ydata(), values)
+
+
+def test_the_task2_2_slide_draws_the_run_without_the_dexterity_term(tmp_path, monkeypatch):
+    """Slide 10 says what UC-EMDM does without its dexterity term; its figure draws that run
+    (the evidence record's overrides) beside the pair, in both panels (reading 135)."""
+    from matplotlib.figure import Figure
+
+    from emdm.outputs import paper_figures as pf
+    from emdm.outputs.report.jobs import _without_term
+
+    drawn: list[Figure] = []
+    save = Figure.savefig
+    monkeypatch.setattr(
+        Figure, "savefig", lambda self, *a, **k: drawn.append(self) or save(self, *a, **k)
+    )
+    label, run = _without_term("UC-EMDM")
+    assert run.scenario.weights.manipulability == 0.0 and "w_M=0" in label
+    sc = emdm.load_scenario("task2")
+    pair = [emdm.simulate(sc, "UC-IVKC"), emdm.simulate(sc, "UC-EMDM")]
+    with pf.png_only():
+        pf.effort_figure(pair, tmp_path / "effort", without=(label, run))
+    for ax in drawn[0].axes[:2]:
+        assert len(ax.lines) == 3 and np.allclose(ax.lines[2].get_xdata(), run.t)
+    assert np.allclose(drawn[0].axes[1].lines[2].get_ydata(), run.m)

@@ -1214,7 +1214,7 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
         story = Story(Data(root))
         share = "".join(p.plain() for p in story.uc_term_share())
         slide = Pitch(Data(root), document(root)).build().bullets["task2-uc"]
-        on_slide = any("the term raises" in render_latex(b) for b in slide)
+        on_slide = any("the term adds" in render_latex(b) for b in slide)
         assert on_slide == story.uc_term_raises_m()  # the pitch's slide 10 says it too
         return story.uc_term_raises_m(), "".join(p.plain() for p in story.abstract()), share
 

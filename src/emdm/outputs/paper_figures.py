@@ -1583,14 +1583,26 @@ def manipulability_figure(
     return stem
 
 
-def effort_figure(runs: Sequence[Run], stem: Path, medium: Medium = SLIDE) -> Path:
+def effort_figure(
+    runs: Sequence[Run],
+    stem: Path,
+    medium: Medium = SLIDE,
+    without: tuple[str, Run] | None = None,
+) -> Path:
     """The pitch's Task 2.2 slide: the effort spent so far, sum E dt up to t (linear, so a saving
     shows as a gap that stays), and the manipulability m(t) of a pair, two large panels (where the
-    pair composite's would be too small to read)."""
+    pair composite's would be too small to read). ``without``: a run with one cause removed,
+    ``(label, run)``, drawn grey and dotted in both panels, so that what its removal changes is
+    seen (reading 135: the slide said it without showing it)."""
     with _figure(stem, medium, medium.wide, 2.3) as fig:
         ax_e, ax_m = fig.subplots(1, 2)
         for run in runs:
             st = _style(run, medium)
+            ax_e.plot(run.t, _effort_so_far(run), **st)
+            ax_m.plot(run.t, run.m, **st)
+        if without is not None:
+            label, run = without
+            st = {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label}
             ax_e.plot(run.t, _effort_so_far(run), **st)
             ax_m.plot(run.t, run.m, **st)
         ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")

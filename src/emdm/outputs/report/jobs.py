@@ -316,8 +316,27 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))
             )
             if (task, group) == ("task2", "UC"):  # the pitch's Task 2.2 slide: two big panels
-                out.append(str(pf.effort_figure(pair, stage / SLIDE_FIGURES / "task2-UC-effort")))
+                stem = stage / SLIDE_FIGURES / "task2-UC-effort"
+                out.append(str(pf.effort_figure(pair, stem, without=_without_term(emdm))))
     return out
+
+
+WITHOUT_TERM = "t2-uc-emdm-no-manip"
+"""The evidence run the pitch's Task 2.2 slide draws beside its pair: UC-EMDM without its
+dexterity term."""
+
+
+def _without_term(emdm: str) -> tuple[str, Run] | None:
+    """Task 2's UC-EMDM run without the dexterity term, as the evidence record ran it (its
+    overrides from :data:`EVIDENCE`), labelled for the slide; None if it does not run."""
+    ev = next((e for e in EVIDENCE if e.key == WITHOUT_TERM), None)
+    if ev is None or emdm not in ev.controllers:
+        return None
+    try:
+        run = simulate(load_scenario(ev.task, ev.overrides), emdm)
+    except NoSolution:
+        return None
+    return f"{emdm}, $w_M=0$", run
 
 
 def _job_mmc(stage: Path, cfg: ReportConfig) -> list[str]:

@@ -352,9 +352,12 @@ class Pitch:
         if s.uc_term_raises_m():  # (the paper's Table II run, said as the talk says it)
             out.append(
                 sentence(
-                    "Without the dexterity term it still saves effort, at about IVKC's mean ",
+                    "Without the dexterity term (dotted) it still saves effort, at about IVKC's "
+                    "mean ",
                     M_SYM,
-                    ": the slack saves the effort, the term raises ",
+                    ": the slack saves the effort, the term adds ",
+                    s.uc_term_gain(),
+                    " to ",
                     M_SYM,
                 )
             )

@@ -8,7 +8,7 @@ and put it into their own sentence, so its words and numbers cannot drift apart 
 from __future__ import annotations
 
 from ....core.controllers import Name
-from ..trace import Ref, Sentence, Text, sentence
+from ..trace import Num, Ref, Sentence, Text, sentence
 from .base import M_SYM, StoryBase, run_label
 from .records import EvidenceKey
 
@@ -121,6 +121,22 @@ class Claims(StoryBase):
             " mean ",
             M_SYM,
             " against UC-IVKC",
+        )
+
+    def uc_term_gain(self) -> Num:
+        """``+1%``: Task 2.2's UC-EMDM mean m against its run without the dexterity term, the
+        term's share of its gain in m (the abstract's and Section IV-C's number)."""
+        emdm = Name.UC_EMDM
+        return self.d.pct(
+            ("data/task2/metrics.json", "controllers", emdm, "mean_manipulability"),
+            (
+                "data/evidence.json",
+                "runs",
+                "t2-uc-emdm-no-manip",
+                "runs",
+                emdm,
+                "mean_manipulability",
+            ),
         )
 
     def uc_term_raises_m(self) -> bool:

@@ -45,7 +45,8 @@ class Front(Claims):
                 "Without limits, UC-EMDM's slack gives ",
                 self.pct(t2, *uc, "total_effort"),
                 " effort, its dexterity term " if by_term else " effort and ",
-                self.pct(t2, *uc, "mean_manipulability"),
+                # the term's own share (reading 134: +2 % is slack and term against UC-IVKC)
+                self.uc_term_gain() if by_term else self.pct(t2, *uc, "mean_manipulability"),
                 " mean ",
                 M_SYM,
                 ". ",

@@ -533,10 +533,7 @@ class Task2(Claims):
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
                 ": the slack saves the effort, the term adds ",
-                self.d.pct(
-                    (f"data/{t}/metrics.json", "controllers", emdm, "mean_manipulability"),
-                    ("data/evidence.json", "runs", key, "runs", emdm, "mean_manipulability"),
-                ),
+                self.uc_term_gain(),
                 " to ",
                 M_SYM,
                 ".",
