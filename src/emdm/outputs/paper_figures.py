@@ -1409,11 +1409,15 @@ def convergence_figure(
             axes.extend(own)
         bottom = min(min(ax.get_ylim()) for ax in axes)
         top = max(max(ax.get_ylim()) for ax in axes)
+        curves_top = top
         if any(len(p) > 1 for p in parts):  # a band of FAMILY_ROOM decades over the curves for
             top *= 10.0**FAMILY_ROOM  # the family names (at the foot they sat on slsqp's curve)
+        ticks = [10.0**e for e in range(-30, 10, 5) if 10.0**e <= curves_top]
         for ax in axes:  # one error scale across the programs, its ticks labelled once
             ax.set_ylim(bottom, top)
             ax.tick_params(labelleft=ax is axes[0])
+            # none in the band: a tick there met the panel's title (reading 134)
+            ax.yaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
         axes[0].set_ylabel(
             r"best $|f-f^*|$ + viol." if medium is not PAPER else r"$|f-f^*|$ + viol.", labelpad=1
         )
