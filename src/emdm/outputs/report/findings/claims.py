@@ -89,7 +89,8 @@ class Claims(StoryBase):
             self.evid_goal(key, Name.C_EMDM),
             # w_M = 0 leaves IVKC's objective (times w_E) with C-EMDM's own bounded slack: the
             # like-for-like pairing of the two under the brief's slack
-            *((" (", run_label(key), ": IVKC's objective, C-EMDM's slack)") if label else ()),
+            # (readings 135: "IVKC's objective, C-EMDM's slack" read as a riddle)
+            *((" (", run_label(key), ": effort and slack only)") if label else ()),
         )
 
     def slack_gains(self) -> list[str]:

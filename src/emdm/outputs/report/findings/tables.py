@@ -238,8 +238,8 @@ class Tables(Claims):
         table = Table(
             "evidence",
             sentence(
-                "Evidence runs, each changing one thing in a nominal run (its outcomes in "
-                "brackets; stall: as in ",
+                "Evidence runs, each changing one thing in a nominal run (the nominal's "
+                "outcomes in brackets; stall: as in ",
                 Ref("tab", "outcomes"),
                 MISS_NOTE,
                 "); ",
