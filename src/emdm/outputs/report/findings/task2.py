@@ -549,7 +549,7 @@ class Task2(Claims):
         emdm = Name.C_EMDM
         f = "data/task2-lab-C-EMDM/solvers.json"
         answer = sentence(
-            "Two things make Task 2's programs harder: the slack weight ",
+            "Task 2's programs pose two numerical challenges: the slack weight ",
             W_S,
             " grows from ",
             self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
