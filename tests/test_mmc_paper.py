@@ -13,13 +13,17 @@ from emdm.cli.main import main
 from emdm.core.loading import load_scenario
 from emdm.studies.mmc_paper import (
     CONTROLLERS,
+    DT,
     PI,
     PROTOCOLS,
     PS,
+    Paper,
+    Singular,
     Y,
     command,
     paper_table,
     run_paper_protocol,
+    run_trials,
     servo,
 )
 
@@ -73,6 +77,85 @@ def test_each_step_is_the_exact_optimum_of_its_program():
             solver="quadprog",
         )
         assert np.abs(mmc - x[:n]).max() < 1e-6 * max(1.0, np.abs(x).max())
+
+
+def one_trial(arm, lo, hi, q0, goal, cap):
+    """The oracle: the authors' loop as their script runs it, one trial at a time, each
+    controller's step from :func:`servo` and :func:`command` (each checked above against an
+    independent statement)."""
+    n = q0.size
+    state = {
+        c: {"q": q0.copy(), "arrived": False, "failed": False, "singular": False, "m": 0.0, "it": 0}
+        for c in CONTROLLERS
+    }
+    it = 0
+    while True:
+        for c in CONTROLLERS:
+            s = state[c]
+            if s["arrived"] or s["failed"]:
+                continue
+            q = s["q"]
+            T, J0, m, Jm = arm.state(q)
+            R = T[:3, :3]
+            J = np.vstack((R.T @ J0[:3], R.T @ J0[3:]))
+            v, s["arrived"], e_s = servo(T, goal)
+            try:
+                qd = command(c, J, Jm, v, e_s, q, lo, hi)
+            except Singular:
+                s["failed"] = s["singular"] = True
+                qd = np.zeros(n)
+            s["m"] += m
+            s["it"] += 1
+            if np.any(q[: n - 2] <= lo[: n - 2]) or np.any(q[: n - 2] >= hi[: n - 2]):
+                s["failed"] = True
+            s["qd"] = qd
+        for c in CONTROLLERS:
+            if "qd" in state[c]:
+                state[c]["q"] = state[c]["q"] + DT * state[c].pop("qd")
+        it += 1
+        if all(state[c]["arrived"] or state[c]["failed"] for c in (Paper.RRMC, Paper.MMC)):
+            break
+        if it > cap:
+            break
+    return {
+        c: {
+            "arrived": s["arrived"],
+            "failed": s["failed"] and not s["arrived"],
+            "singular": s["singular"],
+            "missed": not s["arrived"] and not s["failed"],
+            "joint_limit": s["failed"] and not s["arrived"] and not s["singular"],
+            "mean_m": s["m"] / s["it"] if s["it"] else np.nan,
+            "final_m": arm.manipulability(s["q"]),
+        }
+        for c, s in state.items()
+    }
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_the_stacked_trials_are_the_authors_loop_one_trial_at_a_time(name):
+    """run_trials steps every trial together; each trial's outcome is the one the authors'
+    loop gives it alone (the oracle above), on random tasks that arrive, fail and miss."""
+    sc = load_scenario(name)
+    arm, protocol = sc.serial_arm, PROTOCOLS[name]
+    lo, hi = np.asarray(sc.arm.q_min, float), np.asarray(sc.arm.q_max, float)
+    if protocol.limit is not None:
+        lo, hi = np.full(sc.n, -protocol.limit), np.full(sc.n, protocol.limit)
+    rng = np.random.default_rng(7)
+    off = protocol.shrink * (np.abs(lo) + np.abs(hi))
+    q0s = rng.uniform(lo + off, hi - off, (24, sc.n))
+    goals = np.stack([arm.forward(rng.uniform(lo + off, hi - off)) for _ in range(24)])
+    q0s[0] = lo + 1e-3  # a start at a limit: failed at once
+    stacked = run_trials(arm, lo, hi, q0s, goals, protocol.cap)
+    seen = set()
+    for got, q0, goal in zip(stacked, q0s, goals, strict=True):
+        want = one_trial(arm, lo, hi, q0, goal, protocol.cap)
+        for c in CONTROLLERS:
+            flags = ("arrived", "failed", "singular", "missed", "joint_limit")
+            assert {k: got[c][k] for k in flags} == {k: want[c][k] for k in flags}, c
+            assert got[c]["mean_m"] == pytest.approx(want[c]["mean_m"], rel=1e-9, abs=1e-15)
+            assert got[c]["final_m"] == pytest.approx(want[c]["final_m"], rel=1e-9, abs=1e-15)
+            seen |= {k for k in flags if got[c][k]}
+    assert {"arrived", "failed"} <= seen  # the cases the comparison covers
 
 
 def test_the_protocol_counts_every_trial_once_and_is_seeded(tmp_path, capsys):

@@ -93,43 +93,129 @@ PROTOCOLS = {
 }
 
 
-def rpy_zyx(R: np.ndarray) -> tuple[float, float, float]:
-    """Roll, pitch, yaw (rad) with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (spatialmath's ``zyx``)."""
-    r20 = float(R[2, 0])
-    if abs(abs(r20) - 1.0) < 1e-12:  # pitch at +-90 degrees: roll taken as 0
-        return 0.0, -math.copysign(math.pi / 2, r20), math.atan2(-R[0, 1], R[1, 1])
-    return (
-        math.atan2(R[2, 1], R[2, 2]),
-        -math.asin(max(-1.0, min(1.0, r20))),
-        math.atan2(R[1, 0], R[0, 0]),
+def rpy_zyx(R: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (rad) of each rotation of the stack ``R`` (K x 3 x 3) with
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (spatialmath's ``zyx``): K x 3."""
+    r20 = R[:, 2, 0]
+    gimbal = np.abs(np.abs(r20) - 1.0) < 1e-12  # pitch at +-90 degrees: roll taken as 0
+    out = np.empty((R.shape[0], 3))
+    out[:, 0] = np.where(gimbal, 0.0, np.arctan2(R[:, 2, 1], R[:, 2, 2]))
+    out[:, 1] = np.where(gimbal, -np.copysign(np.pi / 2, r20), -np.arcsin(np.clip(r20, -1, 1)))
+    out[:, 2] = np.where(
+        gimbal, np.arctan2(-R[:, 0, 1], R[:, 1, 1]), np.arctan2(R[:, 1, 0], R[:, 0, 0])
     )
+    return out
+
+
+def servos(T: np.ndarray, goals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`servo` of each pose of the stack ``T`` (K x 4 x 4) towards its goal (K x 4 x 4):
+    ``(v, arrived, e_s)`` as K x 6, K and K arrays."""
+    Rt = np.swapaxes(T[:, :3, :3], 1, 2)
+    t = (Rt @ (goals[:, :3, 3] - T[:, :3, 3])[:, :, None])[:, :, 0]
+    rpy = rpy_zyx(Rt @ goals[:, :3, :3])
+    moved = np.abs(t).sum(axis=1)
+    turned = np.abs(rpy).sum(axis=1)
+    e = np.concatenate((t, rpy), axis=1)
+    return GAIN * e, moved + turned < THRESHOLD, moved + turned * math.pi / 180.0
 
 
 def servo(T: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, bool, float]:
     """``(v, arrived, e_s)``: robotics-toolbox-python's ``p_servo`` (method ``rpy``, gain 1,
     threshold 0.17) and the script's slack error ``e_s`` (module notes). ``T^-1 T*`` is taken
     as the rigid transform it is (spatialmath's inverse: ``R^T``, ``-R^T t``)."""
-    Rt = T[:3, :3].T
-    t = Rt @ (goal[:3, 3] - T[:3, 3])
-    rpy = rpy_zyx(Rt @ goal[:3, :3])
-    e = np.array((t[0], t[1], t[2], *rpy))
-    moved = abs(e[0]) + abs(e[1]) + abs(e[2])
-    turned = abs(rpy[0]) + abs(rpy[1]) + abs(rpy[2])
-    e_s = moved + turned * math.pi / 180.0
-    return GAIN * e, bool(moved + turned < THRESHOLD), e_s
+    v, arrived, e_s = servos(T[None], goal[None])
+    return v[0], bool(arrived[0]), float(e_s[0])
 
 
 class Singular(Exception):
     """A step without a usable command (no solution, or NaN)."""
 
 
-def _joint_limit_terms(q: Vector, lo: Vector, hi: Vector) -> Vector:
-    """Baur's ``b`` (module notes)."""
-    b = np.zeros(q.size)
+def _joint_limit_terms(q: np.ndarray, lo: Vector, hi: Vector) -> np.ndarray:
+    """Baur's ``b`` (module notes), for a configuration or a stack of them."""
+    b = np.zeros(q.shape)
     low, high = q - lo <= PI, hi - q <= PI
     b[low] = -(((q - lo)[low] - PI) ** 2) / (PS - PI) ** 2
     b[high] = (((hi - q)[high] - PI) ** 2) / (PS - PI) ** 2
     return b
+
+
+def _mmc_step(
+    J: Vector, Jm: Vector, v: Vector, e_s: float, q: Vector, lo: Vector, hi: Vector
+) -> Vector | None:
+    """MMC's command at one configuration (module notes), or None where daqp finds none."""
+    import daqp
+
+    n = q.size
+    # n + 6 simple bounds (qd's dampers, delta free), then the 6 rows J qd + delta = v
+    upper, lower = np.full(n + 12, 1e30), np.full(n + 12, -1e30)
+    near_low, near_high = q - lo <= PI, hi - q <= PI
+    lower[:n][near_low] = -((q - lo - PS) / (PI - PS))[near_low]
+    upper[:n][near_high] = ((hi - q - PS) / (PI - PS))[near_high]
+    upper[n + 6 :] = lower[n + 6 :] = v
+    sense = np.zeros(n + 12, dtype=np.int32)
+    sense[n + 6 :] = 5
+    weights = np.full(n + 6, Y)
+    weights[n:] = 1.0 / max(e_s, 1e-300)
+    f = np.zeros(n + 6)
+    f[:n] = -Jm
+    A = np.zeros((6, n + 6))
+    A[:, :n] = J
+    A[:, n:] = np.eye(6)
+    x, _, flag, _ = daqp.solve(np.diag(weights), f, A, upper, lower, sense)
+    if flag < 1:
+        return None
+    qd: Vector = np.array(x[:n], dtype=float)
+    return qd
+
+
+def _pinv(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """numpy's pseudoinverse of each Jacobian of the stack, and where it failed (an SVD that
+    does not converge raises for the whole stack: then each is taken alone)."""
+    try:
+        return np.linalg.pinv(J), np.zeros(J.shape[0], dtype=bool)
+    except np.linalg.LinAlgError:
+        out, failed = np.zeros(np.swapaxes(J, 1, 2).shape), np.zeros(J.shape[0], dtype=bool)
+        for j in range(J.shape[0]):
+            try:
+                out[j] = np.linalg.pinv(J[j])
+            except np.linalg.LinAlgError:
+                failed[j] = True
+        return out, failed
+
+
+def commands(
+    name: str,
+    J: np.ndarray,
+    Jm: np.ndarray,
+    v: np.ndarray,
+    e_s: np.ndarray,
+    q: np.ndarray,
+    lo: Vector,
+    hi: Vector,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One step of controller ``name`` (module notes) at each of K configurations (stacks: J
+    K x 6 x n, Jm, q K x n, v K x 6, e_s K): the commands (K x n, zero where none) and where
+    the step is singular (no solution, or NaN)."""
+    K, n = q.shape
+    qd = np.zeros((K, n))
+    singular = np.zeros(K, dtype=bool)
+    if name == Paper.MMC:
+        for j in range(K):
+            x = _mmc_step(J[j], Jm[j], v[j], float(e_s[j]), q[j], lo, hi)
+            if x is None:
+                singular[j] = True
+            else:
+                qd[j] = x
+    else:
+        pinv, singular = _pinv(J)
+        qd = (pinv @ v[:, :, None])[:, :, 0]
+        if name in (Paper.PARK, Paper.BAUR):  # (I - J^+ J) g, without forming I - J^+ J
+            g = Jm - (_joint_limit_terms(q, lo, hi) if name == Paper.BAUR else 0.0)
+            qd = qd + (g - (pinv @ (J @ g[:, :, None]))[:, :, 0]) / Y
+    singular |= ~np.all(np.isfinite(qd), axis=1)
+    qd[singular] = 0.0
+    return qd, singular
 
 
 def command(
@@ -142,101 +228,96 @@ def command(
     lo: Vector,
     hi: Vector,
 ) -> Vector:
-    """One step of controller ``name`` (module notes); raises :class:`Singular`."""
-    n = q.size
-    try:
-        if name == Paper.MMC:
-            import daqp
-
-            # n + 6 simple bounds (qd's dampers, delta free), then the 6 rows J qd + delta = v
-            upper, lower = np.full(n + 12, 1e30), np.full(n + 12, -1e30)
-            near_low, near_high = q - lo <= PI, hi - q <= PI
-            lower[:n][near_low] = -((q - lo - PS) / (PI - PS))[near_low]
-            upper[:n][near_high] = ((hi - q - PS) / (PI - PS))[near_high]
-            upper[n + 6 :] = lower[n + 6 :] = v
-            sense = np.zeros(n + 12, dtype=np.int32)
-            sense[n + 6 :] = 5
-            weights = np.full(n + 6, Y)
-            weights[n:] = 1.0 / max(e_s, 1e-300)
-            f = np.zeros(n + 6)
-            f[:n] = -Jm
-            A = np.zeros((6, n + 6))
-            A[:, :n] = J
-            A[:, n:] = np.eye(6)
-            x, _, flag, _ = daqp.solve(np.diag(weights), f, A, upper, lower, sense)
-            if flag < 1:
-                raise Singular
-            qd = np.asarray(x[:n], dtype=float)
-        else:
-            pinv = np.linalg.pinv(J)
-            qd = pinv @ v
-            if name in (Paper.PARK, Paper.BAUR):  # (I - J^+ J) g, without forming I - J^+ J
-                gradient = Jm - (_joint_limit_terms(q, lo, hi) if name == Paper.BAUR else 0.0)
-                qd = qd + (gradient - pinv @ (J @ gradient)) / Y
-    except np.linalg.LinAlgError:
-        raise Singular from None
-    if not np.all(np.isfinite(qd)):
+    """One step of controller ``name`` at one configuration (:func:`commands` of one);
+    raises :class:`Singular`."""
+    qd, singular = commands(name, J[None], Jm[None], v[None], np.array([e_s]), q[None], lo, hi)
+    if singular[0]:
         raise Singular
-    return qd
+    one: Vector = qd[0]
+    return one
 
 
-def run_trial(
+def run_trials(
     arm: Any,
     lo: Vector,
     hi: Vector,
-    q0: Vector,
-    goal: Vector,
+    q0s: np.ndarray,
+    goals: np.ndarray,
     cap: int,
     controllers: Sequence[str] = CONTROLLERS,
-) -> dict[str, dict[str, Any]]:
-    """One trial of every controller (module notes): per controller its outcome (``arrived``,
-    ``failed``, ``singular``, ``missed``), mean ``m`` over its steps and final ``m``."""
-    n = q0.size
-    state: dict[str, dict[str, Any]] = {
-        c: {"q": q0.copy(), "arrived": False, "failed": False, "singular": False, "m": 0.0, "it": 0}
+) -> list[dict[str, dict[str, Any]]]:
+    """Every trial (starts ``q0s`` R x n, goal poses ``goals`` R x 4 x 4) of every controller,
+    stepped together (module notes): per trial and controller its outcome (``arrived``,
+    ``failed``, ``singular``, ``missed``, ``joint_limit``), mean ``m`` over its steps and final
+    ``m``. A trial's steps are those of the authors' loop, one trial at a time (the tests'
+    oracle); taken together, each controller's step is one stacked computation."""
+    R, n = q0s.shape
+    limit = n - 2
+    state = {
+        c: {
+            "q": q0s.astype(float),
+            "arrived": np.zeros(R, dtype=bool),
+            "failed": np.zeros(R, dtype=bool),
+            "singular": np.zeros(R, dtype=bool),
+            "m": np.zeros(R),
+            "it": np.zeros(R, dtype=int),
+        }
         for c in controllers
     }
+    running = np.ones(R, dtype=bool)
     it = 0
-    while True:
+    while running.any():
+        steps: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for c in controllers:
             s = state[c]
-            if s["arrived"] or s["failed"]:
+            idx = np.flatnonzero(running & ~s["arrived"] & ~s["failed"])
+            if not idx.size:
                 continue
-            q = s["q"]
-            T, J0, m, Jm = arm.state(q)
-            J = (T[:3, :3].T @ J0.reshape(2, 3, n)).reshape(6, n)  # the end-effector frame
-            v, s["arrived"], e_s = servo(T, goal)
-            try:
-                qd = command(c, J, Jm, v, e_s, q, lo, hi)
-            except Singular:
-                s["failed"] = s["singular"] = True
-                qd = np.zeros(n)
-            s["m"] += m
-            s["it"] += 1
-            limit = n - 2
-            if (q[:limit] <= lo[:limit]).any() or (q[:limit] >= hi[:limit]).any():
-                s["failed"] = True
-            s["qd"] = qd
-        for c in controllers:  # the simulator integrates every robot's command together
-            s = state[c]
-            if "qd" in s:
-                s["q"] = s["q"] + DT * s.pop("qd")
+            q = s["q"][idx]
+            T, J0, m, Jm = (
+                np.empty((idx.size, 4, 4)),
+                np.empty((idx.size, 6, n)),
+                np.empty(idx.size),
+                np.empty((idx.size, n)),
+            )
+            for j in range(idx.size):
+                T[j], J0[j], m[j], Jm[j] = arm.state(q[j])
+            Rt = np.swapaxes(T[:, :3, :3], 1, 2)
+            J = (Rt[:, None] @ J0.reshape(idx.size, 2, 3, n)).reshape(idx.size, 6, n)
+            v, s["arrived"][idx], e_s = servos(T, goals[idx])
+            qd, singular = commands(c, J, Jm, v, e_s, q, lo, hi)
+            s["failed"][idx] |= singular
+            s["singular"][idx] |= singular
+            s["m"][idx] += m
+            s["it"][idx] += 1
+            at_limit = np.any(q[:, :limit] <= lo[:limit], axis=1) | np.any(
+                q[:, :limit] >= hi[:limit], axis=1
+            )
+            s["failed"][idx] |= at_limit
+            steps[c] = (idx, qd)
+        for c, (idx, qd) in steps.items():  # the simulator integrates every robot together
+            state[c]["q"][idx] = state[c]["q"][idx] + DT * qd
         it += 1
-        ended = [state[c]["arrived"] or state[c]["failed"] for c in (Paper.RRMC, Paper.MMC)]
-        if all(ended) or it > cap:
+        ended = np.ones(R, dtype=bool)
+        for c in (Paper.RRMC, Paper.MMC):
+            ended &= state[c]["arrived"] | state[c]["failed"]
+        running &= ~ended
+        if it > cap:
             break
-    out = {}
+    out: list[dict[str, dict[str, Any]]] = [{} for _ in range(R)]
     for c in controllers:
         s = state[c]
-        out[c] = {
-            "arrived": s["arrived"],
-            "failed": s["failed"] and not s["arrived"],
-            "singular": s["singular"],
-            "missed": not s["arrived"] and not s["failed"],
-            "joint_limit": s["failed"] and not s["arrived"] and not s["singular"],
-            "mean_m": s["m"] / s["it"] if s["it"] else math.nan,
-            "final_m": arm.manipulability(s["q"]),
-        }
+        for r in range(R):
+            arrived, failed = bool(s["arrived"][r]), bool(s["failed"][r])
+            out[r][c] = {
+                "arrived": arrived,
+                "failed": failed and not arrived,
+                "singular": bool(s["singular"][r]),
+                "missed": not arrived and not failed,
+                "joint_limit": failed and not arrived and not bool(s["singular"][r]),
+                "mean_m": s["m"][r] / s["it"][r] if s["it"][r] else math.nan,
+                "final_m": arm.manipulability(s["q"][r]),
+            }
     return out
 
 
@@ -266,11 +347,11 @@ def run_paper_protocol(
         # seeded by the arm's name, so that one arm's tasks do not depend on the others run
         rng = np.random.default_rng(np.random.SeedSequence([seed, zlib.crc32(name.encode())]))
         start = time.perf_counter()
-        trials_out = []
-        for _ in range(trials):
-            q0 = rng.uniform(lo + off, hi - off)
-            goal = arm.forward(rng.uniform(lo + off, hi - off))
-            trials_out.append(run_trial(arm, lo, hi, q0, goal, protocol.cap))
+        q0s, goals = np.empty((trials, sc.n)), np.empty((trials, 4, 4))
+        for i in range(trials):  # drawn as the one-at-a-time loop drew them: start, then goal
+            q0s[i] = rng.uniform(lo + off, hi - off)
+            goals[i] = arm.forward(rng.uniform(lo + off, hi - off))
+        trials_out = run_trials(arm, lo, hi, q0s, goals, protocol.cap)
         seconds = time.perf_counter() - start
         every = [all(t[c]["arrived"] for c in protocol.subset) for t in trials_out]
         kept_trials = [t for t, ok in zip(trials_out, every, strict=True) if ok]
@@ -352,4 +433,14 @@ def paper_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["CONTROLLERS", "PROTOCOLS", "paper_table", "run_paper_protocol", "servo"]
+__all__ = [
+    "CONTROLLERS",
+    "PROTOCOLS",
+    "command",
+    "commands",
+    "paper_table",
+    "run_paper_protocol",
+    "run_trials",
+    "servo",
+    "servos",
+]
