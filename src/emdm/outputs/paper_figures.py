@@ -270,7 +270,7 @@ def pair_figure(
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
-        upper = outer[0].subgridspec(1, 4 if gap or path else 3)
+        upper = outer[0].subgridspec(1, 4 if gap or path else 3, wspace=0.12)  # labels clear
         # per joint: every run's lowest and highest speed, and the limit; a joint whose speed
         # goes far beyond its limit gets a log-scaled strip with its peaks labelled on the right
         extents = [_speed_extent(runs, j) for j in range(n)]
