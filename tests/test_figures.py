@@ -639,7 +639,16 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, draw
     points = [
         {"w_effort": 0.1, "w_manip": 0.1 * r, "E": 40 + r**1.3, "M": 2 + r / 300} for r in ratios
     ]
-    front = {"nominal_ratio": 50.0, "steps": [{"k": 0, "points": points}]}
+    front = {
+        "nominal_ratio": 50.0,
+        "steps": [{"k": 0, "t": 0.0, "points": points}, {"k": 9, "t": 0.9, "points": points}],
+    }
+    # each step's record: the nominal's and the effort-only optimum's effort (the second step's
+    # optimum spends none: no bar, as a ratio of nothing)
+    infos = [
+        {"nominal_index": 2, "nominal_E": 43.6, "zero_E": 40.0},
+        {"nominal_index": 2, "nominal_E": 1e-3, "zero_E": 0.0},
+    ]
     grid = [
         {
             "w_effort": 0.1,
@@ -651,13 +660,18 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, draw
         for r in (0.0, 50.0, 351.0, 1e3)
     ]
     with formats((".png",)):
-        pf.pareto_slide_figure(front, {"nominal_index": 2}, grid, tmp_path / "p")
+        pf.pareto_slide_figure(front, infos, grid, tmp_path / "p")
     fig = drawn[-1]
-    assert len(fig.axes) == 2  # no colour bar
-    assert [(ax.get_xscale(), ax.get_yscale()) for ax in fig.axes] == [
+    assert len(fig.axes) == 3  # no colour bar
+    assert [(ax.get_xscale(), ax.get_yscale()) for ax in fig.axes[:2]] == [
         ("linear", "log"),
         ("linear", "linear"),
     ]
+    # the third panel: the nominal's extra effort per step, a bar labelled with its value
+    bars = fig.axes[2].patches
+    assert [b.get_height() for b in bars] == pytest.approx([9.0])
+    assert [t.get_text() for t in fig.axes[2].texts] == ["+9"]
+    assert [t.get_text() for t in fig.axes[2].get_xticklabels()] == ["0.0"]
     named = [{t.get_text(): t.xy for t in ax.texts if hasattr(t, "xy")} for ax in fig.axes]
     assert named[0] == {
         "effort only": (2.0, 40.0),
@@ -672,7 +686,9 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, draw
     assert 0.25 + 1e3 / 2e4 not in drawn_x  # the missed run is not drawn
     front["nominal_ratio"] = 1.0  # its point next to the effort-only one: one name for both
     with formats((".png",)):
-        pf.pareto_slide_figure(front, {"nominal_index": 1}, grid, tmp_path / "p")
+        pf.pareto_slide_figure(
+            front, [{**i, "nominal_index": 1} for i in infos], grid, tmp_path / "p"
+        )
     names = [t.get_text() for t in drawn[-1].axes[0].texts if hasattr(t, "xy")]
     assert names == ["effort only, nominal", "$w_M/w_E=10^{4}$"]
 

@@ -966,23 +966,34 @@ def pareto_figure(
     return stem
 
 
+def nominal_price(info: dict[str, Any]) -> float | None:
+    """How much more effort the nominal weights spend than the effort-only optimum at one
+    front's step (%), from its record (``fronts.json``); ``None`` where that optimum spends
+    none (a ratio of nothing)."""
+    zero = float(info["zero_E"])
+    return 100.0 * (float(info["nominal_E"]) / zero - 1.0) if zero > 0.0 else None
+
+
 def pareto_slide_figure(
     front: dict[str, Any],
-    info: dict[str, Any],
+    infos: Sequence[dict[str, Any]],
     grid: list[dict[str, Any]],
     stem: Path,
     step: int = 0,
     width: float | None = None,
+    height: float = 1.75,
     medium: Medium = SLIDE,
 ) -> Path:
     """The pitch's trade-off, for peers: one step's front (``step``, an index into the brief's
-    four) and the whole runs, on linear axes, with no colour scale: the ends and the nominal
+    four), the whole runs, on linear axes, with no colour scale: the ends and the nominal
     weights are named where they are (effort only, nominal, the most dexterity-weighted), and
-    the settings that miss the goal are named in a note. The paper's :func:`pareto_figure`
-    shows every front on log axes."""
+    the settings that miss the goal are named in a note; and, as bars, what the nominal weights
+    cost at each of the brief's steps (:func:`nominal_price`, the slide's "up to +X % later").
+    ``infos`` are the steps' records (``fronts.json``), in the fronts' order. The paper's
+    :func:`pareto_figure` shows every front on log axes."""
     width = medium.wide if width is None else width
     nominal = float(front["nominal_ratio"])
-    data, near = front["steps"][step], int(info["nominal_index"])
+    data, near = front["steps"][step], int(infos[step]["nominal_index"])
     pts = data["points"]
     ok = [r for r in grid if "error" not in r and r.get("reached")]
     bad = [r for r in grid if "error" in r or not r.get("reached")]
@@ -990,8 +1001,9 @@ def pareto_slide_figure(
     def ratio(r: dict[str, Any]) -> float:
         return float(r["w_manip"] / r["w_effort"])
 
-    with _figure(stem, medium, width, 2.2 * width / medium.wide) as fig:
-        left, right = fig.subplots(1, 2)
+    prices = [(d["t"], nominal_price(i)) for d, i in zip(front["steps"], infos, strict=True)]
+    with _figure(stem, medium, width, height) as fig:
+        left, right, cost = fig.subplots(1, 3, width_ratios=[1.0, 1.0, 0.75])
         panels = (
             (left, [p["M"] for p in pts], [p["E"] for p in pts], [ratio(p) for p in pts], near),
             (
@@ -1048,6 +1060,16 @@ def pareto_slide_figure(
         right.set_ylabel(r"total effort (rad$^2$/s)")
         if bad:  # not drawn: their effort would flatten the others
             _missed_note(right, bad, "misses the goal", 0.78, medium)
+        shown = [(t, p) for t, p in prices if p is not None]
+        bars = cost.bar(range(len(shown)), [p for _, p in shown], color="#0072B2", width=0.6)
+        # each bar's value written on it: no value axis (its ticks would repeat them)
+        cost.bar_label(bars, [f"+{p:.0f}" for _, p in shown], fontsize=medium.tiny, padding=1)
+        cost.set_xticks(range(len(shown)), [f"{t:.1f}" for t, _ in shown])
+        cost.set_xlabel(r"nominal, at $t$ (s)")
+        cost.set_yticks([])
+        cost.spines[["left", "top", "right"]].set_visible(False)
+        cost.set_title("extra effort (%)", fontsize=medium.small)
+        cost.margins(y=0.15)  # room for the bars' labels
         fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
         for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):
             if ax.get_yscale() == "log":

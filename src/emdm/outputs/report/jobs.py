@@ -66,9 +66,9 @@ from .config import (
 
 PAPER_FIGURES = "paper/figures"
 SLIDE_FIGURES = "paper/slides"
-SLIDE_PARETO_WIDTH = 0.84 * 398.34 / 72.27
-"""in: the pitch's Pareto figure, shown at its own size (0.84 of the 16:9 slide's 398.34 pt
-text width, leaving the bullets their room): drawn so, its text is printed at its set size."""
+SLIDE_PARETO_WIDTH = 398.34 / 72.27
+"""in: the pitch's Pareto figure, shown at its own size (the 16:9 slide's 398.34 pt text
+width: three panels): drawn so, its text is printed at its set size."""
 
 
 # ------------------------------------------------------------------------ in-process runs
@@ -461,7 +461,7 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
         str(
             pf.pareto_slide_figure(
                 fronts[Name.UC_EMDM],
-                infos[Name.UC_EMDM][SLIDE_PARETO_STEP],
+                infos[Name.UC_EMDM],
                 grids[Name.UC_EMDM],
                 stage / SLIDE_FIGURES / "pareto",
                 step=SLIDE_PARETO_STEP,

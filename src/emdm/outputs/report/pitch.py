@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...core.controllers import Name
-from .config import SLIDE_PARETO_STEP
 from .document import Document
 from .findings import DT, M_SYM, MRATE, RATIO, Story
 from .findings.base import T_EQ
@@ -294,18 +293,19 @@ class Pitch:
         )
 
     def dearer_later(self, uc: str) -> tuple[Any, ...]:
-        """``, up to +X % at k = K`` when a later front's nominal optimum costs more (the paper's
-        Pareto answer says so too: :meth:`Story.dearest_later`)."""
+        """``, up to +X % later (t = T s)`` when a later front's nominal optimum costs more
+        (the paper's Pareto answer says so too: :meth:`Story.dearest_later`); the slide's
+        figure draws every step's extra effort as a bar (:func:`~..paper_figures.nominal_price`)."""
         i = self.s.dearest_later("UC-EMDM")
         if i is None:
             return ()
-        return (  # said as a time of the run (and so when the slide's fronts omit it)
+        return (  # said as a time of the run: the bars' axis
             ", up to ",
             self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
             " later (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
-            ")" if i == SLIDE_PARETO_STEP else ", not shown)",
+            ")",
         )
 
     def policy(self) -> list[Sentence]:
