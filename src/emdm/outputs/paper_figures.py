@@ -43,6 +43,7 @@ from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
+from ..sim.metrics import limit_excess
 from ..solvers.base import Family
 from ..studies.lab import exact_answer
 from .animate import ellipse_points
@@ -1617,24 +1618,38 @@ def effort_figure(
 ) -> Path:
     """The pitch's Task 2.2 slide: the effort spent so far, sum E dt up to t (linear, so a saving
     shows as a gap that stays), and the manipulability m(t) of a pair, two large panels (where the
-    pair composite's would be too small to read). ``without``: a run with one cause removed,
-    ``(label, run)``, drawn grey and dotted in both panels, so that what its removal changes is
-    seen (reading 135: the slide said it without showing it)."""
+    pair composite's would be too small to read); and, when a run leaves its joint limits (the
+    unconstrained controllers ignore them), a third: how far past them, the deepest joint's
+    excursion at each t (:func:`~emdm.sim.metrics.limit_excess`). ``without``: a run with one
+    cause removed, ``(label, run)``, drawn grey and dotted in every panel, so that what its
+    removal changes is seen (reading 135: the slide said it without showing it)."""
+    drawn = [(run, _style(run, medium)) for run in runs]
+    if without is not None:
+        label, run = without
+        st = {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label}
+        drawn.append((run, st))
+    beyond = [limit_excess(run).max(axis=1) for run, _ in drawn]
+    outside = any(b.max() > 0.0 for b in beyond)
     with _figure(stem, medium, medium.wide, 2.3) as fig:
-        ax_e, ax_m = fig.subplots(1, 2)
-        for run in runs:
-            st = _style(run, medium)
+        axes = fig.subplots(1, 3 if outside else 2)
+        ax_e, ax_m = axes[0], axes[1]
+        for (run, st), over in zip(drawn, beyond, strict=True):
             ax_e.plot(run.t, _effort_so_far(run), **st)
             ax_m.plot(run.t, run.m, **st)
-        if without is not None:
-            label, run = without
-            st = {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label}
-            ax_e.plot(run.t, _effort_so_far(run), **st)
-            ax_m.plot(run.t, run.m, **st)
+            if outside:
+                axes[2].plot(run.t, over, **st)
         ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
         ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
-        ax_m.legend(loc="best", frameon=True, framealpha=0.9)
-        for ax in (ax_e, ax_m):
+        if outside:
+            axes[2].set_ylabel("past a joint limit (rad)")
+        # the legend under the panels: inside one it hid a curve of the narrower three
+        fig.legend(
+            handles=[Line2D([], [], **st) for _, st in drawn],
+            loc="outside lower center",
+            ncols=len(drawn),
+            frameon=False,
+        )
+        for ax in axes:
             ax.set_xlabel(r"$t$ (s)")
     return stem
 

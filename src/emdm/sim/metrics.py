@@ -116,6 +116,13 @@ def run_outcomes(run: Run, out: F64) -> None:
     )
 
 
+def limit_excess(run: Run) -> F64:
+    """Per recorded state and joint: how far the joint is past its position limit (rad; 0
+    within its limits), the excursions of the controllers that ignore the limits."""
+    sc = run.scenario
+    return np.maximum(np.maximum(run.q - sc.arm.q_max, sc.arm.q_min - run.q), 0.0)
+
+
 def metrics(run: Run) -> dict[str, Any]:
     """Every outcome of a run, all from its record.
 

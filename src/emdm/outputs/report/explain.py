@@ -22,7 +22,7 @@ import numpy as np
 
 from ...core.scenario import Scenario
 from ...sim.loop import Run
-from ...sim.metrics import metrics
+from ...sim.metrics import limit_excess, metrics
 
 SAME = 1e-9
 """Two commands coincide when they differ by at most this (rad/s)."""
@@ -303,15 +303,15 @@ def effort(run: Run) -> dict[str, Any]:
 def limits(run: Run) -> dict[str, Any]:
     """The deepest excursion past a joint limit (UC controllers ignore them) and the fastest joint."""
     sc = run.scenario
-    over = np.maximum(run.q - sc.arm.q_max, sc.arm.q_min - run.q)
+    over = limit_excess(run)
     k, j = np.unravel_index(int(np.argmax(over)), over.shape)
     out: dict[str, Any] = {
-        "max_excess": float(max(over[k, j], 0.0)),
+        "max_excess": float(over[k, j]),
         "excess_joint": int(j) + 1,
         "t_excess": float(run.t[k]),
         "time_outside": float((over.max(axis=1) > 0).sum() * sc.motion.dt),
         # every joint's deepest excursion (0: it stayed within its limits)
-        "excess_by_joint": [float(max(x, 0.0)) for x in over.max(axis=0)],
+        "excess_by_joint": [float(x) for x in over.max(axis=0)],
     }
     if run.steps:
         kq, jq = np.unravel_index(int(np.argmax(np.abs(run.qd))), run.qd.shape)
