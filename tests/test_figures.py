@@ -5,11 +5,8 @@ from __future__ import annotations
 import itertools
 import json
 
-import matplotlib.colors
 import numpy as np
 import pytest
-from matplotlib.lines import Line2D
-from matplotlib.offsetbox import AnnotationBbox
 from PIL import Image
 
 import emdm
@@ -397,16 +394,17 @@ def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     assert "then still" not in labels[1]
 
 
-def test_speed_strips_far_beyond_the_limit_are_cut_and_their_peaks_written(tmp_path, drawn):
+def test_speed_strips_far_beyond_the_limit_are_cut(tmp_path, drawn):
     """A joint whose speed goes far beyond its limit has its strip cut at FAR_BEYOND times the
-    limit, on a plain linear axis (readings found a log band beyond it hard to read), and every
-    run's extreme past the cut written at the right; a strip within it spans every run."""
+    limit, on a plain linear axis (readings found a log band beyond it hard to read; the peak
+    speeds are Table I's, no longer written beside the strip: readings 138-140 found those
+    labels cryptic); a strip within it spans every run."""
     from emdm.outputs import paper_figures as pf
 
     sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
     runs = [emdm.simulate(sc, name) for name in ("UC-IVKC", "UC-EMDM")]
     with formats((".png",)):
-        pf.pair_figure(runs, tmp_path / "pair", path=True)
+        pf.pair_figure(runs, tmp_path / "pair")
     strips = [ax for ax in drawn[-1].axes if ax.get_ylabel().startswith(r"$\dot q")]
     assert len(strips) == sc.n
     for j, ax in enumerate(strips):
@@ -420,32 +418,7 @@ def test_speed_strips_far_beyond_the_limit_are_cut_and_their_peaks_written(tmp_p
             assert max(hi, -lo) == pytest.approx(pf.FAR_BEYOND * limit)
         else:
             assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
-        # every run's extreme on each side far beyond the limit is written, in its run's
-        # colour (reading 92 could not read UC-IVKC's 7.26 rad/s beside UC-EMDM's 8.73) and
-        # underlined in its run's line style (reading 105 could not tell them apart in grey)
-        written = []
-        for box in ax.artists:
-            if isinstance(box, AnnotationBbox):
-                for label in box.offsetbox.get_children():
-                    text, underline = label.get_children()
-                    (line,) = underline.get_children()
-                    written.append(
-                        (
-                            text.get_text(),
-                            matplotlib.colors.to_hex(text._text.get_color()),
-                            matplotlib.colors.to_hex(line.get_color()),
-                            line.get_linestyle(),
-                        )
-                    )
-        expected = []
-        for r in runs:
-            style = pf._style(r, pf.PAPER)
-            drawn_style = Line2D([], [], linestyle=style["linestyle"]).get_linestyle()
-            colour = matplotlib.colors.to_hex(style["color"])
-            for v in (r.qd[:, j].min(), r.qd[:, j].max()):
-                if abs(v) > pf.FAR_BEYOND * sc.arm.qd_max[j]:
-                    expected.append((pf._plain(float(f"{v:.2g}")), colour, colour, drawn_style))
-        assert sorted(written) == sorted(expected), j
+        assert not ax.artists  # nothing written beside the strip
     assert any(  # the case this guards: a strip cut
         max(np.abs(r.qd[:, j]).max() for r in runs) > max(np.abs(ax.get_ylim()))
         for j, ax in enumerate(strips)

@@ -35,10 +35,8 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.font_manager import FontProperties
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
-from matplotlib.offsetbox import AnnotationBbox, DrawingArea, HPacker, TextArea, VPacker
 from matplotlib.patches import Circle, Patch
 from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
@@ -213,10 +211,9 @@ def time_end(runs: Sequence[Run]) -> float | None:
 
 FAR_BEYOND = 1.5
 """A joint whose speeds go beyond this multiple of its limit has its speed strip cut there (a
-plain linear axis), each such extreme written on the right at the edge it leaves through
-(:func:`pair_figure`): a spike of a step or two does not squash the motion within the limits
-into a thin band, and no axis changes its scale part-way (readings found a log band beyond
-the limits hard to read)."""
+plain linear axis; :func:`pair_figure`): a spike of a step or two does not squash the motion
+within the limits into a thin band, and no axis changes its scale part-way (readings found a
+log band beyond the limits hard to read). The runs' peak speeds are Table I's column."""
 
 
 GAP_FLOOR = 1e-6
@@ -273,11 +270,10 @@ def pair_figure(
         outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
         upper = outer[0].subgridspec(1, 4 if gap or path else 3, wspace=0.12)  # labels clear
         # per joint: every run's lowest and highest speed, and the limit; a joint whose speed
-        # goes far beyond its limit gets a log-scaled strip with its peaks labelled on the right
+        # goes far beyond its limit gets a strip cut at FAR_BEYOND times it
         extents = [_speed_extent(runs, j) for j in range(n)]
         far_joints = {j for j, (lo_, hi_, lim) in enumerate(extents) if _far(lo_, hi_, lim)}
-        # the labels' room comes out of the speed strips' column: it gets that much more width
-        lower = outer[1].subgridspec(1, 2, width_ratios=[1.0, 1.3 if far_joints else 1.0])
+        lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])
         ax_e = fig.add_subplot(upper[0, 1], sharex=ax_m)
         ax_err = fig.add_subplot(upper[0, 2], sharex=ax_m)
@@ -285,7 +281,6 @@ def pair_figure(
         ax_path = fig.add_subplot(upper[0, 3]) if path else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
-        far_peaks: list[tuple[Axes, list[tuple[float, dict[str, Any]]]]] = []
         for run in runs:
             st = _style(run, medium)
             ax_m.plot(run.t, run.m, **st)
@@ -345,9 +340,9 @@ def pair_figure(
             low, high, limit = extents[j]
             far = j in far_joints
             # a run far beyond the limits (dotted) is cut at FAR_BEYOND times them, so the
-            # motion within the limits keeps the strip, its far peaks written on the right in
-            # the colour of their run. Cut at FAR_BEYOND, not at the limit: an excursion just
-            # past the limit on the other side stays in view
+            # motion within the limits keeps the strip (the runs' peak speeds are Table I's).
+            # Cut at FAR_BEYOND, not at the limit: an excursion just past the limit on the
+            # other side stays in view
             lo_view, hi_view = 1.15 * min(low, -limit), 1.15 * max(high, limit)
             if far:  # cut at FAR_BEYOND times the limit, beyond the limits lightly shaded
                 lo_view = max(lo_view, -FAR_BEYOND * limit)
@@ -362,19 +357,10 @@ def pair_figure(
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
             qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
-            # two ticks per strip (three collide at this height): the position limits, the
-            # velocity limits on the left and, beyond them, the peaks themselves on the right
+            # two ticks per strip (three collide at this height): the position limits and the
+            # velocity limits
             q_tick = float(max(abs(lo[j]), abs(hi[j])))
             qd_tick = limit
-            if far:  # every run's extreme on each side far beyond the limit, in its style
-                peaks = [
-                    (v, _style(r, medium))
-                    for r in runs
-                    if r.steps
-                    for v in (float(r.qd[:, j].min()), float(r.qd[:, j].max()))
-                    if abs(v) > FAR_BEYOND * limit
-                ]
-                far_peaks.append((qd_axes[j], peaks))  # labelled once the layout is known
             for a, tick in ((ax, q_tick), (qd_axes[j], qd_tick)):
                 a.set_yticks([-tick, tick], [_plain(-tick), _plain(tick)])
                 a.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
@@ -410,10 +396,6 @@ def pair_figure(
             frameon=False,
             columnspacing=1.0,
         )
-        if far_peaks:
-            fig.canvas.draw()  # one layout for every strip: their heights in points are final
-            for ax, peaks in far_peaks:
-                _label_peaks(ax, peaks, medium)
     return stem
 
 
@@ -429,90 +411,6 @@ def _speed_extent(runs: Sequence[Run], j: int) -> tuple[float, float, float]:
 def _far(low: float, high: float, limit: float) -> bool:
     """Whether a speed range goes far beyond its limit (:data:`FAR_BEYOND` times it)."""
     return max(high, -low) > FAR_BEYOND * limit
-
-
-PEAK_GAP = 1.1
-"""How many label heights apart two far peaks' labels must be to stand apart; closer ones are
-written side by side, in their runs' colours, at the farther one."""
-
-
-PEAK_UNDERLINE = 1.2
-"""Gap (points) between a far peak's value and its underline, drawn in its run's line style so
-that the runs' values are told apart without colour (in a greyscale print)."""
-
-
-def _label_peaks(ax: Any, peaks: list[tuple[float, dict[str, Any]]], medium: Medium) -> None:
-    """Mark each far peak with a tick on the right of its strip and its value in its run's
-    colour, underlined in its run's line style, at its level or, beyond a cut axis, at the edge
-    its curve leaves through; peaks whose labels would touch (two runs' spikes past the same
-    edge, say 7.3 and 8.7 rad/s) share one label, their values side by side in the order of the
-    legend. The figure is drawn first: the strip's height decides which labels touch."""
-    if not peaks:
-        return
-    low, high = ax.get_ylim()
-    at = {v: min(max(v, low), high) for v, _ in peaks}  # beyond a cut axis: at its edge
-    right = ax.secondary_yaxis("right")
-    right.set_yticks(sorted(set(at.values())), [""] * len(set(at.values())))
-    right.yaxis.set_minor_locator(NullLocator())
-    right.tick_params(pad=1)
-    to_axes = ax.transAxes.inverted()
-    height = ax.get_window_extent().height * 72.0 / ax.figure.dpi
-    gap = PEAK_GAP * medium.tiny / height  # a label's height, in axes fractions
-
-    def frac(v: float) -> float:
-        return float(to_axes.transform(ax.transData.transform((0.0, v)))[1])
-
-    for side in (-1, 1):
-        group: list[tuple[float, dict[str, Any]]] = []
-        ordered = sorted((p for p in peaks if np.sign(p[0]) == side), key=lambda p: abs(p[0]))
-        for i, (v, style) in enumerate(ordered):
-            group.append((v, style))
-            last = i == len(ordered) - 1
-            if last or abs(frac(at[ordered[i + 1][0]]) - frac(at[v])) > gap:
-                order = [s["label"] for _, s in peaks]  # the legend's order
-                group.sort(key=lambda p: order.index(p[1]["label"]))
-                box = HPacker(
-                    children=[_peak_label(ax, u, st, medium) for u, st in group], pad=0, sep=2.5
-                )
-                ax.add_artist(
-                    AnnotationBbox(
-                        box,
-                        (1.0, at[v]),  # at the farthest of the group's level (or the edge)
-                        xycoords=("axes fraction", "data"),
-                        xybox=(4.5, -0.5 * (PEAK_UNDERLINE + medium.line)),
-                        boxcoords="offset points",
-                        box_alignment=(0.0, 0.5),
-                        frameon=False,
-                        pad=0.0,
-                        annotation_clip=False,
-                    )
-                )
-                group = []
-
-
-def _peak_label(ax: Axes, value: float, style: dict[str, Any], medium: Medium) -> Artist:
-    """One far peak's label: its value in its run's colour, underlined in its run's line style
-    (a line beside it would read as a minus sign)."""
-    label = _plain(float(f"{value:.2g}"))
-    renderer = ax.figure.canvas.get_renderer()  # type: ignore[attr-defined]
-    width_px, _, _ = renderer.get_text_width_height_descent(
-        label, FontProperties(size=medium.tiny), ismath=False
-    )
-    width = width_px * 72.0 / ax.figure.dpi
-    line = DrawingArea(width, style["linewidth"])
-    line.add_artist(
-        Line2D(
-            [0.0, width],
-            [0.5 * style["linewidth"]] * 2,
-            color=style["color"],
-            linestyle=style["linestyle"],
-            linewidth=style["linewidth"],
-            solid_capstyle="butt",
-            dash_capstyle="butt",
-        )
-    )
-    text = TextArea(label, textprops={"color": style["color"], "fontsize": medium.tiny})
-    return VPacker(children=[text, line], pad=0, sep=PEAK_UNDERLINE, align="left")
 
 
 def _arm_points(run: Run, q: np.ndarray) -> np.ndarray:

@@ -7,7 +7,7 @@ from typing import Any
 
 from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
-from ..config import PAIRS
+from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
 from ..trace import File, Math, Ref, Segment, Sentence, Text, Unit, sentence
 from .base import (
@@ -74,7 +74,7 @@ class Task1(StoryBase):
             gap,
             " apart (",
             Ref("fig", "t1-uc"),
-            "(c), (d)).",
+            "(c), (d))." if FOURTH_PANEL[t] == "path" else "(c)).",
         )
         sec.answer = answer
         self.answers.append(
