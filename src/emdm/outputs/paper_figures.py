@@ -1388,6 +1388,12 @@ def _convergence_axes(
     # every fifth decade (10^0, 10^-5, ...): a tick per decade runs together at this size
     ax.yaxis.set_major_locator(matplotlib.ticker.FixedLocator([10.0**e for e in range(-30, 10, 5)]))
     ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+    # the counts from a power of ten to a power of ten: within less than a decade (slsqp's few
+    # evaluations) matplotlib labels its minor ticks, and at this size they ran together
+    counts = [c for _kind, cs, _e, _r in curves.values() for c in cs if c > 0]
+    if counts:
+        ax.set_xlim(10.0 ** np.floor(np.log10(min(counts))), 10.0 ** np.ceil(np.log10(max(counts))))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
 def solver_glyph(colour: str, mark: str, dash: Any, stem: Path, medium: Medium = PAPER) -> Path:

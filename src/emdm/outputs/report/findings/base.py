@@ -442,9 +442,7 @@ class StoryBase:
         return out + sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted",
-            f" (shaded beyond them, cut at {FAR_BEYOND:g}×; peak speeds in Table I)"
-            if far
-            else "",
+            f" (shaded beyond them, cut at {FAR_BEYOND:g}×; peak speeds in Table I)" if far else "",
         )
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
