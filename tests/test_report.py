@@ -650,10 +650,11 @@ def test_run_labels_keep_their_case_in_captions():
         run_label("no-such-run")
 
 
-def test_table_one_names_each_rows_program_by_its_equations(report):
-    """Table I's "eqs." column cites the formulation's displays by number: the numbers are those
-    of the LaTeX labels' order and of the page's displays, and each row's program is the one its
-    controller solves (objective, C- bounds, infeasibility policy)."""
+def test_the_programs_table_writes_each_tasks_programs_from_the_controllers_terms(report):
+    """Table I writes out each task's programs (readings 140, 141: the reader had to assemble
+    them from general forms): from each controller's terms on the task's arm, the slack only on
+    the non-redundant arm's EMDM, the box and the task scale only in the C- programs. The
+    formulation's displays are numbered alike in the paper (its labels' order) and the page."""
     from emdm.outputs.report.trace import EQUATIONS
 
     folder = Path(emdm.outputs.report.__file__).parent / "templates"
@@ -664,11 +665,23 @@ def test_table_one_names_each_rows_program_by_its_equations(report):
         str(i + 1) for i in range(len(EQUATIONS))
     ]
     _, page = report
-    rows = {r[0]: r[1] for r in page.tables["tab-outcomes"][1:] if len(r) > 1}
-    # Task 2's rows come last and overwrite Task 1's: the two-link arm's EMDM is the slack program
-    assert rows["UC-IVKC"] == "1" and rows["UC-EMDM"] == "3"
-    assert rows["C-IVKC"] == "1, 4, 5" and rows["C-EMDM"] == "3, 4, 5"
-    assert rows["C-IVKC, free slack"] == "1, 4, 6" and rows["C-EMDM, free slack"] == "3, 4, 6"
+    tasks: list[dict[str, list[str]]] = []
+    for row in page.tables["tab-programs"][1:]:
+        if len(row) == 1:  # a task's heading
+            tasks.append({})
+        else:
+            tasks[-1][row[0]] = row[1:]
+    assert [sorted(t) for t in tasks] == [sorted(["UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM"])] * 2
+    for redundant, programs in zip((True, False), tasks, strict=True):
+        for name, (objective, constraints) in programs.items():
+            is_emdm = "EMDM" in name
+            constrained = name.startswith("C-")
+            slack = is_emdm and not redundant
+            assert objective.startswith("wEE" if is_emdm else "E"), (name, objective)
+            assert ("wMJmTq̇" in objective.replace(" ", "")) == is_emdm, (name, objective)
+            assert ("δ" in objective) == slack and ("δ" in constraints) == slack, name
+            assert ("∈ B" in constraints) == constrained, (name, constraints)
+            assert ("α*" in constraints) == constrained, (name, constraints)
 
 
 def test_references_are_numbered_alike_in_the_paper_and_the_page():

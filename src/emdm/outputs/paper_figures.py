@@ -1392,7 +1392,8 @@ def _convergence_axes(
     # evaluations) matplotlib labels its minor ticks, and at this size they ran together
     counts = [c for _kind, cs, _e, _r in curves.values() for c in cs if c > 0]
     if counts:
-        ax.set_xlim(10.0 ** np.floor(np.log10(min(counts))), 10.0 ** np.ceil(np.log10(max(counts))))
+        low = 10.0 ** np.floor(np.log10(min(counts)))
+        ax.set_xlim(low, max(10.0 ** np.ceil(np.log10(max(counts))), 10.0 * low))
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 

@@ -8,7 +8,6 @@ page's numbers equal LaTeX's ``\\ref`` numbers.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 from .trace import Ref, Segment, Sentence
@@ -46,19 +45,6 @@ class Table:
     font: str = "footnotesize"
     colsep: float = 4.0
     """Space either side of a column (pt, LaTeX's ``\\tabcolsep``): less for a wide table."""
-    paper_only: tuple[int, ...] = ()
-    """Columns that cite the paper's equations, left out on the slides (which have none)."""
-
-    def on_slides(self) -> Table:
-        """The table without its :attr:`paper_only` columns (group headings kept)."""
-        keep = [i for i in range(len(self.header)) if i not in self.paper_only]
-        return dataclasses.replace(
-            self,
-            header=[self.header[i] for i in keep],
-            rows=[r if len(r) == 1 else [r[i] for i in keep] for r in self.rows],
-            align="".join(self.align[i] for i in keep),
-            paper_only=(),
-        )
 
 
 @dataclass

@@ -295,7 +295,7 @@ class Glyph(Segment):
         return ""
 
 
-EQUATIONS = ("ivkc", "emdm", "slack", "bounds", "scale", "free")
+EQUATIONS = ("bounds", "scale", "free")
 """The formulation's displayed equations in their order (``\\label{eq:KEY}`` in
 ``templates/formulation.tex.j2``, numbered alike in ``formulation.html.j2``)."""
 

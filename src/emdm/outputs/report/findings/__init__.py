@@ -62,6 +62,7 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
             self.beyond(),
         ]
         self.outcome_table(sections)
+        self.programs_table(sections)
         self.evidence_table(sections)
         for sec in sections:
             sec.figures = [k for k in sec.figures if k in self.figures]

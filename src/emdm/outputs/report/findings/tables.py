@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
-from ....core.controllers import Name
+from ....core.controllers import CONTROLLERS, Name
+from ....core.terms import TermKind
 from ..document import Section, Table
 from ..trace import Eqs, Math, Ref, Sentence, Text, Unit, Upright, sentence
 from .base import (
@@ -46,21 +47,98 @@ class Tables(Claims):
     """Table I's outcome columns after the time to goal, with their formats."""
 
     # ------------------------------------------------------------------ tables
-    def program(self, task: str, name: str, slack: bool = False) -> Eqs:
-        """The equations of the program ``name`` solves on ``task``: its objective ((1), (2), or
-        (3) on a non-redundant arm), the C- bounds (4), and the infeasibility policy, task
-        scaling (5) or, in Table I's slack rows, the free slack (6)."""
-        emdm = name in (Name.UC_EMDM, Name.C_EMDM)
-        redundant = self.rec.scenarios[task].n > self.rec.scenarios[task].nt
-        keys = ["ivkc" if not emdm else "emdm" if redundant else "slack"]
-        if name in (Name.C_IVKC, Name.C_EMDM):
-            keys += ["bounds", "free" if slack else "scale"]
-        return Eqs(tuple(keys))
+    OBJECTIVE: ClassVar[dict[TermKind, tuple[str, str]]] = {
+        TermKind.MANIPULABILITY: (
+            r"-w_MJ_m^\top\dot q",
+            "− <i>w</i><sub>M</sub><i>J</i><sub>m</sub><sup>T</sup><i>q̇</i>",
+        ),
+        TermKind.SLACK: (r"+\tfrac12w_S\|\delta\|^2", " + ½<i>w</i><sub>S</sub>‖δ‖²"),
+        # beyond the brief (zero weight, so absent, in its tasks): named, not written out
+        TermKind.CENTRING: (r"+\text{centring}", " + centring"),
+        TermKind.CLEARANCE: (r"+\text{clearance}", " + clearance"),
+    }
+    """The objective's parts after the effort, per term (LaTeX, HTML), in the terms' order."""
+
+    ROWS: ClassVar[dict[TermKind, tuple[str, str]]] = {
+        TermKind.PLANE: (r",\ \text{planes}", ", planes"),
+        TermKind.OBSTACLE: (r",\ \text{obstacles}", ", obstacles"),
+    }
+    """Constraint rows beyond the brief's (absent in its tasks), named after the box."""
+
+    def program_row(self, task: str, name: str) -> list[Sentence]:
+        """One row of the programs table: what ``name``'s program on ``task`` minimises and
+        subject to what, read from the controller's terms as the code builds them on the task's
+        arm (:meth:`~emdm.core.controllers.Controller.program_data`): a term the arm does not
+        take (the slack of a redundant arm) or of zero weight is not in it."""
+        sc = self.rec.scenarios[task]
+        ctrl = CONTROLLERS[name]
+        kinds = [list(TermKind)[int(c)] for c in ctrl.program_data(sc).codes]
+        effort = next(t for t in ctrl.terms if t.kind is TermKind.EFFORT)
+        tex, htm = (
+            (r"w_EE", "<i>w</i><sub>E</sub><i>E</i>")
+            if isinstance(effort.weight, str)
+            else ("E", "<i>E</i>")
+        )
+        for kind in kinds:
+            if kind in self.OBJECTIVE:
+                tex += self.OBJECTIVE[kind][0]
+                htm += self.OBJECTIVE[kind][1]
+        slack = TermKind.SLACK in kinds
+        scaled = ctrl.constrained and sc.controller.on_infeasible == "scale"
+        task_tex = (r"J\dot q+\delta=" if slack else r"J\dot q=") + (
+            r"\alpha^*v_d" if scaled else "v_d"
+        )
+        task_htm = ("<i>Jq̇</i> + δ = " if slack else "<i>Jq̇</i> = ") + (
+            "α*<i>v</i><sub>d</sub>" if scaled else "<i>v</i><sub>d</sub>"
+        )
+        if slack:
+            task_tex += r",\ \delta\in D"
+            task_htm += ", δ ∈ <i>D</i>"
+        if TermKind.VELOCITY_BOX in kinds or TermKind.DAMPER in kinds:
+            task_tex += r",\ \dot q\in B"
+            task_htm += ", <i>q̇</i> ∈ <i>B</i>"
+        for kind in kinds:
+            if kind in self.ROWS:
+                task_tex += self.ROWS[kind][0]
+                task_htm += self.ROWS[kind][1]
+        return [sentence(name), sentence(Math(tex, htm)), sentence(Math(task_tex, task_htm))]
+
+    def programs_table(self, sections: list[Section]) -> None:
+        """Each task's programs written out (readings 140, 141: the reader had to assemble them
+        from the general forms and Table I's equation numbers), from the controllers' terms."""
+        table = Table(
+            "programs",
+            sentence(
+                "Each task's programs, as built from each controller's terms (",
+                Math("B", "<i>B</i>"),
+                ": (",
+                Eqs(("bounds",)),
+                "); ",
+                Math(r"\alpha^*", "α*"),
+                ": (",
+                Eqs(("scale",)),
+                ")).",
+            ),
+            [sentence("controller"), sentence("minimise"), sentence("subject to")],
+            align="lll",
+            font="scriptsize",
+            colsep=3.0,
+        )
+        for task, title in (
+            ("task1", "Task 1 (three links): 1.1 UC, 1.2 C"),
+            ("task2", "Task 2 (two links): 2.1 C, 2.2 UC"),
+        ):
+            table.rows.append([sentence(title)])
+            for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
+                table.rows.append(self.program_row(task, name))
+        self.tables["programs"] = table
+        for s in sections:
+            if s.key == "task1":  # floats to the top of page 2, over Table II
+                s.tables.insert(0, "programs")
 
     def outcome_table(self, sections: list[Section]) -> None:
         header = [
             sentence("controller"),
-            sentence("eqs."),
             sentence("goal"),
             sentence("mean ", M_SYM),
             sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
@@ -79,7 +157,7 @@ class Tables(Claims):
         table = Table(
             "outcomes",
             sentence(
-                "Outcomes: program (eqs.), time to goal (",
+                "Outcomes: time to goal (",
                 Unit("s"),
                 "; ",
                 ERR,
@@ -101,9 +179,8 @@ class Tables(Claims):
                 "), task-scaled steps.",
             ),
             header,
-            align="llrrrrr",
+            align="lrrrrr",
             font="scriptsize",  # as Tables II and III: fourteen rows
-            paper_only=(1,),  # the equations' numbers
         )
         policy: dict[str, EvidenceKey] = {
             "task1": "t1-c-slack-policy",
@@ -122,7 +199,6 @@ class Tables(Claims):
                 table.rows.append(
                     [
                         sentence(name),
-                        sentence(self.program(task, name)),
                         goal,
                         *(
                             sentence(self.mt(task, name, metric, fmt))
@@ -137,7 +213,6 @@ class Tables(Claims):
                 table.rows.append(
                     [
                         sentence(name, ", free slack"),  # (the nominal C-EMDM has one too)
-                        sentence(self.program(task, name, slack=True)),
                         sentence(bare(self.evid_goal(key, name)))
                         if run["reached"]
                         else sentence("stall"),

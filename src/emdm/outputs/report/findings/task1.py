@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
-from ..trace import File, Math, Ref, Segment, Sentence, Text, Unit, sentence
+from ..trace import Eqs, Math, Ref, Segment, Sentence, Text, Unit, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -268,7 +268,9 @@ class Task1(StoryBase):
         cap += self.ratios_swept()
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
-            cap += sentence("; hollow: a scaled step's front under the free slack (6)")
+            cap += sentence(
+                "; hollow: a scaled step's front under the free slack (", Eqs(("free",)), ")"
+            )
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(
@@ -339,7 +341,10 @@ class Task1(StoryBase):
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            "; so is the free-slack front (6), hollow in ", Ref("fig", "pareto")
+                            "; so is the free-slack front (",
+                            Eqs(("free",)),
+                            "), hollow in ",
+                            Ref("fig", "pareto"),
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
@@ -568,35 +573,8 @@ class Task1(StoryBase):
                 self.d.num(
                     lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".4g"
                 ),
-                " elsewhere",
-                *(  # the paper's convergence figure has Task 1's hardest program
-                    (
-                        " (",
-                        Ref("fig", "convergence"),
-                        ")",
-                    )
-                    if self.d.exists("paper/figures/convergence.png")
-                    else (" (plots: ", File("figures/task1-lab-C-EMDM/"), ")")
-                    if self.d.exists("figures/task1-lab-C-EMDM/convergence.png")
-                    else ()
-                ),
+                " elsewhere",  # (the lab's records; Fig. 6 draws one program, not the medians)
             )
-        rows = self.solvers("task1-lab-C-EMDM")
-        lab1 = self.rec.labs.get("task1-lab-C-EMDM")
-        notes = lab1.notes if lab1 else {}
-        qp = rows.get("quadprog")
-        if qp and qp.failures:
-            p += sentence(
-                ", and quadprog declines "
-                if "median_iterations_scaled" in ch.get("admm", {})
-                else ". The quadprog solver declines ",
-                self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
-                " of the ",
-                self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved programs",
-            )
-            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
-                p += sentence(", all scaled")
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,
