@@ -50,7 +50,7 @@ class Tables(Claims):
     OBJECTIVE: ClassVar[dict[TermKind, tuple[str, str]]] = {
         TermKind.MANIPULABILITY: (
             r"-w_MJ_m^\top\dot q",
-            "− <i>w</i><sub>M</sub><i>J</i><sub>m</sub><sup>T</sup><i>q̇</i>",
+            " − <i>w</i><sub>M</sub><i>J</i><sub>m</sub><sup>T</sup><i>q̇</i>",
         ),
         TermKind.SLACK: (r"+\tfrac12w_S\|\delta\|^2", " + ½<i>w</i><sub>S</sub>‖δ‖²"),
         # beyond the brief (zero weight, so absent, in its tasks): named, not written out
