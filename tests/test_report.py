@@ -1177,6 +1177,48 @@ def test_the_task2_evidence_slide_draws_each_run_from_its_record(quick_report):
     assert [b.change for b in alone] == ["as run", "as run"]
 
 
+def test_the_task1_policy_slide_draws_both_policies_from_the_records(
+    quick_report, tmp_path, monkeypatch
+):
+    """Slide 6 draws what take-away 2 says (reading 141: it rested on a backup table): Task 1's
+    constrained pair slowed (as run: Table II's rows) and with a free slack (evidence.json),
+    each outcome a panel whose bars are those records' values; the slide shows the chart."""
+    from matplotlib.figure import Figure
+
+    from emdm.outputs import paper_figures as pf
+    from emdm.outputs.report.jobs import POLICY_RUN, _load_runs, policy_runs
+
+    record = quick_report / "data" / "evidence.json"
+    slack = json.loads(record.read_text(encoding="utf-8"))["runs"][POLICY_RUN]["runs"]
+    table = json.loads((quick_report / "data" / "task1" / "metrics.json").read_text())
+    runs = policy_runs(_load_runs("task1"), record)
+    expected = []
+    for ctrl in ("C-IVKC", "C-EMDM"):
+        for policy, rec in (("slowed", table["controllers"][ctrl]), ("free slack", slack[ctrl])):
+            expected.append(
+                (ctrl, policy, rec["time_to_goal"], rec["total_effort"], rec["mean_manipulability"])
+            )
+    got = [
+        (str(r.controller), r.policy, r.time_to_goal, r.total_effort, r.mean_manipulability)
+        for r in runs
+    ]
+    assert [g[:2] for g in got] == [e[:2] for e in expected]
+    assert np.allclose([g[2:] for g in got], [e[2:] for e in expected], rtol=1e-12)
+    drawn: list[Figure] = []
+    save = Figure.savefig
+    monkeypatch.setattr(
+        Figure, "savefig", lambda self, *a, **k: drawn.append(self) or save(self, *a, **k)
+    )
+    with pf.png_only():
+        pf.policy_figure(runs, tmp_path / "policy")
+    for ax, (key, _title, _fmt) in zip(drawn[0].axes, pf.POLICY_PANELS, strict=True):
+        widths = [p.get_width() for p in ax.patches]
+        assert np.allclose(widths, [getattr(r, key) for r in runs]), key
+    assert (quick_report / "paper" / "slides" / "task1-policy.png").exists()
+    assert r"\fig{\textwidth}{task1-policy}" in (quick_report / "paper" / "pitch.tex").read_text()
+    assert policy_runs(_load_runs("task1"), quick_report / "no-such.json") == []
+
+
 def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_runs(
     quick_report, tmp_path
 ):

@@ -1698,6 +1698,94 @@ class EvidenceBar:
     time_to_goal: float | None
 
 
+@dataclass(frozen=True)
+class PolicyRun:
+    """One run of the pitch's Task 1 policy chart: whose, under which infeasibility policy
+    (``slowed``: task scaling, as run; ``free slack``), and its outcomes (``time_to_goal`` None:
+    it did not arrive)."""
+
+    controller: str
+    policy: str
+    time_to_goal: float | None
+    total_effort: float
+    mean_manipulability: float
+
+
+POLICY_PANELS = (
+    ("time_to_goal", "time to goal (s)", "{:.2f}"),
+    ("total_effort", r"effort $\sum E\Delta t$ (rad$^2$/s)", "{:.2f}"),
+    ("mean_manipulability", r"mean $m$ (m$^2$)", "{:.3f}"),
+)
+"""The policy chart's panels, top to bottom: outcome, axis title, value format."""
+
+
+def policy_figure(
+    runs: Sequence[PolicyRun],
+    stem: Path,
+    medium: Medium = SLIDE,
+    width: float = 2.6,
+    height: float = 2.5,
+) -> Path:
+    """The pitch's Task 1 policy evidence: the constrained pair slowed (task scaling, as run)
+    and with a free slack instead, each outcome a panel of bars in the controllers' colours,
+    the free slack hatched, each bar's value written at its end (take-away 2 had rested on a
+    backup table, reading 141). Drawn at the size shown beside the stills."""
+    with _figure(stem, medium, width, height) as fig:
+        axes = fig.subplots(len(POLICY_PANELS), 1)
+        ys = np.arange(len(runs))[::-1]
+        for ax, (key, title, fmt) in zip(axes, POLICY_PANELS, strict=True):
+            values = [getattr(r, key) for r in runs]
+            top = max(v for v in values if v is not None)
+            for y, run, v in zip(ys, runs, values, strict=True):
+                colour = CONTROLLER_STYLE.get(run.controller, {"color": OKABE_ITO[0]})["color"]
+                slack = run.policy != "slowed"
+                if v is None:  # never arrived: no bar, said
+                    ax.text(0.0, y, "no arrival", va="center", fontsize=medium.tiny)
+                    continue
+                ax.barh(
+                    y,
+                    v,
+                    height=0.7,
+                    color="white" if slack else colour,
+                    edgecolor=colour,
+                    hatch="////" if slack else None,
+                    linewidth=0.8,
+                )
+                ax.text(v + 0.02 * top, y, fmt.format(v), va="center", fontsize=medium.tiny)
+            ax.set_xlim(0.0, 1.3 * top)
+            ax.set_yticks([])
+            ax.set_xticks([])
+            ax.set_title(title, fontsize=medium.tiny, pad=2, loc="left")
+            for side in ("top", "right", "left", "bottom"):
+                ax.spines[side].set_visible(False)
+        # the legend in two short columns: the controllers' colours, then the policies' fills
+        handles: list[Artist] = [
+            Patch(color=CONTROLLER_STYLE.get(c, {"color": OKABE_ITO[0]})["color"], label=c)
+            for c in dict.fromkeys(r.controller for r in runs)
+        ]
+        for policy in dict.fromkeys(r.policy for r in runs):
+            slack = policy != "slowed"
+            handles.append(
+                Patch(
+                    facecolor="white" if slack else "#777777",
+                    edgecolor="#777777",
+                    hatch="////" if slack else None,
+                    label=policy,
+                )
+            )
+        fig.legend(
+            handles=handles,
+            loc="outside upper center",
+            ncols=len(handles),
+            fontsize=medium.tiny,
+            frameon=False,
+            columnspacing=0.6,
+            handlelength=1.0,
+            handletextpad=0.3,
+        )
+    return stem
+
+
 def evidence_figure(
     bars: Sequence[EvidenceBar],
     max_time: float,

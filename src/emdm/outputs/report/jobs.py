@@ -396,11 +396,53 @@ def _story_figures(stage: Path) -> list[str]:
                 )
             )
         )
+    policy = policy_runs(t1, stage / "data" / "evidence.json")
+    if policy:
+        stem = stage / SLIDE_FIGURES / "task1-policy"
+        out.append(str(pf.policy_figure(policy, stem, height=2.2)))
     bars = evidence_bars(t2, stage / "data" / "evidence.json")
     if len(bars) > 2:  # the two as run, and at least one run with a cause changed
         max_time = t2[Name.C_EMDM].scenario.motion.max_time
         stem = stage / SLIDE_FIGURES / "task2-evidence"
         out.append(str(pf.evidence_figure(bars, max_time, stem)))
+    return out
+
+
+POLICY_RUN = "t1-c-slack-policy"
+"""The evidence run the pitch's Task 1 policy chart sets beside the constrained pair: the
+same runs with a free slack instead of task scaling."""
+
+
+def policy_runs(runs: dict[str, Run], record: Path) -> list[pf.PolicyRun]:
+    """The pitch's Task 1 policy chart: the constrained pair as run (slowed by task scaling),
+    each followed by its free-slack run from ``evidence.json``; empty without that record."""
+    import json
+
+    ev = json.loads(record.read_text(encoding="utf-8"))["runs"] if record.exists() else {}
+    slack = ev.get(POLICY_RUN, {}).get("runs", {})
+    out = []
+    for ctrl in (Name.C_IVKC, Name.C_EMDM):
+        if ctrl not in slack:
+            return []
+        run, other = metrics(runs[ctrl]), slack[ctrl]  # (the records' outcomes, alike)
+        out.append(
+            pf.PolicyRun(
+                ctrl,
+                "slowed",
+                run["time_to_goal"] if run["reached"] else None,
+                float(run["total_effort"]),
+                float(run["mean_manipulability"]),
+            )
+        )
+        out.append(
+            pf.PolicyRun(
+                ctrl,
+                "free slack",
+                other["time_to_goal"] if other.get("reached") else None,
+                float(other["total_effort"]),
+                float(other["mean_manipulability"]),
+            )
+        )
     return out
 
 
