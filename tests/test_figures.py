@@ -770,3 +770,25 @@ def test_the_task2_2_slide_draws_the_run_without_the_dexterity_term(tmp_path, mo
     with pf.png_only():
         pf.effort_figure(limited, tmp_path / "effort2")
     assert len(drawn[-1].axes) == 2
+
+
+def test_the_task2_slide_draws_each_runs_m_and_its_mean(tmp_path, drawn):
+    """Slide 8's "at a mean m of 0.137 against 0.188" is drawn (reading 140): each run's m(t)
+    and, as a line of its style, its mean over the run as the records give it, written at the
+    right; the time axis ends at C-EMDM's arrival (C-IVKC stalled before it)."""
+    from emdm.outputs import paper_figures as pf
+    from emdm.sim.metrics import metrics
+
+    sc = emdm.load_scenario("task2")
+    pair = [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")]
+    with formats((".png",)):
+        pf.mean_m_figure(pair, tmp_path / "m")
+    ax = drawn[-1].axes[0]
+    curves = [ln for ln in ax.lines if len(ln.get_xdata()) > 2]
+    means = [ln for ln in ax.lines if len(ln.get_xdata()) == 2]
+    for run, curve, mean in zip(pair, curves, means, strict=True):
+        assert np.allclose(curve.get_ydata(), run.m)
+        assert mean.get_ydata()[0] == pytest.approx(metrics(run)["mean_manipulability"])
+    written = sorted(t.get_text() for t in ax.texts)
+    assert written == sorted(f"{metrics(r)['mean_manipulability']:.3f}" for r in pair)
+    assert ax.get_xlim()[1] == pytest.approx(pair[1].time_to_goal)

@@ -42,6 +42,7 @@ from matplotlib.ticker import LogLocator, MaxNLocator, NullLocator
 
 from ..sim.loop import Run
 from ..sim.metrics import limit_excess
+from ..sim.metrics import metrics as metrics_of
 from ..solvers.base import Family
 from ..studies.lab import exact_answer
 from .animate import ellipse_points
@@ -1509,7 +1510,7 @@ def manipulability_figure(
             fontsize=medium.tiny,
         )
         grid[0, 0].set_ylabel(r"$m$ (m$^2$)")
-        grid[1, 0].set_ylabel("effort\n" + r"(rad$^2$/s)")  # spent so far (short: a row is low)
+        grid[1, 0].set_ylabel("effort so far\n" + r"(rad$^2$/s)")  # cumulative (reading 143)
         grid[2, 0].set_ylabel(r"$\|e\|$ (m)")
         fig.align_ylabels(grid[:, 0])  # one column of labels whatever the tick labels' widths
     return stem
@@ -1696,6 +1697,44 @@ class EvidenceBar:
     controller: str
     change: str
     time_to_goal: float | None
+
+
+def mean_m_figure(
+    runs: Sequence[Run],
+    stem: Path,
+    medium: Medium = SLIDE,
+    width: float = 2.1,
+    height: float = 1.05,
+) -> Path:
+    """A pair's m(t) with each run's mean m over its run as a thin line of its style, the
+    mean written at its right (the pitch's Task 2 slide: its "mean m 0.137 against 0.188" had
+    been said, not drawn, reading 140). The time axis ends at the last arrival when the other
+    run had stalled by then (:func:`time_end`); the means are the whole runs' (Table II's)."""
+    with _figure(stem, medium, width, height) as fig:
+        ax = fig.subplots()
+        for run in runs:
+            st = _style(run, medium)
+            ax.plot(run.t, run.m, **st)
+            mean = float(metrics_of(run)["mean_manipulability"])
+            ax.axhline(mean, color=st["color"], linestyle=st["linestyle"], linewidth=0.7)
+            ax.annotate(
+                f"{mean:.3f}",
+                (1.0, mean),
+                xycoords=("axes fraction", "data"),
+                xytext=(2, 0),
+                textcoords="offset points",
+                va="center",
+                fontsize=medium.tiny,
+                color=st["color"],
+                annotation_clip=False,
+            )
+        end = time_end(runs)
+        if end is not None:
+            ax.set_xlim(0.0, end)
+        # the units in the title: axis labels would take the slide's last lines
+        ax.set_title(r"$m$ (m$^2$) over $t$ (s); thin: mean $m$", fontsize=medium.tiny, pad=2)
+        ax.yaxis.set_major_locator(MaxNLocator(3))
+    return stem
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,9 @@ FULL = ReportConfig(
     lab_sample=40,
     lab_budget=600,
     lab_repeats=3,
-    fallback_solvers=("active-set", "interior-point", "admm", "daqp", "quadprog", "slsqp"),
+    # Task 1's lab: the chain's solvers and those of Table III the answer names (Fig. 6's
+    # Task 1 panel draws them: each has its glyph in that table)
+    fallback_solvers=("active-set", "admm", "daqp", "quadprog", "slsqp"),
     pareto_per_decade=4,
     grid=13,
     animation_seconds=10.0,

@@ -386,6 +386,9 @@ def _story_figures(stage: Path) -> list[str]:
             )
         )
     )
+    # the pitch's Task 2 slide: the constrained pair's m(t) and mean m under its bullets
+    pair2 = [t2[Name.C_IVKC], t2[Name.C_EMDM]]
+    out.append(str(pf.mean_m_figure(pair2, stage / SLIDE_FIGURES / "task2-m")))
     # the pitch's picture of what m measures, on Task 2's C-EMDM (it passes m = 0)
     out.append(str(pf.ellipse_figure(t2[Name.C_EMDM], stage / SLIDE_FIGURES / "ellipses")))
     for task, runs in (("task1", t1), ("task2", t2)):

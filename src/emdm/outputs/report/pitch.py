@@ -242,6 +242,7 @@ class Pitch:
             "task1-m",
             "task1-stills",
             "task1-policy",
+            "task2-m",
             "task2-stills",
             "pareto",
             "workspace",

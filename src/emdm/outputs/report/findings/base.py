@@ -439,11 +439,17 @@ class StoryBase:
             out += sentence(
                 "(d) tip paths (y stretched; dotted: the straight line; dot: start, star: goal), "
             )
-        return out + sentence(
+        out += sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
-            "velocities, limits dotted",
-            f" (shaded beyond them, cut at {FAR_BEYOND:g}×; peak speeds in Table I)" if far else "",
+            "velocities, limits dotted"
         )
+        if far:  # the peak speeds: the outcome table's column
+            out += sentence(
+                f" (shaded beyond them, cut at {FAR_BEYOND:g}×; peak speeds in ",
+                Ref("tab", "outcomes"),
+                ")",
+            )
+        return out
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
         """Whether a pair figure of ``controllers`` ticks a joint's peak speeds beyond the

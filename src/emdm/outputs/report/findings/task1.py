@@ -575,6 +575,22 @@ class Task1(StoryBase):
                 ),
                 " elsewhere",  # (the lab's records; Fig. 6 draws one program, not the medians)
             )
+        rows = self.solvers("task1-lab-C-EMDM")
+        lab1 = self.rec.labs.get("task1-lab-C-EMDM")
+        notes = lab1.notes if lab1 else {}
+        qp = rows.get("quadprog")
+        if qp and qp.failures:  # the fallback's last resort: said (reading 142), if unused
+            p += sentence(
+                ", and quadprog, the last fallback, declines "
+                if "median_iterations_scaled" in ch.get("admm", {})
+                else ". The last fallback, quadprog, declines ",
+                self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
+                " of the ",
+                self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
+                " re-solved programs",
+            )
+            if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
+                p += sentence(", all scaled")
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,
