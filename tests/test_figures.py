@@ -792,3 +792,39 @@ def test_the_task2_slide_draws_each_runs_m_and_its_mean(tmp_path, drawn):
     written = sorted(t.get_text() for t in ax.texts)
     assert written == sorted(f"{metrics(r)['mean_manipulability']:.3f}" for r in pair)
     assert ax.get_xlim()[1] == pytest.approx(pair[1].time_to_goal)
+
+
+def test_the_solver_slide_says_each_verdict_and_what_it_cost(tmp_path, drawn):
+    """Slide 11's verdicts in words beside each solver's time: exact (the paper's criterion),
+    within 10^-k or off by g, out of bounds past 1e-6, and the median evaluations of those
+    that count them (readings 140, 142: the slide said 522 evaluations without showing it)."""
+    from emdm.outputs import paper_figures as pf
+
+    def row(family, gap, violation, evaluations):
+        return {
+            "family": family,
+            "median_time": 1e-3,
+            "max_abs_gap": gap,
+            "max_violation": violation,
+            "median_evaluations": evaluations,
+        }
+
+    lab = {
+        "solvers": {
+            "qp": row("exact", 0.0, 0.0, 0.0),
+            "sqp": row("gradient", 1e-14, 0.0, 6.0),
+            "close": row("gradient-free", 3e-8, 1e-8, 58.0),
+            "far": row("gradient-free", 0.11, 2e-6, 344.0),
+        }
+    }
+    with formats((".png",)):
+        pf.solver_verdict_figure(lab, 0.05, tmp_path / "v")
+    words = sorted(t.get_text() for t in drawn[-1].axes[1].texts)
+    assert words == sorted(
+        [
+            "exact",
+            "exact, 6 evals",
+            "within $10^{-7}$, 58 evals",
+            "off by 0.11, out of bounds, 344 evals",
+        ]
+    )

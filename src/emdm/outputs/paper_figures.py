@@ -1089,8 +1089,9 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     """The pitch's solver slide: one axis, the median time per program of each solver (rows by
     family, the control period dashed), and in a column beside the axes, in words, whether its
     answer is the optimum: ``exact`` (:func:`~emdm.studies.lab.exact_answer`, filled), else
-    hollow with ``within 10^-k``, ``off by g``, and ``out of bounds`` (violation above 1e-6).
-    The paper's :func:`solver_figure` plots the gaps on an axis."""
+    hollow with ``within 10^-k``, ``off by g``, and ``out of bounds`` (violation above 1e-6),
+    then the median objective evaluations of the solvers that count them (``522 evals``). The
+    paper's :func:`solver_figure` plots the gaps on an axis."""
     rows = lab["solvers"]
     order = [
         k
@@ -1130,6 +1131,9 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
                 word = f"off by {gap:.2g}"
             if violation > 1e-6:
                 word += ", out of bounds"
+            evaluations = r.get("median_evaluations")
+            if evaluations:  # what it costs, in the methods' own unit (the slide's bullets)
+                word += f", {evaluations:g} evals"
             words.text(-0.1, yi, word, va="center", fontsize=medium.tiny)
         # the one long name shortened: the axes keep the slide's width; a star marks a compiled
         # inner loop, as in the paper's Table III (its times compare implementations too)
