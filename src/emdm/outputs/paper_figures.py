@@ -1708,7 +1708,7 @@ def mean_m_figure(
     stem: Path,
     medium: Medium = SLIDE,
     width: float = 2.1,
-    height: float = 1.05,
+    height: float = 0.98,
 ) -> Path:
     """A pair's m(t) with each run's mean m over its run as a thin line of its style, the
     mean written at its right (the pitch's Task 2 slide: its "mean m 0.137 against 0.188" had

@@ -341,6 +341,28 @@ class Cite(Segment):
 Sentence = list[Segment]
 
 
+@dataclass(frozen=True)
+class PageOnly(Segment):
+    """Words the page prints and the paper leaves out: its four pages have no room for them
+    (the stochastic solvers' spread over seeds, say). Its segments are numbers and prose, never
+    a reference (references are numbered over the paper's sentences)."""
+
+    parts: tuple[Segment, ...]
+
+    def __post_init__(self) -> None:
+        if any(isinstance(p, Ref) for p in self.parts):
+            raise ValueError("PageOnly holds no reference: the paper would not number it")
+
+    def html(self) -> str:
+        return render_html(self.parts)
+
+    def latex(self) -> str:
+        return ""
+
+    def plain(self) -> str:
+        return "".join(p.plain() for p in self.parts)
+
+
 def sentence(*parts: Segment | str) -> Sentence:
     """A sentence from segments and strings (strings become :class:`Text`)."""
     return [Text(p) if isinstance(p, str) else p for p in parts]

@@ -30,16 +30,16 @@ class Claims(StoryBase):
     def dexterity_gain(self) -> Sentence:
         """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers)."""
         t1 = "task1"
-        return sentence(
+        return sentence(  # each gain beside its cost (a reader paired four numbers)
             "raises the mean manipulability by ",
             self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
-            " without and ",
-            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-            " with joint limits, for ",
+            " for ",
             self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
-            " and ",
+            " effort, and by ",
+            self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+            " for ",
             self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
-            " effort",
+            " with joint limits",
         )
 
     def mean_m_pair(self, task: str) -> Sentence:
@@ -84,13 +84,11 @@ class Claims(StoryBase):
             "task2", Name.C_EMDM, "time_to_goal"
         ):
             return []
-        return sentence(
-            "without the dexterity term C-EMDM arrives sooner, in ",
+        return sentence(  # (the run's label first: "E4: ..." read as a noun, reading 142's edit)
+            "without the dexterity term",
+            *((" (", run_label(key), "),") if label else ()),
+            " C-EMDM arrives sooner, in ",
             self.evid_goal(key, Name.C_EMDM),
-            # w_M = 0 leaves IVKC's objective (times w_E) with C-EMDM's own bounded slack: the
-            # like-for-like pairing of the two under the brief's slack
-            # (readings 135: "IVKC's objective, C-EMDM's slack" read as a riddle)
-            *((" (", run_label(key), ": effort and slack only)") if label else ()),
         )
 
     def slack_gains(self) -> list[str]:

@@ -11,7 +11,7 @@ from ....solvers.nlp import PENALISED, SEEDED, WHOLE_GENERATIONS
 from ....studies.lab import EXACT, LIKE_FOR_LIKE, SEEDS, exact_answer
 from ..config import GLYPHS
 from ..document import Section, Table
-from ..trace import Glyph, Math, Ref, Sentence, Text, Unit, sentence
+from ..trace import Glyph, Math, PageOnly, Ref, Sentence, Text, Unit, sentence
 from .base import (
     DT,
     StoryBase,
@@ -78,15 +78,17 @@ class Solvers(StoryBase):
         if grad:
             # evaluations first: they compare the methods, the times their implementations too
             answer += sentence(
-                "On these ",
+                "On ",
+                Ref("tab", "solvers"),
+                "'s ",
                 self.d.count(f, "resolved_steps"),
-                " programs (",
+                " programs",
                 *(  # the convergence figure, when it was drawn
-                    (Ref("tab", "solvers"), ", ", Ref("fig", "convergence"))
+                    (" (", Ref("fig", "convergence"), ")")
                     if self.d.exists("paper/figures/convergence.png")  # (registered below)
-                    else (Ref("tab", "solvers"),)
+                    else ()
                 ),
-                ") the gradient-based ",
+                " the gradient-based ",
                 glossed(grad),
                 # both counts only while no gradient-free method is as exact
                 f" is as exact as {exact_free[0]} and far faster: it"
@@ -102,39 +104,45 @@ class Solvers(StoryBase):
                 self.sn(lab, grad, "median_time", unit="ms"),
                 "). ",
             )
-        if exact_free:
+        if len(exact_free) == 1:  # subject first, one fact per clause (reading 142's edit)
+            k = exact_free[0]
+            answer += sentence(
+                "The exact gradient-free method, ",
+                glossed(k),
+                ", needs a median ",
+                self.sn(lab, k, "median_evaluations", ".4g"),
+                " evaluations and ",
+                self.sn(lab, k, "median_time", unit="ms"),
+                " on the reduced program (",
+                Ref("sec", "formulation"),
+                "); run from Python, it ",
+            ) + self.overruns(lab, exact_free, rows, named=False)
+        elif exact_free:
             answer += sentence(
                 "On the reduced program (",
                 Ref("sec", "formulation"),
-                ") the exact gradient-free "
-                + ("methods need a median of " if len(exact_free) > 1 else "method, "),
+                ") the exact gradient-free methods need a median of ",
             )
             for i, k in enumerate(exact_free):
                 answer += sentence(
-                    *(
-                        (glossed(k), " ")
-                        if len(exact_free) > 1
-                        else (glossed(k), ", needs a median of ")
-                    ),
+                    glossed(k),
+                    " ",
                     self.sn(lab, k, "median_evaluations", ".4g"),
                     " evaluations and ",
                     self.sn(lab, k, "median_time", unit="ms"),
                     "; " if i < len(exact_free) - 1 else "",
                 )
-            answer += (
-                # (its times are Python's: the evaluations, not the times, compare methods)
-                sentence(", and, run from Python, ")
-                + self.overruns(lab, exact_free, rows, named=False)
-                if len(exact_free) == 1
-                else sentence("; ") + self.overruns(lab, exact_free, rows)
-            )
+            # (their times are Python's: the evaluations, not the times, compare methods)
+            answer += sentence("; ") + self.overruns(lab, exact_free, rows)
+        if exact_free:
             twin = rows.get(LIKE_FOR_LIKE)
             if twin and exact_answer(twin.max_abs_gap, twin.max_violation):
                 # the same formulation, a gradient-based method: the gap is the method's
+                whose = f"{exact_free[0]}'s" if len(exact_free) == 1 else "their"
                 answer += sentence(
-                    f". SLSQP on it ({LIKE_FOR_LIKE}) needs ",
+                    f". On that program slsqp ({LIKE_FOR_LIKE}) needs ",
                     self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                    ": the many evaluations come from the method, not the program",
+                    f": {whose} many evaluations come from the method, not the program",
                 )
             if inexact_free:
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]
@@ -156,7 +164,8 @@ class Solvers(StoryBase):
                     else sentence(". The others are inexact")
                 )
                 answer += self.budget_stops(lab, free, rows)
-            answer += self.seed_spread(lab, rows) + sentence(".")
+            # the spread over seeds on the page only (readings asked for the room in the paper)
+            answer += sentence(PageOnly(tuple(self.seed_spread(lab, rows))), ".")
         elif inexact_free:
             answer += sentence("Every gradient-free method is inexact (")
             for i, k in enumerate(inexact_free):
@@ -226,9 +235,12 @@ class Solvers(StoryBase):
                 p += sentence(  # (exact: rho exceeds the largest multiplier, data-checked)
                     ", short of its exact penalty's minimum",
                 )
-            p += sentence("; ")
-        p += sentence("in closed loop " if violators else "In closed loop ")
-        p += self.closed_loop_arrivals(free, rows)
+            p += sentence(". ")
+        # the closed loops' arrivals on the page only: the paper's Table III goal column shows
+        # them (its four pages had no line to spare)
+        p += sentence(
+            PageOnly(tuple(sentence("In closed loop ") + self.closed_loop_arrivals(free, rows)))
+        )
         sec.answer = answer + p  # the recommendation closes the paper (conclusion)
         return sec
 
@@ -360,13 +372,13 @@ class Solvers(StoryBase):
         table = Table(
             "solvers",
             sentence(
-                f"The {len(rows)} solvers on the same ",
+                f"{len(rows)} solvers on ",
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs (evenly spaced, least dexterous included). ",
                 Unit("ms"),
-                ": median cold time, from Python (*: compiled loop); it./ev.: median "
+                ": median cold time from Python (*: compiled loop); it./ev.: median "
                 "iterations, evaluations (–: none",
                 *(  # a trust-region method's short steps: iterations that evaluate nothing
                     ("; ", ", ".join(skip), ": not every iteration evaluates")
@@ -381,16 +393,16 @@ class Solvers(StoryBase):
                 ),
                 "); gap, viol.: largest ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
-                " and bound violation (0: below ",
+                ", bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
-                "; exact: both at most ",
-                Math(f"10^{{{EXACT_EXP}}}", f"10<sup>−{-EXACT_EXP}</sup>"),
-                "); over: programs over the period ",
+                "; exact: both ",
+                Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
+                "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                "; goal: closed-loop arrival, solve time not charged",
+                " period; goal: closed-loop arrival (solve time not charged)",
                 *(
                     (
-                        f"; the stochastic {'ones' if len(seeded) > 1 else 'one'}: seed 0 of 0–{SEEDS - 1}",
+                        f"; {'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1}",
                     )
                     if (seeded := [k for k in rows if k in SEEDED])
                     else ()
@@ -407,7 +419,7 @@ class Solvers(StoryBase):
                 sentence("goal (s)"),
             ],
             align="lrrrrrr",
-            font="scriptsize" if len(rows) > 8 else "footnotesize",  # 7 pt fits a column
+            font="scriptsize",  # as Tables I-III
             colsep=1.6,  # the widest cells: a 3.4e-8 gap and a 0.099 violation
         )
         for family in Family:

@@ -92,10 +92,10 @@ class Tables(Claims):
             "α*<i>v</i><sub>d</sub>" if scaled else "<i>v</i><sub>d</sub>"
         )
         if slack:
-            task_tex += r",\ \delta\in D"
+            task_tex += r",\,\delta\in D"
             task_htm += ", δ ∈ <i>D</i>"
         if TermKind.VELOCITY_BOX in kinds or TermKind.DAMPER in kinds:
-            task_tex += r",\ \dot q\in B"
+            task_tex += r",\,\dot q\in B"
             task_htm += ", <i>q̇</i> ∈ <i>B</i>"
         for kind in kinds:
             if kind in self.ROWS:
@@ -109,7 +109,8 @@ class Tables(Claims):
         table = Table(
             "programs",
             sentence(
-                "Each task's programs, as built from each controller's terms (",
+                "Each task's programs (the brief's items; Task 1: three links, Task 2: two), "
+                "as built from each controller's terms (",
                 Math("B", "<i>B</i>"),
                 ": (",
                 Eqs(("bounds",)),
@@ -119,22 +120,26 @@ class Tables(Claims):
                 Eqs(("scale",)),
                 ")).",
             ),
-            [sentence("controller"), sentence("minimise"), sentence("subject to")],
+            [sentence("task, ctrl."), sentence("minimise"), sentence("subject to")],
             align="lll",
             font="scriptsize",
-            colsep=3.0,
+            colsep=1.5,
+            placement="b",  # under the formulation's first column, beside what it writes out
         )
-        for task, title in (
-            ("task1", "Task 1 (three links): 1.1 UC, 1.2 C"),
-            ("task2", "Task 2 (two links): 2.1 C, 2.2 UC"),
+        # the brief's items in its order, each with its pair (no heading rows: two lines saved)
+        for task, item, names in (
+            ("task1", "1.1", (Name.UC_IVKC, Name.UC_EMDM)),
+            ("task1", "1.2", (Name.C_IVKC, Name.C_EMDM)),
+            ("task2", "2.1", (Name.C_IVKC, Name.C_EMDM)),
+            ("task2", "2.2", (Name.UC_IVKC, Name.UC_EMDM)),
         ):
-            table.rows.append([sentence(title)])
-            for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
-                table.rows.append(self.program_row(task, name))
+            for name in names:
+                row = self.program_row(task, name)
+                table.rows.append([sentence(f"{item} ", *row[0]), *row[1:]])
         self.tables["programs"] = table
         for s in sections:
-            if s.key == "task1":  # floats to the top of page 2, over Table II
-                s.tables.insert(0, "programs")
+            if s.key == "formulation":
+                s.tables.append("programs")
 
     def outcome_table(self, sections: list[Section]) -> None:
         header = [

@@ -273,12 +273,13 @@ class Task1(StoryBase):
             )
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
-        answer = sentence(
-            "The fronts (",
-            Ref("fig", "pareto"),
-            ") show what the weights buy. At ",
+        answer = sentence(  # (no topic sentence: "the fronts show what the weights buy" said
+            # nothing the numbers do not, a copy editor found)
+            "At ",
             K_EQ,
-            "0, raising ",
+            "0 (",
+            Ref("fig", "pareto"),
+            "), raising ",
             RATIO,
             " from 0 to ",
             self.d.num(PARETO_RECORD, "ratios", -1, fmt=".0e"),
@@ -300,7 +301,7 @@ class Task1(StoryBase):
             if e0 > 0
             else Text("little"),
             *(
-                (" effort over the effort-minimal optimum (ratio 0) at ", K_EQ, "0")
+                (" effort over the effort-minimal optimum at ", K_EQ, "0")
                 if en >= e0
                 else (" effort",)
             ),
@@ -314,9 +315,8 @@ class Task1(StoryBase):
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
-                " (of ",
+                ", over a minimum of ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
-                ")",
             )
         answer += sentence(".")
         answer += self.whole_runs_levelled()
@@ -463,15 +463,15 @@ class Task1(StoryBase):
         return sentence(
             " Over whole runs (",
             Ref("fig", "pareto"),
-            ", right) ",
+            ", right)",
             *(
-                ("the mean ", M_SYM, " levels off at the nominal ratio. Larger")
+                (" the mean ", M_SYM, " levels off at the nominal ratio. Where UC-EMDM arrives,")
                 if gain < 0.01
-                else ("larger",)
+                else (", where UC-EMDM arrives,",)
             ),
-            " ratios that still arrive ",
+            " larger ratios ",
             *more,
-            " UC-EMDM's mean ",
+            " its mean ",
             M_SYM,
             " but raise its effort from ",
             self.gridn("UC-EMDM", n, "total_effort", fmt=".3g"),
@@ -488,18 +488,18 @@ class Task1(StoryBase):
         fallbacks = self.mv(t, Name.UC_EMDM, "fallback_steps") + self.mv(
             t, Name.C_EMDM, "fallback_steps"
         )
-        answer = sentence(
-            "The custom active-set solver certified its optimum at every step of UC-EMDM (",
+        answer = sentence(  # (one fact per clause: a reader stalled on four parentheses)
+            "The custom active-set solver certified its optimum at all ",
             self.mt(t, Name.UC_EMDM, "steps", "d"),
-            " steps, largest relative KKT residual ",
-            self.mt(t, Name.UC_EMDM, "max_kkt_residual", ".2g"),
-            ") and C-EMDM (",
+            " steps of UC-EMDM and all ",
             self.mt(t, Name.C_EMDM, "steps", "d"),
-            ", ",
+            " of C-EMDM, with largest relative KKT residuals of ",
+            self.mt(t, Name.UC_EMDM, "max_kkt_residual", ".2g"),
+            " and ",
             self.mt(t, Name.C_EMDM, "max_kkt_residual", ".2g"),
-            "; accepted up to ",
+            " (limit ",
             Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
-            "): the fallback (daqp, then quadprog) ",
+            "). The fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
             answer += sentence("was never used.")
@@ -509,7 +509,7 @@ class Task1(StoryBase):
                 self.mt(t, Name.UC_EMDM, "fallback_steps", "d"),
                 " and ",
                 self.mt(t, Name.C_EMDM, "fallback_steps", "d"),
-                " of them.",
+                " of those steps.",
             )
         sec.answer = answer
         self.answers.append(
@@ -563,27 +563,13 @@ class Task1(StoryBase):
                 f" bounds active, {fixed} needed). Active-set methods can cycle there; ours "
                 "uses Bland's rule",
             )
-        if "median_iterations_scaled" in ch.get("admm", {}):
-            p += sentence(
-                ". First-order ADMM needs a median of ",
-                self.d.num(
-                    lab, "challenges", "solvers", "admm", "median_iterations_scaled", fmt=".4g"
-                ),
-                " iterations there against ",
-                self.d.num(
-                    lab, "challenges", "solvers", "admm", "median_iterations_unscaled", fmt=".4g"
-                ),
-                " elsewhere",  # (the lab's records; Fig. 6 draws one program, not the medians)
-            )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
         notes = lab1.notes if lab1 else {}
         qp = rows.get("quadprog")
         if qp and qp.failures:  # the fallback's last resort: said (reading 142), if unused
-            p += sentence(
-                ", and quadprog, the last fallback, declines "
-                if "median_iterations_scaled" in ch.get("admm", {})
-                else ". The last fallback, quadprog, declines ",
+            p += sentence(  # (ADMM's iterations there: Fig. 6 draws them, reading 141)
+                ". The last fallback, quadprog, declines ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of the ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
