@@ -1287,3 +1287,20 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()
     assert not by_term and "effort and" in abstract and "the term adds" not in share
+
+
+def test_page_only_words_are_on_the_page_and_not_in_the_paper(quick_report):
+    """A PageOnly segment prints on the page and nowhere in the LaTeX (the paper has no room
+    for it); it holds no reference (the paper numbers references over its own sentences). The
+    seeds' spread and the closed loops' arrivals are such words: on the page, not the paper."""
+    from emdm.outputs.report.trace import PageOnly, Ref, Text, render_html, render_latex
+
+    seg = PageOnly((Text("over seeds 0–4"),))
+    assert render_html([Text("a"), seg]) == "aover seeds 0–4" and render_latex([seg]) == ""
+    assert seg.plain() == "over seeds 0–4"
+    with pytest.raises(ValueError, match="no reference"):
+        PageOnly((Ref("tab", "solvers"),))
+    page = (quick_report / "index.html").read_text(encoding="utf-8")
+    paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    for words in ("In closed loop ",):
+        assert words in page and words not in paper
