@@ -366,6 +366,9 @@ class Pitch:
                     s.uc_term_gain(),
                     " to ",
                     M_SYM,
+                    " for ",
+                    s.uc_term_cost(),
+                    " effort",
                 )
             )
         return out

@@ -541,7 +541,9 @@ class Task2(Claims):
                 self.uc_term_gain(),
                 " to ",
                 M_SYM,
-                ".",
+                " for ",
+                self.uc_term_cost(),
+                " effort.",
             )
         else:
             out += sentence(".")
