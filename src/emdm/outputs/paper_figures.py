@@ -1548,7 +1548,7 @@ def effort_figure(
             ax_m.plot(run.t, run.m, **st)
             if outside:
                 axes[2].plot(run.t, over, **st)
-        ax_e.set_ylabel(r"effort so far $\sum E\Delta t$ (rad$^2$/s)")
+        ax_e.set_ylabel(r"effort so far (rad$^2$/s)")  # (the sum's symbol: taller than the axes)
         ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
         if outside:
             axes[2].set_ylabel("past a joint limit (rad)")
@@ -1816,13 +1816,13 @@ def policy_figure(
                     label=policy,
                 )
             )
-        fig.legend(
+        fig.legend(  # two columns (the controllers, the policies): one row ran past the edge
             handles=handles,
             loc="outside upper center",
-            ncols=len(handles),
+            ncols=2,
             fontsize=medium.tiny,
             frameon=False,
-            columnspacing=0.6,
+            columnspacing=1.0,
             handlelength=1.0,
             handletextpad=0.3,
         )

@@ -402,7 +402,7 @@ def _story_figures(stage: Path) -> list[str]:
     policy = policy_runs(t1, stage / "data" / "evidence.json")
     if policy:
         stem = stage / SLIDE_FIGURES / "task1-policy"
-        out.append(str(pf.policy_figure(policy, stem, height=2.05)))
+        out.append(str(pf.policy_figure(policy, stem, height=2.25)))
     bars = evidence_bars(t2, stage / "data" / "evidence.json")
     if len(bars) > 2:  # the two as run, and at least one run with a cause changed
         max_time = t2[Name.C_EMDM].scenario.motion.max_time
