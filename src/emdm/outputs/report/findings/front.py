@@ -159,8 +159,7 @@ class Front(Claims):
         p = sentence(
             "On the redundant arm EMDM keeps IVKC's tracking and trades effort for "
             "manipulability through null-space motion. On the non-redundant arm the slack, not the "
-            "dexterity term, decides: it lets C-EMDM leave a straight line that the joint "
-            "limits block, where task scaling stalls C-IVKC. ",
+            "dexterity term, gets C-EMDM past the joint limits. ",
         )
         gains = self.slack_gains()
         if gains:
@@ -180,8 +179,10 @@ class Front(Claims):
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(
             "For programs this small, certified active-set QP solvers are the right tool, "
-            "not gradient-free ones",
+            "not gradient-free ones. ",
         )
-        p += sentence(".")
+        p += sentence(  # what the study does not show (reading 145: no limitations said)
+            "Limits: two planar arms, one goal each, kinematics only, Python timings."
+        )
         sec.paragraphs.append(p)
         return sec
