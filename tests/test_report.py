@@ -1239,13 +1239,13 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
         return "".join(p.plain() for p in Story(Data(root)).abstract())
 
     said = abstract()
-    assert "IVKC stalls under our choice, task scaling" in said
+    assert "IVKC stalls under the task scaling we chose" in said
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
     assert ("both arrive, IVKC first" in said) == first
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "free slack instead, IVKC arrives." in said and "both arrive" not in said
+    assert "with a free slack instead, IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):

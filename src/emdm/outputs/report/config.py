@@ -156,10 +156,10 @@ TASKS = ("task1", "task2")
 PAIRS = {"UC": (Name.UC_IVKC, Name.UC_EMDM), "C": (Name.C_IVKC, Name.C_EMDM)}
 """Each pair as (IVKC, EMDM): the brief compares them pair by pair."""
 
-FOURTH_PANEL: dict[str, str | None] = {"task1": None, "task2": "gap"}
-"""Each task's fourth panel in its pair figures: none for Task 1 (its task is imposed: the
-distance to the goal, panel (c), is the tracking; readings 140 and 141 wanted its three panels
-wider rather than a fourth, the tip paths), Task 2's tracking gap (its slack at work)."""
+FOURTH_PANEL: dict[str, str | None] = {"task1": "path", "task2": "gap"}
+"""Each task's fourth panel in its pair figures: Task 1's tip paths in the plane (its task is
+imposed: the tracking overlaid; readings 144 and 147 missed an x-y view after readings 140 and
+141 had it cut for width), Task 2's tracking gap (its slack at work)."""
 
 
 @dataclass(frozen=True)

@@ -312,6 +312,9 @@ class Pitch:
             " later (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
+            "), of a near-zero effort (",
+            # the percentage's base (reading 146: a bar without its base overstates the cost)
+            self.s.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             ")",
         )
 

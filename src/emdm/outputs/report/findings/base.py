@@ -436,9 +436,7 @@ class StoryBase:
             " (log; dotted: the tolerance), ",
         )
         if path:
-            out += sentence(
-                "(d) tip paths (y stretched; dotted: the straight line; dot: start, star: goal), "
-            )
+            out += sentence("(d) tip paths (dotted: the straight line), ")
         out += sentence(
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted"

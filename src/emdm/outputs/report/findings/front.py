@@ -28,12 +28,12 @@ class Front(Claims):
             # the body has the times; the abstract says who arrives and in which order
             out += sentence(
                 "On a two-link arm with limits, a slack lets EMDM leave the blocked straight line "
-                "and reach the goal, while IVKC stalls under our choice, task scaling",
+                "and reach the goal, while IVKC stalls under the task scaling we chose",
             )
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "; given a free slack instead, ",
+                    "; with a free slack instead, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                 )
@@ -112,7 +112,7 @@ class Front(Claims):
             ". A non-redundant arm can only trade tracking for dexterity through a "
             "task slack. As in",
             Cite("haviland"),
-            ", we solve one strictly convex quadratic program (QP) per step by our "
+            ", we solve one strictly convex quadratic program (QP) per step, here by our own "
             "KKT-certified active-set method. We compare this controller, EMDM, with IVKC, each "
             "unconstrained (UC-) or with joint limits (C-). We coded both from the brief's "
             "definitions (its code was unavailable)",

@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
-from ..trace import Eqs, Math, Ref, Segment, Sentence, Text, Unit, sentence
+from ..trace import Eqs, Math, PageOnly, Ref, Segment, Sentence, Text, Unit, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -63,18 +63,21 @@ class Task1(StoryBase):
             self.pct(t, emdm, ivkc, "total_effort"),
             f") and tracks the goal as {ivkc} does. ",
         )
+        # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
+        # paths when drawn (reading 146: (c) shows the distance to the goal, not the gap)
+        where = sentence(" (", Ref("fig", "t1-uc"), "(c))")
         if same_time and self.mv(t, emdm, "reached"):
-            answer += sentence("Both reach it in ", self.ttg(t, emdm))
+            answer += sentence("Both reach it in ", self.ttg(t, emdm), *where)
         else:
             answer += sentence(
-                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc)
+                f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc), *where
             )
         answer += sentence(
             "; at each step their tips are at most ",
             gap,
-            " apart (",
-            Ref("fig", "t1-uc"),
-            "(c), (d))." if FOURTH_PANEL[t] == "path" else "(c)).",
+            " apart",
+            *((" (", Ref("fig", "t1-uc"), "(d))") if FOURTH_PANEL[t] == "path" else ()),
+            ".",
         )
         sec.answer = answer
         self.answers.append(
@@ -87,11 +90,19 @@ class Task1(StoryBase):
         sec.figures.append(self.figure("t1-uc", "figures/task1-UC", self.pair_caption(t, "UC")))
         # why the tracking is the same
         p = sentence(
-            "Both impose ",
-            Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-            " exactly, so their tips differ only through the Euler steps' ",
-            Math(r"O(\Delta t^2)", "<i>O</i>(Δ<i>t</i><sup>2</sup>)"),
-            " terms. Only null-space motion differs, ",
+            # why the tips stay together: on the page (Fig. 1(d) overlays them in the paper)
+            PageOnly(
+                tuple(
+                    sentence(
+                        "Both impose ",
+                        Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
+                        " exactly, so their tips differ only through the Euler steps' ",
+                        Math(r"O(\Delta t^2)", "<i>O</i>(Δ<i>t</i><sup>2</sup>)"),
+                        " terms. ",
+                    )
+                )
+            ),
+            "Only null-space motion differs, ",
             Math(
                 r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
                 "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
@@ -473,7 +484,7 @@ class Task1(StoryBase):
             *more,
             " its mean ",
             M_SYM,
-            " but raise its effort from ",
+            " but raise its total effort from ",
             self.gridn("UC-EMDM", n, "total_effort", fmt=".3g"),
             " to ",
             self.gridn("UC-EMDM", dearest, "total_effort", fmt=".3g", unit="rad²/s"),
