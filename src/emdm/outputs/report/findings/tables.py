@@ -112,11 +112,11 @@ class Tables(Claims):
                 "Each task's programs (the brief's items; Task 1: three links, Task 2: two), "
                 "as built from each controller's terms (",
                 Math("B", "<i>B</i>"),
-                ": (",
+                ": the speed box (",
                 Eqs(("bounds",)),
                 "); ",
                 Math(r"\alpha^*", "α*"),
-                ": (",
+                ": the task scale (",
                 Eqs(("scale",)),
                 ")).",
             ),
