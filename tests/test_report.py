@@ -1288,7 +1288,7 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
         assert f"slack alone gives {alone:+.0f}% effort" in abstract.replace("−", "-")
         assert f"for {cost:+.0f}% effort" in abstract and f"for {cost:+.0f}% effort" in share
     assert ("the term adds" in share) == by_term
-    assert share.startswith("Without the dexterity term (E6) UC-EMDM ")
+    assert share.startswith("Without the dexterity term, UC-EMDM ") and "(E6)" in share
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()

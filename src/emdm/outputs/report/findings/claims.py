@@ -86,8 +86,8 @@ class Claims(StoryBase):
             return []
         return sentence(  # (the run's label first: "E4: ..." read as a noun, reading 142's edit)
             "without the dexterity term",
-            *((" (", run_label(key), "),") if label else ()),
-            " C-EMDM arrives sooner, in ",
+            *((" (", run_label(key), ")") if label else ()),
+            ", C-EMDM arrives sooner, in ",
             self.evid_goal(key, Name.C_EMDM),
         )
 

@@ -112,7 +112,7 @@ class Front(Claims):
             ". A non-redundant arm can only trade tracking for dexterity through a "
             "task slack. As in",
             Cite("haviland"),
-            ", we solve one strictly convex quadratic program (QP) per step, here by our own "
+            ", we solve one strictly convex quadratic program (QP) per step, here by our "
             "KKT-certified active-set method. We compare this controller, EMDM, with IVKC, each "
             "unconstrained (UC-) or with joint limits (C-). We coded both from the brief's "
             "definitions (its code was unavailable)",

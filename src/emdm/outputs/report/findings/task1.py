@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
-from ..trace import Eqs, Math, PageOnly, Ref, Segment, Sentence, Text, Unit, sentence
+from ..trace import Eqs, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -52,16 +52,16 @@ class Task1(StoryBase):
             "m",
         )
         # the result first, then how closely the two track
-        answer = sentence(
-            f"{emdm} raises the mean manipulability by ",
+        answer = sentence(  # the trade last, where it gets the stress (a copy editor's order)
+            f"{emdm} tracks the goal as {ivkc} does but raises the mean manipulability by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
-            " (",
-            self.mt(t, emdm, "mean_manipulability", ".3f"),
-            " against ",
-            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
-            f") for {self.more_less(t, emdm, ivkc, 'total_effort')} effort (",
+            ", from ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f"),
+            " to ",
+            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+            ", for ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            f") and tracks the goal as {ivkc} does. ",
+            " effort. ",
         )
         # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
         # paths when drawn (reading 146: (c) shows the distance to the goal, not the gap)
@@ -102,28 +102,32 @@ class Task1(StoryBase):
                     )
                 )
             ),
-            "Only null-space motion differs, ",
+            "EMDM adds only null-space motion: ",
             Math(
                 r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
                 "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
                 "<i>w</i><sub>E</sub>)(<i>I</i> − <i>J</i><sup>+</sup><i>J</i>)<i>J</i><sub>m</sub>",
             ),
-            " for EMDM: with ",
+            ". With ",
             W_M,
-            " = 0 (",
-            run_label("t1-uc-no-manip"),
-            "), ",
+            " = 0, ",
         )
         ref = self.evid("t1-uc-no-manip", "reference")
         if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
-            p += sentence(f"{emdm} reproduces {ivkc} command for command. ")
-        else:
             p += sentence(
-                "the two differ by at most ",
+                f"{emdm} reproduces {ivkc} command for command (",
+                run_label("t1-uc-no-manip"),
+                "). ",
+            )
+        else:  # what the bound means: the two are one controller up to rounding
+            p += sentence(
+                "the commands agree to rounding error: within ",
                 self.evidn(
                     "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
                 ),
-                ". ",
+                " (",
+                run_label("t1-uc-no-manip"),
+                "). ",
             )
         p += sentence("Neither sees the limits: ")
         for name in (ivkc, emdm):
@@ -196,14 +200,14 @@ class Task1(StoryBase):
         # joints, which the two task equations fix: the reason is stated only when it holds
         if same and self.pair(t, "C", "coincide_determined_steps") == same:
             p = sentence(
-                "Both give the same first ",
-                self.pairn(t, "C", "coincide_steps", "d"),
-                " commands (to ",
+                "Up to ",
                 T_EQ,
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                "; ",
+                ", both give the same ",
+                self.pairn(t, "C", "coincide_steps", "d"),
+                " commands, ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " scaled): at each, the joints at bounds allow the task only one solution",
+                " scaled: at each, the joints at bounds allow the task only one solution",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -304,29 +308,25 @@ class Task1(StoryBase):
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
             ". ",
         )
-        answer += sentence("The nominal ratio costs ")
+        answer += sentence("The nominal ratio adds ")
         e0 = self.front("UC-EMDM", 0, "zero_E")
         en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(
             self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
             if e0 > 0
             else Text("little"),
-            *(
-                (" effort over the effort-minimal optimum at ", K_EQ, "0")
-                if en >= e0
-                else (" effort",)
-            ),
+            *((" to the minimal effort at ", K_EQ, "0") if en >= e0 else (" to the effort",)),
         )
         i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
             answer += sentence(
-                ", but up to ",
+                " but up to ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
                 " at ",
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
-                ", over a minimum of ",
+                ", where the minimum is only ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
         answer += sentence(".")
@@ -408,7 +408,7 @@ class Task1(StoryBase):
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
                 " UC-EMDM misses the goal (",
                 run_label(GRID_MISS),
-                "): at ",
+                "): at a peak joint speed of ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                 " a ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
@@ -421,16 +421,13 @@ class Task1(StoryBase):
                 p += sentence(
                     "With ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " it arrives (",
-                    run_label(FINER_STEP),
-                    ") but spends ",
-                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g"),
+                    " it arrives, spending ",
+                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
                     " against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
-                    " ",
-                    Unit("rad²/s"),
-                    " with nominal weights: the step size causes the miss, the weights the "
-                    "extra effort. ",
+                    " at nominal weights (",
+                    run_label(FINER_STEP),
+                    "). The step size causes the miss; the weights cause the extra effort. ",
                 )
             break
         if p:
@@ -500,20 +497,20 @@ class Task1(StoryBase):
             t, Name.C_EMDM, "fallback_steps"
         )
         answer = sentence(  # (one fact per clause: a reader stalled on four parentheses)
-            "The custom active-set solver certified its optimum at all ",
+            "The custom active-set solver certified the optimum at all ",
             self.mt(t, Name.UC_EMDM, "steps", "d"),
-            " steps of UC-EMDM and all ",
+            " UC-EMDM and all ",
             self.mt(t, Name.C_EMDM, "steps", "d"),
-            " of C-EMDM, with largest relative KKT residuals of ",
+            " C-EMDM steps; the largest relative KKT residuals, ",
             self.mt(t, Name.UC_EMDM, "max_kkt_residual", ".2g"),
             " and ",
             self.mt(t, Name.C_EMDM, "max_kkt_residual", ".2g"),
-            " (limit ",
+            ", lie far below the ",
             Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
-            "). The fallback (daqp, then quadprog) ",
+            " limit. The fallback (daqp, then quadprog) ",
         )
         if fallbacks == 0:
-            answer += sentence("was never used.")
+            answer += sentence("never ran.")
         else:
             answer += sentence(
                 "answered ",
@@ -571,7 +568,7 @@ class Task1(StoryBase):
                     if high > low
                     else ()
                 ),
-                f" bounds active, {fixed} needed). Active-set methods can cycle there; ours "
+                f" bounds active where {fixed} fix it). Active-set methods can cycle there; ours "
                 "uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
@@ -582,9 +579,9 @@ class Task1(StoryBase):
             p += sentence(  # (ADMM's iterations there: Fig. 6 draws them, reading 141)
                 ". The last fallback, quadprog, declines ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
-                " of the ",
+                " of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved programs",
+                " re-solved Task 1 programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 p += sentence(", all scaled")

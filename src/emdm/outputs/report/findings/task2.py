@@ -43,7 +43,7 @@ class Task2(Claims):
             self.ev("task2", emdm, "singular", "t", fmt=".2f", unit="s"),
         )
 
-    def common_mean(self, key: EvidenceKey) -> tuple[Segment | str, ...]:
+    def common_mean(self, key: EvidenceKey, lead: str = ", or ") -> tuple[Segment | str, ...]:
         """``, or 0.121 over 0-13.15 s``: the nominal run's mean m over the time the
         shorter evidence run lasts (each run's own mean covers its own horizon), when the
         evidence run is the shorter one (empty otherwise)."""
@@ -54,7 +54,7 @@ class Task2(Claims):
         if not run or ref["common_until_t"] < run["final_time"]:
             return ()  # the nominal is the shorter: its own mean is over the common time
         return (
-            ", or ",
+            lead,
             self.evidn(key, "reference", "mean_m_common", "reference", fmt=".3f"),
             " over 0–",
             self.evidn(key, "reference", "common_until_t", fmt=".2f", unit="s"),
@@ -268,30 +268,34 @@ class Task2(Claims):
                 *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
                 ") lets ",
                 emdm,
-                " leave the line: its path is ",
+                " leave the line: its ",
                 self.ev(t, emdm, "path_length", fmt=".2f", unit="m"),
-                " long, ",
+                " path, ",
                 self.ev(t, emdm, "detour", fmt=".0%"),
-                " longer than the line. ",
+                # why longer (a copy editor's "so what"): around the disc it cannot enter
+                " longer, detours around the blocked disc. "
+                if geo is not None and geo.line_blocked
+                else " longer than the line. ",
             )
             pins = self.evv(t, emdm, "pinned")
             if pins:
-                p += sentence(
-                    "Joint ",
-                    self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
-                    f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                p += sentence(  # (two sentences: "it" read as the joint, reading 147's edit)
+                    "From ",
                     self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
                     " to ",
                     self.ev(t, emdm, "pinned", 0, "t_last", fmt=".2f", unit="s"),
-                    " while the arm stretches; ",
+                    ", joint ",
+                    self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
+                    f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound while the arm "
+                    "stretches. ",
                 )
             flips = self.evv(t, emdm, "singular", "elbow_flips")
             if flips:
                 p += sentence(
-                    "at ",
+                    "At ",
                     T_EQ,
                     self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
-                    " it passes the singular stretched configuration (",
+                    " the arm passes through the singular stretched configuration (",
                     *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
                     ", ",
                     *eq(COND_J, self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g")),
@@ -337,12 +341,12 @@ class Task2(Claims):
         if e6.get("reached") and reached_e:
             if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
                 higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
-                p += cap(self.emdm_without_term()) + sentence(
+                p += cap(self.emdm_without_term(label=not higher)) + sentence(
                     *(
-                        (
+                        (  # the run's label after its numbers, the nominal's means said as such
                             ", with a higher mean ",
                             M_SYM,
-                            ": ",
+                            ", ",
                             self.evidn(
                                 "t2-c-emdm-no-manip",
                                 "runs",
@@ -351,9 +355,12 @@ class Task2(Claims):
                                 fmt=".3f",
                                 unit="m²",
                             ),
-                            ", against the nominal run's ",
+                            " (",
+                            run_label("t2-c-emdm-no-manip"),
+                            "); the nominal run averages ",
                             self.mt(t, emdm, "mean_manipulability", ".3f"),
-                            *self.common_mean("t2-c-emdm-no-manip"),
+                            " overall" if self.common_mean("t2-c-emdm-no-manip") else "",
+                            *self.common_mean("t2-c-emdm-no-manip", lead=", "),
                             ". On this arm the term does not raise ",
                             M_SYM,
                             *(
@@ -409,18 +416,19 @@ class Task2(Claims):
             " mean ",
             M_SYM,
             " is ",
-            self.mt(t, emdm, "mean_manipulability", ".3f"),
-            # a stalled arm's m is frozen: said so (E4 above is the moving, like-for-like one)
-            f" against the stalled {ivkc}'s " if not reached_i and not same else f", {ivkc}'s ",
-            self.mt(t, ivkc, "mean_manipulability", ".3f", "m²"),
-            " (",
+            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
+            ", ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
+            # a stalled arm's m is frozen: said so (E4 above is the moving, like-for-like one)
+            f" against the stalled {ivkc}'s "
+            if not reached_i and not same
+            else f" against {ivkc}'s ",
+            self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                ("; the same over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
+                (", also over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
                 if same and not reached_i
                 else ()
             ),
-            ")",
         )
         if crosses and not same:  # the stall's tail changes the means: the common window's too
             p += sentence(
@@ -522,22 +530,23 @@ class Task2(Claims):
             return []
         saves = run["total_effort"] < self.mv(t, ivkc, "total_effort")
         out = sentence(
-            "Without the dexterity term (",
-            run_label(key),
-            f") {emdm} ",
+            f"Without the dexterity term, {emdm} ",
             "still" if saves else "no longer",
-            " saves effort (",
+            " saves effort, ",
             self.evidn(key, "runs", emdm, "total_effort", fmt=".2f"),
             " against ",
             self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
-            ") at mean ",
+            ", at mean ",
             M_SYM,
             " ",
             self.evidn(key, "runs", emdm, "mean_manipulability", fmt=".3f"),
+            " (",
+            run_label(key),
+            ")",
         )
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ": the slack saves the effort, the term adds ",
+                ": the slack saves effort; the term adds ",
                 self.uc_term_gain(),
                 " to ",
                 M_SYM,
@@ -594,7 +603,7 @@ class Task2(Claims):
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
                 ", yet the active-set solver needs ",
                 "no fallback and, " if self.mv(t, emdm, "fallback_steps") == 0 else "",
-                "warm-started, a median of ",
+                "warm-started, a median ",
                 self.ev(t, emdm, "solver", "median_iterations", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations", fmt=".0f"),
