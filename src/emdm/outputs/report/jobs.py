@@ -527,7 +527,9 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     panels = [
         panel
         for rel, count in (
-            (f"data/task1-lab-{Name.C_EMDM}/histories.json", "iteration"),
+            # Task 1.1's controller: the brief asks its custom solver's convergence (readings
+            # 144, 146, 149: C-EMDM's first program, a scaled single point, read as trivial)
+            (f"data/task1-lab-{Name.UC_EMDM}/histories.json", "iteration"),
             (f"data/task2-lab-{Name.C_EMDM}/histories.json", "evaluations"),
         )
         if (stage / rel).exists() and (panel := convergence_panel(load(rel), count)) is not None

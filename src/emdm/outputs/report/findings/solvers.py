@@ -399,7 +399,7 @@ class Solvers(StoryBase):
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: closed-loop arrival (solve time not charged)",
+                " period; goal: closed-loop arrival",
                 *(
                     (
                         f"; {'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1}",

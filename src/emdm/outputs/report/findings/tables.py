@@ -319,10 +319,10 @@ class Tables(Claims):
             "evidence",
             sentence(
                 "Evidence runs, each changing one thing in a nominal run (the nominal's "
-                "outcomes in brackets; stall: as in ",
+                "outcomes in brackets; stall as in ",
                 Ref("tab", "outcomes"),
                 MISS_NOTE,
-                "); ",
+                "). ",
                 Upright(run_label(GRID_MISS)),
                 " is from ",
                 Ref("fig", "pareto"),

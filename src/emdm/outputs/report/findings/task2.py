@@ -419,10 +419,9 @@ class Task2(Claims):
             self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
             ", ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
-            # a stalled arm's m is frozen: said so (E4 above is the moving, like-for-like one)
-            f" against the stalled {ivkc}'s "
-            if not reached_i and not same
-            else f" against {ivkc}'s ",
+            # a stalled arm's m is frozen: said so (reading 148: its free-slack run, Table II,
+            # is the arriving peer)
+            f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
                 (", also over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
