@@ -378,6 +378,46 @@ def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, dra
         pf.pair_figure(runs, tmp_path / "both", gap=True, path=True)
 
 
+def test_the_arms_figure_draws_each_runs_postures_path_and_ellipse(tmp_path, drawn):
+    """Task 1's stills in the paper: one panel per pair with both runs overlaid, each run's arm
+    at half its run and at its end (its joints' positions as the record gives them), its tip
+    path, and its manipulability ellipse at its end on the scale the animation uses."""
+    from emdm.outputs import paper_figures as pf
+    from emdm.outputs.animate import ellipse_points
+
+    sc = emdm.load_scenario("task1", {"motion.max_time": 3.0})
+    pairs = {
+        "UC": [emdm.simulate(sc, n) for n in ("UC-IVKC", "UC-EMDM")],
+        "C": [emdm.simulate(sc, n) for n in ("C-IVKC", "C-EMDM")],
+    }
+    with formats((".png",)):
+        pf.arms_figure(pairs, tmp_path / "arms")
+    axes = drawn[-1].axes
+    assert len(axes) == 2
+    arm = sc.planar_arm
+    for ax, runs in zip(axes, pairs.values(), strict=True):
+        lines = [line.get_xydata() for line in ax.get_lines()]
+        patches = [p.get_xy() for p in ax.patches]
+        assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+            r.controller.name for r in runs
+        ]
+        for run in runs:
+            for k in (round(run.steps / 2), run.steps):
+                posture = np.asarray(arm.joint_positions(run.q[k]))[:, :2]
+                assert any(x.shape == posture.shape and np.allclose(x, posture) for x in lines)
+            assert any(
+                x.shape == run.p[:, :2].shape and np.allclose(x, run.p[:, :2]) for x in lines
+            )
+            # the ellipse's shape at the end: its axes are the Jacobian's singular values
+            ell = next(
+                x for x in patches if np.allclose(x[:-1].mean(axis=0), run.p[-1, :2], atol=1e-9)
+            )
+            ref = ellipse_points(arm.jacobian(run.q[-1]), run.p[-1, :2], 1.0) - run.p[-1, :2]
+            drawn_shape = ell - run.p[-1, :2]
+            ratio = np.abs(drawn_shape).max() / np.abs(ref).max()
+            assert np.allclose(drawn_shape[: len(ref)], ratio * ref)
+
+
 def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     """The pitch's stills draw a stalled run until its stall, dated by Run.stalled_from (the
     paper's date), and say it is still from then on."""

@@ -263,12 +263,15 @@ def pair_figure(
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
-    height = (2.5 if n == 3 else 2.2) if medium is PAPER else 3.4
+    upper_row = gap or path  # four panels above: narrower, so taller to stay legible
+    height = ((2.5 if upper_row else 2.35) if n == 3 else 2.1) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
-        outer = fig.add_gridspec(2, 1, height_ratios=[1.25, 2.2 if n == 3 else 1.6])
+        outer = fig.add_gridspec(
+            2, 1, height_ratios=[1.25 if upper_row else 1.1, 2.2 if n == 3 else 1.6]
+        )
         upper = outer[0].subgridspec(1, 4 if gap or path else 3, wspace=0.12)  # labels clear
         # per joint: every run's lowest and highest speed, and the limit; a joint whose speed
         # goes far beyond its limit gets a strip cut at FAR_BEYOND times it
@@ -427,7 +430,7 @@ def workspace_figure(
     reach = geometry["reach"]
     inner = geometry["inner_reach"]
     width = medium.column if medium is PAPER else 3.9  # on a slide: 0.62 of its width
-    height = 1.42 if medium is PAPER else 3.3
+    height = 1.3 if medium is PAPER else 3.3
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         ax.add_patch(Circle((0, 0), reach, color="#BBBBBB", alpha=0.25, linewidth=0))
@@ -1690,6 +1693,108 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
                 fontsize=medium.font,
                 color="#444444",
             )
+    return stem
+
+
+def arms_figure(
+    pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium = PAPER, marks: int = 2
+) -> Path:
+    """Animation stills of a task's pairs, one panel per pair with its two runs overlaid: the
+    start arm (grey), each run's arm at ``marks`` instants after it (fainter earlier, its own
+    colour and dash), its tip path and its manipulability ellipse at its last state (the
+    animation's, on one scale for every panel), so that what tip-space plots cannot show, the
+    postures that null-space motion changes, is seen."""
+    runs = [r for pair in pairs.values() for r in pair]
+    sc = runs[0].scenario
+    arm = sc.planar_arm
+    biggest = max(
+        float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(r.q[-1]) @ arm.jacobian(r.q[-1]).T)[-1]))
+        for r in runs
+    )
+    scale = 0.16 * arm.reach / biggest if biggest > 0 else 1.0
+    width = medium.column if medium is PAPER else 4.4
+    height = 1.2 if medium is PAPER else 2.4
+    drawn: list[np.ndarray] = []
+    with _figure(stem, medium, width, height) as fig:
+        axes = fig.subplots(1, len(pairs), squeeze=False)[0]
+        for n, (ax, pair) in enumerate(zip(axes, pairs.values(), strict=True)):
+            start = _arm_points(pair[0], pair[0].q[0])  # cut at the frame: the view is the
+            # postures' (the start arm would halve their scale at column width)
+            ax.plot(
+                *start[:, :2].T,
+                color="#999999",
+                linewidth=medium.line,
+                marker="o",
+                markersize=2,
+                zorder=1,
+            )
+            for run in pair:
+                st = _style(run, medium)
+                stalled = run.stalled_from
+                last = stalled if stalled is not None else run.steps
+                for i in range(1, marks + 1):
+                    k = round(last * i / marks)
+                    pts = _arm_points(run, run.q[k])
+                    drawn.append(pts[:, :2])
+                    ax.plot(
+                        *pts[:, :2].T,
+                        color=st["color"],
+                        linestyle=st["linestyle"],
+                        linewidth=medium.line * (0.7 + 0.5 * i / marks),
+                        alpha=0.35 + 0.65 * i / marks,
+                        marker="o",
+                        markersize=1.8,
+                        zorder=2,
+                    )
+                ell = ellipse_points(arm.jacobian(run.q[last]), run.p[last, :2], scale)
+                drawn.append(ell)
+                ax.fill(*ell.T, color=st["color"], alpha=0.18, linewidth=0)
+                ax.plot(
+                    *ell.T,
+                    color=st["color"],
+                    linestyle=st["linestyle"],
+                    linewidth=0.6 * medium.line,
+                )
+                ax.plot(
+                    *run.p[: last + 1, :2].T,
+                    color=st["color"],
+                    linewidth=0.6 * medium.line,
+                    linestyle=":",
+                    zorder=3,
+                )
+            ax.plot(
+                *sc.motion.goal, marker="*", color="black", markersize=6, linestyle="none", zorder=4
+            )
+            ax.text(  # inside, in the corner the arms leave free: a title row cost the postures
+                0.97,
+                0.95,
+                f"({'abcd'[n]})",  # the legend names the pair
+                transform=ax.transAxes,
+                ha="right",
+                va="top",
+                fontsize=medium.small,
+                fontweight="bold",
+            )
+            ax.legend(  # in the corner the arms leave free (the start arm is cut at the right)
+                handles=[Line2D([], [], **_style(r, medium)) for r in pair],
+                loc="lower left",
+                fontsize=medium.tiny,
+                frameon=False,
+                handlelength=1.6,
+                labelspacing=0.2,
+                borderaxespad=0.2,
+            )
+            ax.set_aspect("equal")
+            ax.set_xlabel(r"$x$ (m)")
+            if n == 0:
+                ax.set_ylabel(r"$y$ (m)")
+        box = np.concatenate(drawn)
+        pad = 0.05 * arm.reach
+        for n, ax in enumerate(axes):  # one view for every pair
+            ax.set_xlim(box[:, 0].min() - pad, box[:, 0].max() + pad)
+            ax.set_ylim(box[:, 1].min() - pad, box[:, 1].max() + pad)
+            if n:
+                ax.tick_params(labelleft=False)
     return stem
 
 

@@ -156,10 +156,10 @@ TASKS = ("task1", "task2")
 PAIRS = {"UC": (Name.UC_IVKC, Name.UC_EMDM), "C": (Name.C_IVKC, Name.C_EMDM)}
 """Each pair as (IVKC, EMDM): the brief compares them pair by pair."""
 
-FOURTH_PANEL: dict[str, str | None] = {"task1": "path", "task2": "gap"}
-"""Each task's fourth panel in its pair figures: Task 1's tip paths in the plane (its task is
-imposed: the tracking overlaid; readings 144 and 147 missed an x-y view after readings 140 and
-141 had it cut for width), Task 2's tracking gap (its slack at work)."""
+FOURTH_PANEL: dict[str, str | None] = {"task1": None, "task2": "gap"}
+"""Each task's fourth panel in its pair figures: Task 2's tracking gap (its slack at work);
+Task 1's tip paths are drawn in the plane with the arms (``task1-arms``: readings 144-147
+missed an x-y view and the arms, readings 140, 141, 148 and 149 found a fourth panel too small)."""
 
 
 @dataclass(frozen=True)

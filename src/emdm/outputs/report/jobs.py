@@ -230,6 +230,7 @@ def _outcome(run: Any, done: dict[str, Any]) -> dict[str, Any]:
         "max_abs_qd": done["max_abs_qd"],
         "mean_manipulability": done["mean_manipulability"],
         "total_effort": done["total_effort"],
+        "scaled_steps": done["scaled_steps"],
     }
 
 
@@ -375,6 +376,13 @@ def _story_figures(stage: Path) -> list[str]:
         out.append(
             str(pf.workspace_figure(pair, geometry, stage / SLIDE_FIGURES / "workspace", pf.SLIDE))
         )
+    # Task 1's stills in the paper: both pairs' postures and tip paths (the pair figures show
+    # time series only)
+    arms = {
+        "unconstrained": [t1[Name.UC_IVKC], t1[Name.UC_EMDM]],
+        "constrained": [t1[Name.C_IVKC], t1[Name.C_EMDM]],
+    }
+    out.append(str(pf.arms_figure(arms, stage / PAPER_FIGURES / "task1-arms")))
     out.append(
         str(
             pf.manipulability_figure(

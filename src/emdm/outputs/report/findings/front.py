@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 from ....core.controllers import Name
-from ..config import PAIRS
 from ..document import Section
-from ..trace import Cite, File, Math, Sentence, sentence
+from ..trace import Cite, Math, Sentence, sentence
 from .base import (
     M_SYM,
 )
@@ -119,14 +118,7 @@ class Front(Claims):
             *self.derivatives_checked(),
             ".",
         )
-        anims = [a for a in (self.anim(t, g) for t in ("task1", "task2") for g in PAIRS) if a]
-        if anims:
-            last = anims[-1]
-            p = sentence(
-                "Animations: animations/ (e.g. ",
-                File(f"{last['task']}/{last['files'][-1]}"),
-            )
-            intro += sentence(" ") + p + sentence(").")  # one paragraph: a line saved
+        # the animations: named with their stills (Task 1's figure, Task 2's workspace)
         sec.paragraphs.append(intro)
         return sec
 

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 from ....core.controllers import CONTROLLERS, Name
 from ....core.terms import TermKind
 from ..document import Section, Table
-from ..trace import Eqs, Math, Ref, Sentence, Text, Unit, Upright, sentence
+from ..trace import Eqs, Math, Num, Ref, Sentence, Text, Unit, Upright, sentence
 from .base import (
     DT,
-    ERR,
     FINER_STEP,
     GRID_MISS,
     M_SYM,
@@ -20,15 +19,17 @@ from .base import (
     run_label,
 )
 from .claims import Claims
-from .records import EvidenceKey, MetricKey, RunOutcome
+from .records import EvidenceKey, GridKey, MetricKey, RunOutcome
 
-MISS_NOTE = Text("; miss: goal not reached")
-STALL_NOTE = "stall: at rest short of the goal"
+MISS_NOTE = Text("; miss: not reached")
+STALL_NOTE = "stall: at rest short of it"
 """What "stall" means in Tables I and II (a run's record has a stall event)."""
 """Table II's caption names a miss only where the table has one."""
 
 
 STALL, MISS = Text("stall"), Text("miss")
+INDENT = Math(r"\quad", "\u2003")
+"""Table II: an evidence run's row starts indented under the nominal run it changes."""
 
 
 def unreached(stalled: bool) -> Sentence:
@@ -142,16 +143,20 @@ class Tables(Claims):
                 s.tables.append("programs")
 
     def outcome_table(self, sections: list[Section]) -> None:
+        """Table II: every closed-loop run of the study, each evidence run (E1-E6) and free-slack
+        run indented under the nominal run it changes in one thing (readings 147-149: a separate
+        evidence table repeated the nominal runs and was read twice); the pitch's backup keeps
+        the nominal runs and the free-slack rows only (``outcomes-backup``)."""
         header = [
-            sentence("controller"),
+            sentence("run"),
             sentence("goal"),
             sentence("mean ", M_SYM),
             sentence(Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")),
             sentence("max ", Math(r"|\dot q|", "|<i>q̇</i>|")),
             sentence("scaled"),
         ]
-        # a run that stalls reads "stall", as in Table II (the text gives its distance); one
-        # that ends elsewhere without arriving gives its final error
+        # a run that stalls reads "stall" (the text gives its distance); one that ends elsewhere
+        # without arriving gives its final error
         missed = [
             (task, name)
             for task in ("task1", "task2")
@@ -159,40 +164,56 @@ class Tables(Claims):
             if not self.mv(task, name, "reached")
         ]
         drifted = [m for m in missed if not self.evv(*m, "stall")]
-        table = Table(
-            "outcomes",
-            sentence(
-                "Outcomes: time to goal (",
+
+        indented = sentence(
+            " Indented: one change to the run above (E1–E6: a cause tested; free slack: (",
+            Eqs(("free",)),
+            ") in place of scaling)",
+            *self.finer_note(),
+            ".",
+        )
+
+        def caption(evidence: bool) -> Sentence:
+            # (the arrival tolerance is the formulation's: "runs end at ||e|| < 1e-3 m")
+            return sentence(
+                "Closed-loop runs" if evidence else "Outcomes",
+                ": time to goal (",
                 Unit("s"),
-                "; ",
-                ERR,
-                " < ",
-                self.scn("task1", "motion", "tolerance", fmt=".0e", unit="m"),
                 *(("; " + STALL_NOTE,) if len(drifted) < len(missed) else ()),
+                *((MISS_NOTE,) if evidence and self.grid_miss() is not None else ()),
                 ")",
                 *((" or final error (m)",) if drifted else ()),
                 ", mean ",
                 M_SYM,
                 " (",
                 Unit("m²"),
-                "; over the run: to arrival or ",
+                ", to arrival or ",
                 self.scn("task1", "motion", "max_time", fmt="g", unit="s"),
                 "), effort (",
                 Unit("rad²/s"),
                 "), peak speed (",
                 Unit("rad/s"),
                 "), task-scaled steps.",
-            ),
+                *(indented if evidence else sentence()),
+            )
+
+        full = Table(
+            "outcomes",
+            caption(True),
             header,
             align="lrrrrr",
-            font="scriptsize",  # as Tables II and III: fourteen rows
+            font="scriptsize",
+            colsep=3.0,
         )
+        backup = Table("outcomes-backup", caption(False), header, align="lrrrrr")
         policy: dict[str, EvidenceKey] = {
             "task1": "t1-c-slack-policy",
             "task2": "t2-c-slack-policy",
         }
+        evidence = self.evidence_rows()
         for task, title in (("task1", "Task 1 (three links)"), ("task2", "Task 2 (two links)")):
-            table.rows.append([sentence(title)])
+            for table in (full, backup):
+                table.rows.append([sentence(title)])
             for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
                 goal = (
                     sentence(bare(self.ttg(task, name)))
@@ -201,36 +222,134 @@ class Tables(Claims):
                     if self.evv(task, name, "stall")
                     else sentence("(", self.mt(task, name, "final_error", ".3f"), " m)")
                 )
-                table.rows.append(
-                    [
-                        sentence(name),
-                        goal,
-                        *(
-                            sentence(self.mt(task, name, metric, fmt))
-                            for metric, fmt in self.OUTCOME_COLUMNS
-                        ),
-                    ]
-                )
-            # the constrained pair again under the other infeasibility policy: a free slack
-            key = policy[task]
-            for name in (Name.C_IVKC, Name.C_EMDM):
-                run = self.evid(key, "runs", name)
-                table.rows.append(
-                    [
-                        sentence(name, ", free slack"),  # (the nominal C-EMDM has one too)
-                        sentence(bare(self.evid_goal(key, name)))
-                        if run["reached"]
-                        else sentence("stall"),
-                        *(
-                            sentence(self.evidn(key, "runs", name, metric, fmt=fmt))
-                            for metric, fmt in self.OUTCOME_COLUMNS
-                        ),
-                    ]
-                )
-        self.tables["outcomes"] = table
+                row = [
+                    sentence(name),
+                    goal,
+                    *(
+                        sentence(self.mt(task, name, metric, fmt))
+                        for metric, fmt in self.OUTCOME_COLUMNS
+                    ),
+                ]
+                full.rows.append(row)
+                backup.rows.append(row)
+                full.rows.extend(evidence.get((task, name), []))
+                if name not in (Name.C_IVKC, Name.C_EMDM):
+                    continue
+                # the constrained run again under the other infeasibility policy: a free slack
+                key = policy[task]
+                cells = [
+                    sentence(bare(self.evid_goal(key, name)))
+                    if self.evid(key, "runs", name)["reached"]
+                    else sentence("stall"),
+                    *(
+                        sentence(self.evidn(key, "runs", name, metric, fmt=fmt))
+                        for metric, fmt in self.OUTCOME_COLUMNS
+                    ),
+                ]
+                full.rows.append([sentence(INDENT, "free slack"), *cells])
+                backup.rows.append([sentence(name, ", free slack"), *cells])
+        if not any(MISS in cell for row in full.rows for cell in row):  # none to explain
+            full.caption = [seg for seg in full.caption if seg is not MISS_NOTE]
+        self.tables["outcomes"] = full
+        self.tables["outcomes-backup"] = backup
         for s in sections:
             if s.key == "task1":
                 s.tables.append("outcomes")
+
+    def evidence_rows(self) -> dict[tuple[str, str], list[list[Sentence]]]:
+        """Table II's evidence rows in its columns, under the nominal run each one changes:
+        ``{(task, controller): [row, ...]}``."""
+        out: dict[tuple[str, str], list[list[Sentence]]] = {}
+        for key, ctrl, change in self.evidence_items():
+            entry = self.evid(key)
+            run = entry["runs"].get(ctrl, {})
+            label = sentence(INDENT, run_label(key), ": ", *change)
+            rows = out.setdefault((entry["task"], ctrl), [])
+            if "error" in run:
+                rows.append([label, sentence("no solution"), *([sentence("–")] * 4)])
+            else:
+                goal = (
+                    sentence(bare(self.evid_goal(key, ctrl)))
+                    if run["reached"]
+                    else unreached(bool(run.get("events", {}).get("stall")))
+                )
+                rows.append(
+                    [
+                        label,
+                        goal,
+                        *(
+                            sentence(self.evidn(key, "runs", ctrl, metric, fmt=fmt))
+                            for metric, fmt in self.OUTCOME_COLUMNS
+                        ),
+                    ]
+                )
+            if key == "t1-uc-no-manip":
+                rows.extend(self.grid_outcome_rows())
+        return out
+
+    def grid_miss(self) -> int | None:
+        """The index of the first run of Task 1's UC-EMDM weight grid that misses the goal."""
+        runs = self.rec.grids.get(Name.UC_EMDM, [])
+        return next((i for i, r in enumerate(runs) if not r.reached), None)
+
+    def finer_note(self) -> Sentence:
+        """Table II's caption: what E2b is, and the nominal weights' run at its step."""
+        i = self.grid_miss()
+        ctrl = Name.UC_EMDM
+        if i is None or "nominal" not in (self.grid(ctrl, i, "finer_dt") or {}):
+            return sentence()
+        nominal = self.grid(ctrl, i, "finer_dt", "nominal")
+        return sentence(
+            "; ",
+            Upright(run_label(FINER_STEP)),
+            " is ",
+            Upright(run_label(GRID_MISS)),
+            " at ",
+            *self.e3_step(),
+            ", where nominal weights give ",
+            *(
+                sentence(self.gridn(ctrl, i, "finer_dt", "nominal", "time_to_goal", fmt=".2f"))
+                + sentence(" s")
+                if nominal.get("reached")
+                else unreached(False)
+            ),
+            ", ",
+            self.gridn(ctrl, i, "finer_dt", "nominal", "mean_manipulability", fmt=".3f"),
+            ", ",
+            self.gridn(ctrl, i, "finer_dt", "nominal", "total_effort", fmt=".2f"),
+        )
+
+    def grid_outcome_rows(self) -> list[list[Sentence]]:
+        """E2a and E2b in Table II's columns: the weight grid's first run that misses the goal,
+        and the same weights at a five times smaller step."""
+        i = self.grid_miss()
+        if i is None:
+            return []
+        ctrl = Name.UC_EMDM
+        w_m = sentence(*eq(W_M, self.gridn(ctrl, i, "w_manip", fmt=".4g")))
+
+        def cells(*path: str) -> list[Sentence]:
+            """The run's cells; ``path``: where in the grid run it is (``finer_dt``)."""
+
+            def value(metric: str) -> Any:
+                return self.grid(ctrl, i, *cast(tuple[GridKey], (*path, metric)))
+
+            def num(metric: str, fmt: str) -> Num:
+                return self.gridn(ctrl, i, *cast(tuple[GridKey], (*path, metric)), fmt=fmt)
+
+            out = [sentence(num("time_to_goal", ".2f")) if value("reached") else unreached(False)]
+            for metric, fmt in self.OUTCOME_COLUMNS:
+                big = fmt.endswith("f") and abs(value(metric)) >= 1e3  # 11749 read as 117.49
+                out.append(sentence(num(metric, ",.0f" if big else fmt)))
+            return out
+
+        rows = [[sentence(INDENT, run_label(GRID_MISS), ": ", *w_m), *cells()]]
+        finer = self.grid(ctrl, i, "finer_dt") or {}
+        if "nominal" in finer:
+            rows.append(
+                [sentence(INDENT, run_label(FINER_STEP), ": ", *self.e3_step()), *cells("finer_dt")]
+            )
+        return rows
 
     def e3_step(self) -> Sentence:
         """The finer-step run's time step, as its row writes it (``Δt/5``)."""
@@ -300,8 +419,10 @@ class Tables(Claims):
         change = w_m + sentence(" at ") + self.e3_step()
         return [*out, [sentence(run_label(FINER_STEP)), sentence("1, ", ctrl), change, *cells]]
 
-    def evidence_table(self, sections: list[Section]) -> None:
-        items: list[tuple[EvidenceKey, str, Sentence]] = [
+    def evidence_items(self) -> list[tuple[EvidenceKey, str, Sentence]]:
+        """The evidence runs E1, E3-E6: each one's record, the controller it changes and the
+        change as its row says it (E2a and E2b come from the weight grid)."""
+        return [
             ("t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip")),
             ("t2-c-ivkc-wide-limits", Name.C_IVKC, self.limits_widened()),
             ("t2-c-emdm-no-manip", Name.C_EMDM, self.weight_off("t2-c-emdm-no-manip")),
@@ -315,6 +436,11 @@ class Tables(Claims):
             ),
             ("t2-uc-emdm-no-manip", Name.UC_EMDM, self.weight_off("t2-uc-emdm-no-manip")),
         ]
+
+    def evidence_table(self) -> None:
+        """The pitch's backup slide of evidence runs, each beside its nominal run's outcomes
+        (in the paper they are Table II's indented rows)."""
+        items = self.evidence_items()
         table = Table(
             "evidence",
             sentence(
@@ -383,6 +509,3 @@ class Tables(Claims):
         if not any(MISS in cell for row in table.rows for cell in row):  # none to explain
             table.caption = [seg for seg in table.caption if seg is not MISS_NOTE]
         self.tables["evidence"] = table
-        for s in sections:  # with Task 1.2: it floats to the top of the page Task 1 ends on
-            if s.key == "t1-c":
-                s.tables.append("evidence")

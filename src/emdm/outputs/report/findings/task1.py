@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
-from ..trace import Eqs, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
+from ..trace import Eqs, File, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
 from .base import (
     ALPHA,
     COND_J,
@@ -39,6 +39,16 @@ PARETO_RECORD = "data/task1-pareto-UC-EMDM/pareto.json"
 
 
 class Task1(StoryBase):
+    def arms_caption(self) -> Sentence:
+        """The caption of Task 1's stills: what is drawn and the animations they come from."""
+        return sentence(
+            "Stills of Task 1's animations",
+            # (the folder holds every pair's, Task 2's too: named once, here)
+            *((" (", File("animations/"), ")") if self.anim("task1", "UC") else ()),
+            ": each run's arm halfway (faint) and at its end, its tip path (dotted) and final "
+            "velocity ellipse (one scale); grey: the start arm, cut at the right; star: goal.",
+        )
+
     def task1_uc(self) -> Section:
         t = "task1"
         ivkc, emdm = PAIRS["UC"]
@@ -66,6 +76,7 @@ class Task1(StoryBase):
         # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
         # paths when drawn (reading 146: (c) shows the distance to the goal, not the gap)
         where = sentence(" (", Ref("fig", "t1-uc"), "(c))")
+        arms = self.figure("t1-arms", "figures/task1-arms", self.arms_caption())
         if same_time and self.mv(t, emdm, "reached"):
             answer += sentence("Both reach it in ", self.ttg(t, emdm), *where)
         else:
@@ -76,7 +87,13 @@ class Task1(StoryBase):
             "; at each step their tips are at most ",
             gap,
             " apart",
-            *((" (", Ref("fig", "t1-uc"), "(d))") if FOURTH_PANEL[t] == "path" else ()),
+            *(
+                (" (", Ref("fig", "t1-uc"), "(d))")
+                if FOURTH_PANEL[t] == "path"
+                else (" (", Ref("fig", "t1-arms"), "(a))")
+                if self.has_figure("t1-arms")
+                else ()
+            ),
             ".",
         )
         sec.answer = answer
@@ -88,6 +105,7 @@ class Task1(StoryBase):
             )
         )
         sec.figures.append(self.figure("t1-uc", "figures/task1-UC", self.pair_caption(t, "UC")))
+        sec.figures.append(arms)
         # why the tracking is the same
         p = sentence(
             # why the tips stay together: on the page (Fig. 1(d) overlays them in the paper)
@@ -280,7 +298,7 @@ class Task1(StoryBase):
             ),
             "); right: whole runs, one per setting. Without a slack only the ratio matters",
         )
-        cap += self.ratios_swept()
+        cap += sentence(PageOnly(tuple(self.ratios_swept())))  # the sweeps: on the page
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
             cap += sentence(
@@ -507,7 +525,9 @@ class Task1(StoryBase):
             self.mt(t, Name.C_EMDM, "max_kkt_residual", ".2g"),
             ", lie far below the ",
             Math(rf"10^{{{KKT_EXP}}}", f"10<sup>−{-KKT_EXP}</sup>"),
-            " limit. The fallback (daqp, then quadprog) ",
+            " limit. The fallback",
+            PageOnly(tuple(sentence(" (daqp, then quadprog)"))),  # (Section II names it)
+            " ",
         )
         if fallbacks == 0:
             answer += sentence("never ran.")
@@ -575,8 +595,9 @@ class Task1(StoryBase):
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
         notes = lab1.notes if lab1 else {}
         qp = rows.get("quadprog")
-        if qp and qp.failures:  # the fallback's last resort: said (reading 142), if unused
-            p += sentence(  # (ADMM's iterations there: Fig. 6 draws them, reading 141)
+        if qp and qp.failures:  # the fallback's last resort (reading 142): on the page, as
+            # it never ran in the loop (reading 149 asked for the room)
+            declines = sentence(
                 ". The last fallback, quadprog, declines ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of ",
@@ -584,7 +605,8 @@ class Task1(StoryBase):
                 " re-solved Task 1 programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
-                p += sentence(", all scaled")
+                declines += sentence(", all scaled")
+            p += sentence(PageOnly(tuple(declines)))
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,

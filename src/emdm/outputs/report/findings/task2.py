@@ -6,7 +6,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Num, Ref, Segment, Sentence, sentence, traced
+from ..trace import Math, Num, PageOnly, Ref, Segment, Sentence, sentence, traced
 from .base import (
     ALPHA,
     COND_J,
@@ -187,19 +187,33 @@ class Task2(Claims):
                 p += sentence(
                     "Within the joint limits the goal has one configuration, elbow ",
                     sols[i].elbow,
-                    ", ",
-                    Math("q", "<i>q</i>"),
-                    " = (",
-                    self.geon(t, "solutions", i, "q1", fmt=".2f"),
-                    ", ",
-                    self.geon(t, "solutions", i, "q2", fmt=".2f"),
-                    ") rad; the elbow-",
+                    PageOnly(  # the angles on the page: Fig. 4 draws both configurations
+                        tuple(
+                            sentence(
+                                ", ",
+                                Math("q", "<i>q</i>"),
+                                " = (",
+                                self.geon(t, "solutions", i, "q1", fmt=".2f"),
+                                ", ",
+                                self.geon(t, "solutions", i, "q2", fmt=".2f"),
+                                ") rad",
+                            )
+                        )
+                    ),
+                    "; the elbow-",
                     sols[o].elbow,
                     " one needs ",
                     q(joint),
-                    " = ",
-                    self.geon(t, "solutions", o, f"q{joint}", fmt=".2f", unit="rad"),
-                    ", ",
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                " = ",
+                                self.geon(t, "solutions", o, f"q{joint}", fmt=".2f", unit="rad"),
+                                ",",
+                            )
+                        )
+                    ),
+                    " ",
                     self.geon(t, "solutions", o, "outside_by", fmt=".2f", unit="rad"),
                     " beyond its limit. ",
                 )
@@ -314,7 +328,7 @@ class Task2(Claims):
                 " (",
                 run_label("t2-c-ivkc-wide-limits"),
                 ", ",
-                Ref("tab", "evidence"),
+                Ref("tab", "outcomes"),
                 f") {ivkc} arrives too, in ",
                 self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
                 ". ",
@@ -574,9 +588,15 @@ class Task2(Claims):
             COND_J,
             " to ",
             self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
-            " at ",
-            T_EQ,
-            self.ev(t, emdm, "conditioning", "t_cond_J_max", fmt=".2f", unit="s"),
+            PageOnly(  # (Section IV-A dates the passage)
+                tuple(
+                    sentence(
+                        " at ",
+                        T_EQ,
+                        self.ev(t, emdm, "conditioning", "t_cond_J_max", fmt=".2f", unit="s"),
+                    )
+                )
+            ),
             ".",
         )
         self.answers.append(("Task 2.1: convergence behaviour and numerical challenges", answer))
