@@ -166,7 +166,7 @@ class Tables(Claims):
         drifted = [m for m in missed if not self.evv(*m, "stall")]
 
         indented = sentence(
-            " Indented: one change to the run above (E1–E6: a cause tested; free slack: (",
+            " Indented: one change to the nominal run above (E1–E6: a cause tested; free slack: (",
             Eqs(("free",)),
             ") in place of scaling)",
             *self.finer_note(),
