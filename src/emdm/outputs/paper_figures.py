@@ -1302,7 +1302,8 @@ def convergence_figure(
         # a busier panel gets more room (Task 2's nine solvers against Task 1's four)
         parts = [panel.parts() for panel in panels]
         widths = [sum(max(1, len(c)) ** 0.5 for _, c in part) for part in parts]
-        subs = fig.subfigures(1, len(panels), squeeze=False, width_ratios=widths, wspace=0)[0]
+        # a gap between the programs' panels: their end ticks (10^2, 10^0) met (readings 150-151)
+        subs = fig.subfigures(1, len(panels), squeeze=False, width_ratios=widths, wspace=0.06)[0]
         engine = fig.get_layout_engine()
         if isinstance(engine, ConstrainedLayoutEngine) and any(len(p) > 1 for p in parts):
             # split axes side by side: room between them, or their end ticks (10^1, 10^0) meet

@@ -25,18 +25,22 @@ class Front(Claims):
         )
         if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
             # the body has the times; the abstract says who arrives and in which order
-            out += sentence(
-                "On a two-link arm with limits, a slack lets EMDM leave the blocked straight line "
-                "and reach the goal, while IVKC stalls under the task scaling we chose",
-            )
+            # the like-for-like comparison first (readings 150, 151: the stall is the policy's)
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "; with a free slack instead, ",
+                    "On a two-link arm with limits, given the same free slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
+                    "; as the brief defines them, only EMDM has a slack, which lets it leave the "
+                    "blocked straight line and arrive, while IVKC stalls under the task scaling "
+                    "we chose. ",
                 )
-            out += sentence(". ")
+            else:
+                out += sentence(
+                    "On a two-link arm with limits, a slack lets EMDM leave the blocked straight "
+                    "line and reach the goal, while IVKC stalls under the task scaling we chose. "
+                )
         uc = (Name.UC_EMDM, Name.UC_IVKC)
         if all(self.mv(t2, c, "reached") for c in uc):  # Task 2.2, in the same figures as the body
             by_term = self.uc_term_raises_m()  # (an evidence run: whose gain is which)

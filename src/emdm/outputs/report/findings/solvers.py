@@ -223,8 +223,9 @@ class Solvers(StoryBase):
             sentence(
                 "Convergence on the ",
                 "least dexterous" if hardest else "first",
-                " programs, cold (lines: ",
+                " programs, cold (lines as in ",
                 Ref("tab", "solvers"),
+                ", Task 1's too",
                 *(  # the table's solvers without a curve: they report no iterates
                     (f"; {', '.join(unplotted)}: no iterates",)
                     if 0 < len(unplotted) < len(rows)

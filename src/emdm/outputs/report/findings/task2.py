@@ -89,22 +89,11 @@ class Task2(Claims):
         )
         stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
         both_first = stalled and first
-        if both_first:  # both policies' outcomes, side by side, first: the stall is the policy's
-            answer = sentence(  # one sentence: the two policies' outcomes side by side
-                f"Under task scaling, {emdm} leaves the straight line and reaches the goal in ",
-                self.ttg(t, emdm),
-                f" while {ivkc}",
-                # the brief's exact program has no solution there: what the policy is for
-                ", infeasible from step 0,"
-                if self.evv(t, ivkc, "scaling")
-                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
-                else "",
-                " cannot leave it and stalls. ",
-            )
-            # the other policy in a sentence of its own (a reader lost the two in one)
+        if both_first:  # both policies' outcomes, the like-for-like one first (readings 150,
+            # 151: the stall is the policy's; with the same slack C-IVKC arrives first)
             both = bool(self.evid(key, "runs", emdm).get("reached"))
-            answer += sentence(
-                "Given a free slack, ",
+            answer = sentence(
+                "Given the same free slack, ",
                 "both arrive: " if both else "",
                 f"{ivkc} ",
                 "in " if both else "arrives in ",
@@ -115,7 +104,21 @@ class Task2(Claims):
                 answer += sentence(", with a higher mean ", M_SYM, f" than {emdm}")
             if both:
                 answer += sentence(", which takes ", self.evid_goal(key, emdm))
-            answer += sentence(" (", Ref("tab", "outcomes"), "). From ", *stall_told)
+            answer += sentence(
+                " (",
+                Ref("tab", "outcomes"),
+                f"). As the brief defines them, only {emdm} has a slack: it leaves the straight "
+                "line and reaches the goal in ",
+                self.ttg(t, emdm),
+                f", while {ivkc}",
+                # the brief's exact program has no solution there: what the policy is for
+                ", infeasible from step 0,"
+                if self.evv(t, ivkc, "scaling")
+                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
+                else "",
+                " cannot leave it: from ",
+                *stall_told,
+            )
         elif stalled:
             # the contrast first (who can leave the line), then where the other stops
             scaled = " under task scaling" if self.ivkc_with_slack() else ""
@@ -225,9 +228,17 @@ class Task2(Claims):
                     self.geon(t, "max_fold", fmt=".3f", unit="rad"),
                     ", outside its stop zone, the end effector cannot come within ",
                     self.geon(t, "inner_reach", fmt=".3f", unit="m"),
-                    " of the base. Yet the straight line passes ",
-                    self.geon(t, "line_min_distance", fmt=".3f", unit="m"),
-                    " from the base, entering this disc ",
+                    " of the base. Yet the straight line",
+                    PageOnly(  # (Fig. 4 draws it)
+                        tuple(
+                            sentence(
+                                " passes ",
+                                self.geon(t, "line_min_distance", fmt=".3f", unit="m"),
+                                " from the base,",
+                            )
+                        )
+                    ),
+                    " enters this disc ",
                     self.geon(t, "line_enters_at", fmt=".3f", unit="m"),
                     " after the start (",
                     Ref("fig", "workspace"),
