@@ -418,6 +418,33 @@ def test_the_arms_figure_draws_each_runs_postures_path_and_ellipse(tmp_path, dra
             assert np.allclose(drawn_shape[: len(ref)], ratio * ref)
 
 
+def test_the_task2_2_figure_draws_the_answers_four_quantities(tmp_path, drawn, task2_runs):
+    """Task 2.2's paper figure: per run (the pair and the run without the dexterity term) its m,
+    the effort spent so far (from 0, summing E dt), the tracking gap (the slack; an exact task
+    sits on the floor) and its deepest joint's excursion past the limits."""
+    from emdm.outputs import paper_figures as pf
+    from emdm.sim.metrics import limit_excess
+
+    runs = [task2_runs["UC-IVKC"], task2_runs["UC-EMDM"]]
+    sc = emdm.load_scenario("task2", {"motion.max_time": 4.0, "weights.manipulability": 0.0})
+    without = emdm.simulate(sc, "UC-EMDM")
+    with formats((".png",)):
+        pf.slack_figure(runs, tmp_path / "slack", without=("no term", without))
+    ax_m, ax_e, ax_gap, ax_out = drawn[-1].axes[:4]
+    for run in (*runs, without):
+        assert any(np.array_equal(line.get_ydata(), run.m) for line in ax_m.get_lines())
+        spent = np.concatenate(([0.0], np.cumsum(run.effort) * run.scenario.motion.dt))
+        assert any(np.allclose(line.get_ydata(), spent) for line in ax_e.get_lines())
+        gap = np.maximum(pf.tracking_gap(run), pf.GAP_FLOOR)
+        assert any(np.allclose(line.get_ydata(), gap) for line in ax_gap.get_lines())
+        out = limit_excess(run).max(axis=1)
+        assert any(np.allclose(line.get_ydata(), out) for line in ax_out.get_lines())
+    # UC-IVKC imposes the task: on the floor; UC-EMDM's slack lifts it off
+    assert pf.tracking_gap(runs[0]).max() < 1e-9 < pf.tracking_gap(runs[1]).max()
+    labels = [t.get_text() for t in drawn[-1].legends[0].get_texts()]
+    assert labels == ["UC-IVKC", "UC-EMDM", "no term"]
+
+
 def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     """The pitch's stills draw a stalled run until its stall, dated by Run.stalled_from (the
     paper's date), and say it is still from then on."""

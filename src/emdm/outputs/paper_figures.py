@@ -1568,6 +1568,55 @@ def effort_figure(
     return stem
 
 
+def slack_figure(
+    runs: Sequence[Run],
+    stem: Path,
+    without: tuple[str, Run] | None = None,
+    medium: Medium = PAPER,
+) -> Path:
+    """Task 2.2 in the paper, what its answer says, in four panels of a 2 x 2 grid (the pair
+    composite's eight were too small to read, readings 150-151): (a) m(t), (b) the effort spent
+    so far, sum E dt up to t (a saving is a gap that stays), (c) the slack at work, the tracking
+    gap ||J qd - v_d|| of :func:`tracking_gap` (log, floored at :data:`GAP_FLOOR`), and (d) how
+    far past its position limits the deepest joint is (:func:`~emdm.sim.metrics.limit_excess`).
+    ``without``: ``(label, run)`` with one cause removed, drawn grey and dotted in every panel."""
+    drawn = [(run, _style(run, medium)) for run in runs]
+    if without is not None:
+        label, run = without
+        st = {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label}
+        drawn.append((run, st))
+    with _figure(stem, medium, medium.column, 1.9) as fig:
+        axes = fig.subplots(2, 2, sharex=True)
+        ax_m, ax_e, ax_gap, ax_out = axes.ravel()
+        for run, st in drawn:
+            ax_m.plot(run.t, run.m, **st)
+            ax_e.plot(run.t, _effort_so_far(run), **st)
+            ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
+            ax_out.plot(run.t, limit_excess(run).max(axis=1), **st)
+        ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
+        ax_e.set_ylabel(r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)  # (a short Sigma)
+        ax_gap.set_ylabel("gap (m/s)", labelpad=1)
+        ax_gap.set_ylim(bottom=GAP_FLOOR / 4)  # a run on the floor (an exact task) is a line
+        ax_gap.yaxis.set_major_locator(LogLocator(numticks=4))
+        ax_gap.yaxis.set_minor_locator(NullLocator())
+        ax_out.set_ylabel("past limit (rad)", labelpad=1)
+        for ax, letter in zip(axes.ravel(), ("(a)", "(b)", "(c)", "(d)"), strict=True):
+            ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
+            if ax is not ax_gap:
+                ax.yaxis.set_major_locator(MaxNLocator(3))
+        for ax in axes[1]:
+            ax.set_xlabel(r"$t$ (s)", labelpad=1)
+        fig.legend(
+            handles=[Line2D([], [], **st) for _, st in drawn],
+            loc="outside upper center",
+            ncols=len(drawn),
+            frameon=False,
+            columnspacing=1.0,
+            handlelength=2.0,
+        )
+    return stem
+
+
 def _plain_tex(x: float) -> str:
     """``0.100``, or ``3.4\times10^{-5}`` for a value below 10^-3 (mathtext)."""
     if x == 0 or abs(x) >= 1e-3:

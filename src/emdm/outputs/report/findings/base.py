@@ -456,6 +456,27 @@ class StoryBase:
         limit = float(np.min(np.abs(self.rec.scenarios[task].arm.qd_max)))
         return any(self.mv(task, c, "max_abs_qd") > FAR_BEYOND * limit for c in controllers)
 
+    def slack_caption(self, ivkc: str, emdm: str) -> Sentence:
+        """Task 2.2's figure (:func:`~emdm.outputs.paper_figures.slack_figure`): the pair and,
+        when recorded, the run without the dexterity term, in the panels its answer cites."""
+        key: EvidenceKey = "t2-uc-emdm-no-manip"
+        without = key in self.rec.evidence and not self.evid(key, "runs", emdm).get("error")
+        return sentence(
+            f"{ivkc} (solid), {emdm} (dashed)",
+            *(
+                (f", {emdm} without its dexterity term (dotted, {run_label(key)})",)
+                if without
+                else ()
+            ),
+            ": (a) ",
+            M_SYM,
+            ", (b) effort so far, (c) tracking gap ",
+            Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+            " (the slack; log, floor ",
+            Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
+            "), (d) the deepest joint's excess past its limit.",
+        )
+
     def pair_caption(self, task: str, group: str) -> Sentence:
         """A pair figure's caption: its panels in full for the first (Task 1.1's), by reference
         to it for the others, then what this pair's figure adds (the scaled span, the time axes'
@@ -483,8 +504,8 @@ class StoryBase:
         if (task, group) == ("task1", "UC"):
             far = self.far_beyond(task, PAIRS[group])
             out += sentence(": ") + self.panels(far, path=FOURTH_PANEL[task] == "path")
-        elif (task, group) == ("task2", "UC"):  # the same five panels as Task 2.1's, the gap too
-            out += sentence(", as in ", Ref("fig", "t2-c"))
+        elif (task, group) == ("task2", "UC"):  # paper_figures.slack_figure: the answer's four
+            return self.slack_caption(ivkc, emdm)
         else:
             out += sentence(", as in ", Ref("fig", "t1-uc"))
         if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
