@@ -805,7 +805,8 @@ def test_the_task1_slide_shows_dexterity_effort_and_tracking_for_both_pairs(tmp_
 
 def test_the_task2_2_slide_draws_the_run_without_the_dexterity_term(tmp_path, monkeypatch):
     """Slide 10 says what UC-EMDM does without its dexterity term; its figure draws that run
-    (the evidence record's overrides) beside the pair, in both panels (reading 135)."""
+    (the evidence record's overrides) beside the pair, in every panel (reading 135), and the
+    slack it says absorbs the desired velocity (the tracking gap, readings 150-151)."""
     from matplotlib.figure import Figure
 
     from emdm.outputs import paper_figures as pf
@@ -821,22 +822,22 @@ def test_the_task2_2_slide_draws_the_run_without_the_dexterity_term(tmp_path, mo
     sc = emdm.load_scenario("task2")
     pair = [emdm.simulate(sc, "UC-IVKC"), emdm.simulate(sc, "UC-EMDM")]
     with pf.png_only():
-        pf.effort_figure(pair, tmp_path / "effort", without=(label, run))
+        pf.slack_figure(pair, tmp_path / "effort", without=(label, run), medium=pf.SLIDE)
     for ax in drawn[0].axes:
-        assert len(ax.lines) == 3 and np.allclose(ax.lines[2].get_xdata(), run.t)
-    assert np.allclose(drawn[0].axes[1].lines[2].get_ydata(), run.m)
-    # the third panel: how far past its joint limits each run goes (the slide's "by leaving
+        assert len(ax.lines) == 3 and np.allclose(ax.lines[2].get_xdata()[:2], run.t[:2])
+    assert np.allclose(drawn[0].axes[0].lines[2].get_ydata(), run.m)
+    # the fourth panel: how far past its joint limits each run goes (the slide's "by leaving
     # the joint limits ... by up to"), against the positions and limits directly
     arm = sc.arm
-    for line, r in zip(drawn[0].axes[2].lines, [*pair, run], strict=True):
+    for line, r in zip(drawn[0].axes[3].lines, [*pair, run], strict=True):
         deepest = [max(0.0, *(q - arm.q_max), *(arm.q_min - q)) for q in r.q]
         assert np.allclose(line.get_ydata(), deepest)
-    assert max(drawn[0].axes[2].lines[0].get_ydata()) > 0.5  # UC-IVKC leaves them by 0.71 rad
+    assert max(drawn[0].axes[3].lines[0].get_ydata()) > 0.5  # UC-IVKC leaves them by 0.71 rad
     # a pair within its limits (Task 2 with them) has no such panel
     limited = [emdm.simulate(sc, "C-IVKC"), emdm.simulate(sc, "C-EMDM")]
     with pf.png_only():
-        pf.effort_figure(limited, tmp_path / "effort2")
-    assert len(drawn[-1].axes) == 2
+        pf.slack_figure(limited, tmp_path / "effort2", medium=pf.SLIDE)
+    assert len(drawn[-1].axes) == 3
 
 
 def test_the_task2_slide_draws_each_runs_m_and_its_mean(tmp_path, drawn):

@@ -1524,19 +1524,21 @@ def manipulability_figure(
     return stem
 
 
-def effort_figure(
+def slack_figure(
     runs: Sequence[Run],
     stem: Path,
-    medium: Medium = SLIDE,
     without: tuple[str, Run] | None = None,
+    medium: Medium = PAPER,
 ) -> Path:
-    """The pitch's Task 2.2 slide: the effort spent so far, sum E dt up to t (linear, so a saving
-    shows as a gap that stays), and the manipulability m(t) of a pair, two large panels (where the
-    pair composite's would be too small to read); and, when a run leaves its joint limits (the
-    unconstrained controllers ignore them), a third: how far past them, the deepest joint's
-    excursion at each t (:func:`~emdm.sim.metrics.limit_excess`). ``without``: a run with one
-    cause removed, ``(label, run)``, drawn grey and dotted in every panel, so that what its
-    removal changes is seen (reading 135: the slide said it without showing it)."""
+    """Task 2.2, what its answer says (in the paper: a 2 x 2 grid, the pair composite's eight
+    panels were too small to read, readings 150-151; on a slide: one row): (a) m(t), (b) the
+    effort spent so far, sum E dt up to t (linear: a saving is a gap that stays), (c) the slack
+    at work, the tracking gap ||J qd - v_d|| of :func:`tracking_gap` (log, floored at
+    :data:`GAP_FLOOR`), and, when a run leaves its joint limits (the unconstrained controllers
+    ignore them), (d) how far past them its deepest joint is
+    (:func:`~emdm.sim.metrics.limit_excess`). ``without``: ``(label, run)`` with one cause
+    removed, drawn grey and dotted in every panel, so that what its removal changes is seen
+    (reading 135: the slide said it without showing it)."""
     drawn = [(run, _style(run, medium)) for run in runs]
     if without is not None:
         label, run = without
@@ -1544,71 +1546,39 @@ def effort_figure(
         drawn.append((run, st))
     beyond = [limit_excess(run).max(axis=1) for run, _ in drawn]
     outside = any(b.max() > 0.0 for b in beyond)
-    with _figure(stem, medium, medium.wide, 2.3) as fig:
-        axes = fig.subplots(1, 3 if outside else 2)
-        ax_e, ax_m = axes[0], axes[1]
+    n = 4 if outside else 3
+    paper = medium is PAPER
+    with _figure(stem, medium, medium.column, 1.9 if paper else 2.3) as fig:
+        grid = fig.subplots(2, 2, sharex=True) if paper else fig.subplots(1, n, sharex=True)
+        axes = list(np.ravel(grid))[:n]
+        for extra in list(np.ravel(grid))[n:]:
+            extra.remove()
+        ax_m, ax_e, ax_gap = axes[:3]
         for (run, st), over in zip(drawn, beyond, strict=True):
-            ax_e.plot(run.t, _effort_so_far(run), **st)
-            ax_m.plot(run.t, run.m, **st)
-            if outside:
-                axes[2].plot(run.t, over, **st)
-        ax_e.set_ylabel(r"effort so far (rad$^2$/s)")  # (the sum's symbol: taller than the axes)
-        ax_m.set_ylabel(r"manipulability $m$ (m$^2$)")
-        if outside:
-            axes[2].set_ylabel("past a joint limit (rad)")
-        # the legend under the panels: inside one it hid a curve of the narrower three
-        fig.legend(
-            handles=[Line2D([], [], **st) for _, st in drawn],
-            loc="outside lower center",
-            ncols=len(drawn),
-            frameon=False,
-        )
-        for ax in axes:
-            ax.set_xlabel(r"$t$ (s)")
-    return stem
-
-
-def slack_figure(
-    runs: Sequence[Run],
-    stem: Path,
-    without: tuple[str, Run] | None = None,
-    medium: Medium = PAPER,
-) -> Path:
-    """Task 2.2 in the paper, what its answer says, in four panels of a 2 x 2 grid (the pair
-    composite's eight were too small to read, readings 150-151): (a) m(t), (b) the effort spent
-    so far, sum E dt up to t (a saving is a gap that stays), (c) the slack at work, the tracking
-    gap ||J qd - v_d|| of :func:`tracking_gap` (log, floored at :data:`GAP_FLOOR`), and (d) how
-    far past its position limits the deepest joint is (:func:`~emdm.sim.metrics.limit_excess`).
-    ``without``: ``(label, run)`` with one cause removed, drawn grey and dotted in every panel."""
-    drawn = [(run, _style(run, medium)) for run in runs]
-    if without is not None:
-        label, run = without
-        st = {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label}
-        drawn.append((run, st))
-    with _figure(stem, medium, medium.column, 1.9) as fig:
-        axes = fig.subplots(2, 2, sharex=True)
-        ax_m, ax_e, ax_gap, ax_out = axes.ravel()
-        for run, st in drawn:
             ax_m.plot(run.t, run.m, **st)
             ax_e.plot(run.t, _effort_so_far(run), **st)
             ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
-            ax_out.plot(run.t, limit_excess(run).max(axis=1), **st)
+            if outside:
+                axes[3].plot(run.t, over, **st)
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
         ax_e.set_ylabel(r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)  # (a short Sigma)
-        ax_gap.set_ylabel("gap (m/s)", labelpad=1)
+        ax_gap.set_ylabel("gap (m/s)" if paper else "tracking gap (m/s)", labelpad=1)
         ax_gap.set_ylim(bottom=GAP_FLOOR / 4)  # a run on the floor (an exact task) is a line
         ax_gap.yaxis.set_major_locator(LogLocator(numticks=4))
         ax_gap.yaxis.set_minor_locator(NullLocator())
-        ax_out.set_ylabel("past limit (rad)", labelpad=1)
-        for ax, letter in zip(axes.ravel(), ("(a)", "(b)", "(c)", "(d)"), strict=True):
+        if outside:
+            axes[3].set_ylabel("past limit (rad)" if paper else "past a joint limit (rad)")
+        for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)"), strict=False):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
             if ax is not ax_gap:
                 ax.yaxis.set_major_locator(MaxNLocator(3))
-        for ax in axes[1]:
+        for ax in axes[-2:] if paper else axes:
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
+        # the legend above (paper) or under (slide, as the other slides') the panels: inside
+        # one it hid a curve
         fig.legend(
             handles=[Line2D([], [], **st) for _, st in drawn],
-            loc="outside upper center",
+            loc="outside upper center" if paper else "outside lower center",
             ncols=len(drawn),
             frameon=False,
             columnspacing=1.0,
