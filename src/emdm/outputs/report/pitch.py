@@ -7,7 +7,7 @@ from typing import Any
 
 from ...core.controllers import Name
 from .document import Document
-from .findings import DT, M_SYM, MRATE, RATIO, Story
+from .findings import M_SYM, MRATE, RATIO, Story
 from .findings.base import T_EQ
 from .findings.claims import cap, listed
 from .trace import Data, Sentence, Text, sentence
@@ -312,10 +312,9 @@ class Pitch:
             " later (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
-            "), of a near-zero effort (",
-            # the percentage's base (reading 146: a bar without its base overstates the cost)
-            self.s.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
-            ")",
+            # the percentage's base said (reading 146: a bar without it overstates the cost), its
+            # value left to the paper (reading 151: the slide was overloaded)
+            "), of a near-zero effort",
         )
 
     def policy(self) -> list[Sentence]:
@@ -414,20 +413,9 @@ class Pitch:
                     self.s.gridn("UC-EMDM", failed[0], "w_manip", fmt=".4g"),
                     Text("/"),
                     self.s.gridn("UC-EMDM", failed[0], "w_effort", fmt=".2g"),
-                    ") misses the goal",
-                    *(
-                        (
-                            "; with ",
-                            DT,
-                            " = ",
-                            self.s.gridn(
-                                "UC-EMDM", failed[0], "finer_dt", "dt", fmt=".2f", unit="s"
-                            ),
-                            " it arrives",
-                        )
-                        if (runs[failed[0]].finer_dt or {}).get("reached")
-                        else ()
-                    ),
+                    # (the finer step that fixes it: the paper's and the backup table's, not
+                    # drawn here: reading 151 found the slide overloaded)
+                    ") misses the goal (middle)",
                 )
             )
         return out
