@@ -174,14 +174,12 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
         assert own == {"C-IVKC": {"weights.slack": w.slack / w.effort}}, key
     assert events["controllers"]["C-EMDM"]["singular"]["elbow_flips"]
     text = (root / "index.html").read_text(encoding="utf-8")
-    # the like-for-like policy first (the stall is the policy's), then the brief's pair and
-    # where the scaled run stops
-    assert "Given the same free slack, both arrive: C-IVKC in" in text
-    assert "only C-EMDM has a slack: it leaves the straight line and reaches the goal in" in text
+    # the brief's pair first, its stall the policy's, then the like-for-like runs and where the
+    # scaled run stops
+    assert "As the brief defines them, only C-EMDM has a slack: it leaves the straight" in text
+    assert "under our task scaling, stalls. Given the same free slack, both arrive: C-IVKC" in text
     scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
-    assert (
-        "while C-IVKC, infeasible from step 0, cannot leave it: from" in text
-    ) == scaled_at_start
+    assert ("while C-IVKC, infeasible from step 0, cannot leave it and" in text) == scaled_at_start
     assert " on the scaled C-IVKC stalls " in text
     assert "evidence" in text.lower()
 
@@ -1253,8 +1251,7 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "given the same free slack, IVKC arrives; as the brief" in said
-    assert "both arrive" not in said
+    assert "given the same free slack, IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):

@@ -1716,14 +1716,13 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
     return stem
 
 
-def arms_figure(
-    pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium = PAPER, marks: int = 2
-) -> Path:
+def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium = PAPER) -> Path:
     """Animation stills of a task's pairs, one panel per pair with its two runs overlaid: the
-    start arm (grey), each run's arm at ``marks`` instants after it (fainter earlier, its own
-    colour and dash), its tip path and its manipulability ellipse at its last state (the
-    animation's, on one scale for every panel), so that what tip-space plots cannot show, the
-    postures that null-space motion changes, is seen."""
+    start arm (grey), each run's arm at its end, its tip path and its manipulability ellipse
+    there (the animation's, on one scale for every panel), so that what tip-space plots cannot
+    show, the postures null-space motion changes, is seen (the caption gives each run's final
+    m: the ellipses' difference, reading 152). An arm halfway, in time or in distance, crowded
+    the end pose or the start arm (reading 152)."""
     runs = [r for pair in pairs.values() for r in pair]
     sc = runs[0].scenario
     arm = sc.planar_arm
@@ -1752,20 +1751,17 @@ def arms_figure(
                 st = _style(run, medium)
                 stalled = run.stalled_from
                 last = stalled if stalled is not None else run.steps
-                for i in range(1, marks + 1):
-                    k = round(last * i / marks)
-                    pts = _arm_points(run, run.q[k])
-                    drawn.append(pts[:, :2])
-                    ax.plot(
-                        *pts[:, :2].T,
-                        color=st["color"],
-                        linestyle=st["linestyle"],
-                        linewidth=medium.line * (0.7 + 0.5 * i / marks),
-                        alpha=0.35 + 0.65 * i / marks,
-                        marker="o",
-                        markersize=1.8,
-                        zorder=2,
-                    )
+                pts = _arm_points(run, run.q[last])
+                drawn.append(pts[:, :2])
+                ax.plot(
+                    *pts[:, :2].T,
+                    color=st["color"],
+                    linestyle=st["linestyle"],
+                    linewidth=medium.line * 1.2,
+                    marker="o",
+                    markersize=1.8,
+                    zorder=2,
+                )
                 ell = ellipse_points(arm.jacobian(run.q[last]), run.p[last, :2], scale)
                 drawn.append(ell)
                 ax.fill(*ell.T, color=st["color"], alpha=0.18, linewidth=0)

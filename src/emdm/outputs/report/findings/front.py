@@ -25,16 +25,16 @@ class Front(Claims):
         )
         if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
             # the body has the times; the abstract says who arrives and in which order
-            # the like-for-like comparison first (readings 150, 151: the stall is the policy's)
+            # the brief's pair, its stall named as our policy's, then the like-for-like runs
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "On a two-link arm with limits, given the same free slack, ",
+                    "On a two-link arm with limits, only EMDM has the brief's slack, which lets "
+                    "it leave the blocked straight line and arrive, while IVKC stalls under the "
+                    "task scaling we chose; given the same free slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
-                    "; as the brief defines them, only EMDM has a slack, which lets it leave the "
-                    "blocked straight line and arrive, while IVKC stalls under the task scaling "
-                    "we chose. ",
+                    ". ",
                 )
             else:
                 out += sentence(

@@ -40,13 +40,27 @@ PARETO_RECORD = "data/task1-pareto-UC-EMDM/pareto.json"
 
 class Task1(StoryBase):
     def arms_caption(self) -> Sentence:
-        """The caption of Task 1's stills: what is drawn and the animations they come from."""
+        """The caption of Task 1's stills: what is drawn, the animations they come from, and
+        each run's final m (the ellipses differ by less than the eye tells, reading 152)."""
+        t = "task1"
+        finals = sentence()
+        for g, group in enumerate(("UC", "C")):
+            for i, name in enumerate(PAIRS[group]):
+                finals += sentence(
+                    "; " if g and not i else (", " if i else ""),
+                    f"{name} ",
+                    self.mt(t, name, "final_manipulability", ".3f"),
+                )
         return sentence(
             "Stills of Task 1's animations",
             # (the folder holds every pair's, Task 2's too: named once, here)
-            *((" (", File("animations/"), ")") if self.anim("task1", "UC") else ()),
-            ": each run's arm halfway (faint) and at its end, its tip path (dotted) and final "
-            "velocity ellipse (one scale); grey: the start arm, cut at the right; star: goal.",
+            *((" (", File("animations/"), ")") if self.anim(t, "UC") else ()),
+            ": each run's arm at its end, its tip path (dotted) and velocity ellipse there "
+            "(one scale); grey: the start arm, cut at the right; star: goal. Final ",
+            M_SYM,
+            ": ",
+            *finals,
+            ".",
         )
 
     def task1_uc(self) -> Section:

@@ -89,11 +89,21 @@ class Task2(Claims):
         )
         stalled = reached_e and not reached_i and bool(self.evv(t, ivkc, "stall"))
         both_first = stalled and first
-        if both_first:  # both policies' outcomes, the like-for-like one first (readings 150,
-            # 151: the stall is the policy's; with the same slack C-IVKC arrives first)
+        if both_first:  # the brief's pair first, its stall named as our policy's, then the
+            # like-for-like run in the same answer (readings 150-151 asked the latter first,
+            # 152-153 the former: the pair as the brief defines it is the question)
             both = bool(self.evid(key, "runs", emdm).get("reached"))
             answer = sentence(
-                "Given the same free slack, ",
+                f"As the brief defines them, only {emdm} has a slack: it leaves the straight "
+                "line and reaches the goal in ",
+                self.ttg(t, emdm),
+                f", while {ivkc}",
+                # the brief's exact program has no solution there: what the policy is for
+                ", infeasible from step 0,"
+                if self.evv(t, ivkc, "scaling")
+                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
+                else "",
+                " cannot leave it and, under our task scaling, stalls. Given the same free slack, ",
                 "both arrive: " if both else "",
                 f"{ivkc} ",
                 "in " if both else "arrives in ",
@@ -104,21 +114,7 @@ class Task2(Claims):
                 answer += sentence(", with a higher mean ", M_SYM, f" than {emdm}")
             if both:
                 answer += sentence(", which takes ", self.evid_goal(key, emdm))
-            answer += sentence(
-                " (",
-                Ref("tab", "outcomes"),
-                f"). As the brief defines them, only {emdm} has a slack: it leaves the straight "
-                "line and reaches the goal in ",
-                self.ttg(t, emdm),
-                f", while {ivkc}",
-                # the brief's exact program has no solution there: what the policy is for
-                ", infeasible from step 0,"
-                if self.evv(t, ivkc, "scaling")
-                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
-                else "",
-                " cannot leave it: from ",
-                *stall_told,
-            )
+            answer += sentence(" (", Ref("tab", "outcomes"), "). From ", *stall_told)
         elif stalled:
             # the contrast first (who can leave the line), then where the other stops
             scaled = " under task scaling" if self.ivkc_with_slack() else ""
