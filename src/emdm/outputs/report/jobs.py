@@ -544,9 +544,8 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     panels = [
         panel
         for rel, count in (
-            # Task 1.1's controller: the brief asks its custom solver's convergence (readings
-            # 144, 146, 149: C-EMDM's first program, a scaled single point, read as trivial)
-            (f"data/task1-lab-{Name.UC_EMDM}/histories.json", "iteration"),
+            # Task 2.1's comparison only: Task 1's custom solver is told in its section
+            # (readings 150-153: its panel, under Task 2's table, was read as out of place)
             (f"data/task2-lab-{Name.C_EMDM}/histories.json", "evaluations"),
         )
         if (stage / rel).exists() and (panel := convergence_panel(load(rel), count)) is not None

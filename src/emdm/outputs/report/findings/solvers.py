@@ -223,11 +223,11 @@ class Solvers(StoryBase):
             sentence(
                 "Convergence on the ",
                 "least dexterous" if hardest else "first",
-                " programs, cold (lines as in ",
+                " program, cold (lines as in ",
                 Ref("tab", "solvers"),
-                ", Task 1's too",
-                *(  # the table's solvers without a curve: they report no iterates
-                    (f"; {', '.join(unplotted)}: no iterates",)
+                *(  # the table's solvers without a curve: they count no objective evaluations
+                    # (the QP methods solve the program, they do not sample its objective)
+                    (f"; {', '.join(unplotted)}: no evaluations",)
                     if 0 < len(unplotted) < len(rows)
                     else ()
                 ),
