@@ -65,13 +65,16 @@ def test_the_paper_is_at_most_four_letter_pages(quick_report):
         assert f"\\section{{{section}}}" in tex
 
 
-def test_the_pitch_is_16_9_with_8_to_12_slides_and_backups(quick_report):
+def test_the_pitch_is_16_9_with_8_to_13_slides_and_backups(quick_report):
+    """A 10-minute talk: at most 13 frames before the backups, the title's included (Task 1's
+    policy has a slide of its own since readings 152-153 found it a second idea beside the
+    stills), about 45 s each."""
     folder = quick_report / "paper"
     w, h = _page_size(folder / "pitch.pdf")
     assert abs(w / h - 16 / 9) < 0.01
     tex = (folder / "pitch.tex").read_text(encoding="utf-8")
     main, _, backup = tex.partition("\\appendix")
-    assert 8 <= main.count("\\begin{frame}") <= 12
+    assert 8 <= main.count("\\begin{frame}") <= 13
     assert backup.count("\\begin{frame}") <= 6
 
 

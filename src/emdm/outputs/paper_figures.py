@@ -1830,13 +1830,28 @@ def mean_m_figure(
     medium: Medium = SLIDE,
     width: float = 2.1,
     height: float = 0.98,
+    shared_until: float | None = None,
 ) -> Path:
     """A pair's m(t) with each run's mean m over its run as a thin line of its style, the
     mean written at its right (the pitch's Task 2 slide: its "mean m 0.137 against 0.188" had
     been said, not drawn, reading 140). The time axis ends at the last arrival when the other
-    run had stalled by then (:func:`time_end`); the means are the whole runs' (Table II's)."""
+    run had stalled by then (:func:`time_end`); the means are the whole runs' (Table II's).
+    ``shared_until``: the time up to which the pair gave the same commands, shaded (the Task 1
+    slide's title, readings 152-153: said, not shown)."""
     with _figure(stem, medium, width, height) as fig:
         ax = fig.subplots()
+        if shared_until:
+            ax.axvspan(0.0, shared_until, color="#DDDDDD", linewidth=0, zorder=0)
+            ax.annotate(
+                "same\ncommands",
+                (shared_until, 0.04),
+                xycoords=("data", "axes fraction"),
+                xytext=(3, 0),
+                textcoords="offset points",
+                va="bottom",
+                fontsize=medium.tiny,
+                color="#555555",
+            )
         for run in runs:
             st = _style(run, medium)
             ax.plot(run.t, run.m, **st)

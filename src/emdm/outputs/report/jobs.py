@@ -403,6 +403,11 @@ def _story_figures(stage: Path) -> list[str]:
             )
         )
     )
+    # the pitch's Task 1 slide: the constrained pair's m(t), the same commands shaded
+    pair1 = [t1[Name.C_IVKC], t1[Name.C_EMDM]]
+    shared = explain.pair_events(*pair1)["coincide_until_t"]
+    stem = stage / SLIDE_FIGURES / "task1-C-m"
+    out.append(str(pf.mean_m_figure(pair1, stem, width=2.6, height=2.0, shared_until=shared)))
     # the pitch's Task 2 slide: the constrained pair's m(t) and mean m under its bullets
     pair2 = [t2[Name.C_IVKC], t2[Name.C_EMDM]]
     out.append(str(pf.mean_m_figure(pair2, stage / SLIDE_FIGURES / "task2-m")))

@@ -10,6 +10,7 @@ from .document import Document
 from .findings import M_SYM, MRATE, RATIO, Story
 from .findings.base import T_EQ
 from .findings.claims import cap, listed
+from .findings.records import EvidenceKey
 from .trace import Data, Sentence, Text, sentence
 
 
@@ -95,10 +96,31 @@ class Pitch:
                 sentence("Then EMDM raises ", M_SYM, ": mean ", *s.mean_m_pair(t1))
             )
         gains = s.slack_gains()
-        if gains:  # the chart beside the stills (take-away 2's evidence)
-            out.bullets["task1-stills"].append(
-                sentence("Right: a free slack instead of slowing makes C-EMDM ", listed(gains))
+        out.bullets["task1-policy"] = []
+        out.titles["task1-policy"] = sentence("Task 1 with limits: slowing the tip or a slack")
+        if gains:  # a slide of its own (readings 152-153: beside the stills, two ideas)
+            out.titles["task1-policy"] = sentence(
+                "Task 1 with limits: a slack beats slowing the tip"
+                if s.slack_better_on_all()
+                else "Task 1 with limits: slowing the tip or a slack"
             )
+            e2: EvidenceKey = "t1-c-slack-policy"
+            out.bullets["task1-policy"] += [
+                sentence(
+                    "Where the limits forbid the asked tip velocity, our controllers slow the tip "
+                    "down (task scaling)"
+                ),
+                sentence(
+                    "A free slack lets the tip leave its line instead (hatched): C-EMDM is ",
+                    listed(gains),
+                ),
+                sentence(
+                    "Slowing keeps a straighter path: ",
+                    s.mt(t1, Name.C_EMDM, "path_length", ".2f"),
+                    " against ",
+                    s.evidn(e2, "runs", Name.C_EMDM, "path_length", fmt=".2f", unit="m"),
+                ),
+            ]
         t2c = [
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
             sentence(
@@ -241,6 +263,7 @@ class Pitch:
             "ellipses",
             "task1-m",
             "task1-stills",
+            "task1-C-m",
             "task1-policy",
             "task2-m",
             "task2-stills",
