@@ -176,10 +176,10 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     text = (root / "index.html").read_text(encoding="utf-8")
     # the brief's pair first, its stall the policy's, then the like-for-like runs and where the
     # scaled run stops
-    assert "As the brief defines them, only C-EMDM has a slack: it leaves the straight" in text
-    assert "under our task scaling, stalls. Given the same free slack, both arrive: C-IVKC" in text
+    assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
+    assert "under our task scaling, stalls. Given the same free slack, both arrive, C-IVKC" in text
     scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
-    assert ("while C-IVKC, infeasible from step 0, cannot leave it and" in text) == scaled_at_start
+    assert ("C-IVKC cannot meet its task from step 0" in text) == scaled_at_start
     assert " on the scaled C-IVKC stalls " in text
     assert "evidence" in text.lower()
 
@@ -851,11 +851,11 @@ def test_the_single_point_claim_is_made_only_where_measured(quick_report, tmp_pa
     def said() -> str:
         return " ".join(render_latex(p) for s in document(root).sections for p in s.paragraphs)
 
-    assert "each admissible set is one point" in said()
+    assert "one command is feasible (widest set" in said()
     vertex["max_width"] = 1e-3  # a segment, not a point
     path.write_text(json.dumps(lab), encoding="utf-8")
     assert not Pitch(Data(root), document(root)).build().single_point
-    assert "each admissible set is one point" not in said()
+    assert "one command is feasible (widest set" not in said()
 
 
 def test_task1_slide_title_says_its_idea_only_where_measured(quick_report, tmp_path):
@@ -1246,7 +1246,7 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "given the same free slack, IVKC arrives." in said and "both arrive" not in said
+    assert "Given the same free slack, IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):
@@ -1281,19 +1281,19 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
     )
     by_term, abstract, share = said()
     assert by_term == expected
-    assert ("slack alone gives" in abstract) == by_term
+    assert ("slack alone cuts effort" in abstract) == by_term
     if by_term:  # each cause's share, sized from the records (reading 144)
         effort_emdm = metrics["controllers"]["UC-EMDM"]["total_effort"]
         alone = 100 * (run["total_effort"] / effort_ivkc - 1)
         cost = 100 * (effort_emdm / run["total_effort"] - 1)
-        assert f"slack alone gives {alone:+.0f}% effort" in abstract.replace("−", "-")
-        assert f"for {cost:+.0f}% effort" in abstract and f"for {cost:+.0f}% effort" in share
-    assert ("the term adds" in share) == by_term
-    assert share.startswith("Without the dexterity term, UC-EMDM ") and "(E6)" in share
+        assert f"slack alone cuts effort ({alone:+.0f}%)" in abstract.replace("−", "-")
+        assert f"trades {cost:+.0f}% effort for" in abstract and f"for {cost:+.0f}% effort" in share
+    assert ("the term buys" in share) == by_term
+    assert share.startswith("Without the dexterity term (E6), UC-EMDM ")
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()
-    assert not by_term and "effort and" in abstract and "the term adds" not in share
+    assert not by_term and "effort and" in abstract and "the term buys" not in share
 
 
 def test_page_only_words_are_on_the_page_and_not_in_the_paper(quick_report):

@@ -31,11 +31,13 @@ class Claims(StoryBase):
         """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers)."""
         t1 = "task1"
         return sentence(  # each gain beside its cost (a reader paired four numbers)
-            "raises the mean manipulability by ",
+            "buys ",
             self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "mean_manipulability"),
+            " mean manipulability ",
+            M_SYM,
             " for ",
             self.pct(t1, Name.UC_EMDM, Name.UC_IVKC, "total_effort"),
-            " effort, and by ",
+            " effort, and ",
             self.pct(t1, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
             " for ",
             self.pct(t1, Name.C_EMDM, Name.C_IVKC, "total_effort"),
@@ -113,12 +115,12 @@ class Claims(StoryBase):
         return sentence(  # the pair's difference is UC-EMDM's, slack and term together
             "UC-EMDM's slack absorbs up to ",
             self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
-            " of the desired velocity; against UC-IVKC, UC-EMDM spends ",
+            " of the desired velocity; against UC-IVKC, its effort is ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            " effort for ",
-            self.pct(t, emdm, ivkc, "mean_manipulability"),
-            " mean ",
+            " and its mean ",
             M_SYM,
+            " ",
+            self.pct(t, emdm, ivkc, "mean_manipulability"),
         )
 
     def uc_term_gain(self) -> Num:

@@ -16,10 +16,10 @@ class Front(Claims):
     def abstract(self) -> Sentence:
         t2 = "task2"
         out = sentence(
-            "We pose velocity control of planar arms as one quadratic program per step that tracks "
-            "a proportional controller's tip velocity, minimises joint-speed effort and maximises "
-            "the manipulability rate (EMDM), and compare it with inverse velocity kinematics "
-            "(IVKC). On a redundant three-link arm, EMDM tracks as IVKC does and ",
+            "For planar arms, EMDM solves one quadratic program per step: the tip follows a "
+            "proportional controller's velocity, effort (joint speed) is minimised and the growth "
+            "rate of manipulability maximised. We compare it with inverse velocity kinematics "
+            "(IVKC). On a redundant three-link arm, EMDM tracks as well as IVKC; it ",
             *self.dexterity_gain(),
             ". ",
         )
@@ -29,9 +29,9 @@ class Front(Claims):
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "On a two-link arm with limits, only EMDM has the brief's slack, which lets "
-                    "it leave the blocked straight line and arrive, while IVKC stalls under the "
-                    "task scaling we chose; given the same free slack, ",
+                    "On a two-link arm with limits, only EMDM has the brief's slack, so only it "
+                    "can leave the blocked straight line and arrive; IVKC stalls under the task "
+                    "scaling we chose. Given the same free slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     ". ",
@@ -49,15 +49,15 @@ class Front(Claims):
                 # pair's -21 % effort is the slack's -35 % less what the term spends)
                 *(
                     (
-                        "Without limits, EMDM's slack alone gives ",
+                        "Without limits, EMDM's slack alone cuts effort (",
                         self.uc_slack_alone(),
-                        " effort, and its dexterity term adds ",
+                        "); its dexterity term trades ",
+                        self.uc_term_cost(),
+                        " effort for ",
                         self.uc_term_gain(),
                         " mean ",
                         M_SYM,
-                        " for ",
-                        self.uc_term_cost(),
-                        " effort. ",
+                        ". ",
                     )
                     if by_term
                     else (
@@ -160,11 +160,11 @@ class Front(Claims):
         gains = self.slack_gains()
         if gains:
             p += sentence(
-                "In Task 1 task scaling's only gain is a tip moving along "
+                "In Task 1, scaling's only gain is a tip moving along "
                 if self.slack_better_on_all()
-                else "In Task 1 task scaling keeps the tip moving along ",
+                else "In Task 1, scaling keeps the tip moving along ",
                 Math("v_d", "<i>v</i><sub>d</sub>"),
-                ": " if self.slack_better_on_all() else ", but ",
+                "; " if self.slack_better_on_all() else ", but ",
                 "a free slack makes C-EMDM ",
                 listed(gains),
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",

@@ -115,15 +115,15 @@ class Solvers(StoryBase):
         if len(exact_free) == 1:  # subject first, one fact per clause (reading 142's edit)
             k = exact_free[0]
             answer += sentence(
-                "The exact gradient-free method, ",
+                "Only one gradient-free method is exact: ",
                 glossed(k),
-                ", needs a median ",
+                ". It needs a median ",
                 self.sn(lab, k, "median_evaluations", ".4g"),
                 " evaluations and ",
                 self.sn(lab, k, "median_time", unit="ms"),
                 " on the reduced program (",
                 Ref("sec", "formulation"),
-                "); run from Python, it ",
+                ") and, run from Python, ",
             ) + self.overruns(lab, exact_free, rows, named=False)
         elif exact_free:
             answer += sentence(
@@ -164,11 +164,11 @@ class Solvers(StoryBase):
                 hi = max(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
                 answer += (
                     sentence(
-                        ". The others end between ",
+                        ". The others stop ",
                         self.sn(lab, lo, "max_abs_gap", ".2g"),
                         " (",
                         lo,
-                        ") and ",
+                        ") to ",
                         self.sn(lab, hi, "max_abs_gap", ".2g"),
                         " (",
                         hi,

@@ -166,9 +166,10 @@ class Tables(Claims):
         drifted = [m for m in missed if not self.evv(*m, "stall")]
 
         indented = sentence(
-            " Indented: one change to the nominal run above (E1–E6: a cause tested; free slack: (",
+            " Indented rows change one thing in the nominal run above: E1–E6 test a cause; free "
+            "slack uses (",
             Eqs(("free",)),
-            ") in place of scaling)",
+            "), not scaling",
             *self.finer_note(),
             ".",
         )
@@ -301,13 +302,13 @@ class Tables(Claims):
             return sentence()
         nominal = self.grid(ctrl, i, "finer_dt", "nominal")
         return sentence(
-            "; ",
+            ". ",
             Upright(run_label(FINER_STEP)),
             " is ",
             Upright(run_label(GRID_MISS)),
             " at ",
             *self.e3_step(),
-            ", where nominal weights give ",
+            "; there, nominal weights give ",
             *(
                 sentence(self.gridn(ctrl, i, "finer_dt", "nominal", "time_to_goal", fmt=".2f"))
                 + sentence(" s")

@@ -22,7 +22,6 @@ from .base import (
     MRATE,
     RATIO,
     SCALED_LAB,
-    T_EQ,
     W_M,
     StoryBase,
     eq,
@@ -232,14 +231,13 @@ class Task1(StoryBase):
         # joints, which the two task equations fix: the reason is stated only when it holds
         if same and self.pair(t, "C", "coincide_determined_steps") == same:
             p = sentence(
-                "Up to ",
-                T_EQ,
+                "In the first ",
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                ", both give the same ",
+                " (",
                 self.pairn(t, "C", "coincide_steps", "d"),
-                " commands, ",
+                " steps, ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " scaled: at each, the joints at bounds allow the task only one solution",
+                " scaled) both send the same commands: joints at bounds leave just one solution",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -373,21 +371,22 @@ class Task1(StoryBase):
             for i, info in enumerate(csteps):
                 if info.degenerate:
                     clauses.append(
-                        sentence(
-                            "C-EMDM's front at ",
+                        sentence(  # what "the front is one point" means (reading 151)
+                            "at ",
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
-                            " is one point, the scaled step (",
+                            " all ratios give C-EMDM one step: the scaled one (",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
                             ")",
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            "; so is the free-slack front (",
+                            ", or with free slack (",
                             Eqs(("free",)),
-                            "), hollow in ",
+                            ") ",
                             Ref("fig", "pareto"),
+                            "'s hollow one",
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
@@ -397,11 +396,13 @@ class Task1(StoryBase):
                         "at ",
                         K_EQ,
                         self.frontn("C-EMDM", i, "k", "d"),
-                        " every ",
+                        ", ratios ",
                         RATIO,
-                        " from ",
+                        " ",
+                        Math(r"\geq", "≥"),
+                        " ",
                         self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
-                        " on gives the same optimum, a vertex of the joint bounds",
+                        " all give one optimum, a corner of the joint bounds",
                     )
                 )
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
@@ -438,15 +439,15 @@ class Task1(StoryBase):
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                " UC-EMDM misses the goal (",
+                ", UC-EMDM misses the goal (",
                 run_label(GRID_MISS),
-                "): at a peak joint speed of ",
+                "): joints peak at ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                " a ",
+                ", so one ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
-                " step leaves the linearisation ",
+                " step moves the arm too far for ",
                 Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-                " far behind. ",
+                " to hold. ",
             )
             finer = r.finer_dt
             if finer.get("reached"):
@@ -505,9 +506,13 @@ class Task1(StoryBase):
             Ref("fig", "pareto"),
             ", right)",
             *(
-                (" the mean ", M_SYM, " levels off at the nominal ratio. Where UC-EMDM arrives,")
+                (
+                    " the mean ",
+                    M_SYM,
+                    " levels off at the nominal ratio. In runs that reach the goal,",
+                )
                 if gain < 0.01
-                else (", where UC-EMDM arrives,",)
+                else (", in runs that reach the goal,",)
             ),
             " larger ratios ",
             *more,
@@ -591,19 +596,19 @@ class Task1(StoryBase):
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
             p += sentence(
                 # (the widest, rounded: a bound "<=" would understate it)
-                ". These are Task 1's challenge: each admissible set is one point (widest ",
+                ". Scaled steps are Task 1's challenge: one command is feasible (widest set ",
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                "), a degenerate vertex (",
+                "), and ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
                     if high > low
                     else ()
                 ),
-                f" bounds active where {fixed} fix it). Active-set methods can cycle there; ours "
-                "uses Bland's rule",
+                f" bounds pin it where {fixed} would do (a degenerate vertex). Active-set methods "
+                "can cycle there; ours uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")

@@ -93,27 +93,32 @@ class Task2(Claims):
             # like-for-like run in the same answer (readings 150-151 asked the latter first,
             # 152-153 the former: the pair as the brief defines it is the question)
             both = bool(self.evid(key, "runs", emdm).get("reached"))
-            answer = sentence(
-                f"As the brief defines them, only {emdm} has a slack: it leaves the straight "
-                "line and reaches the goal in ",
+            infeasible = bool(
+                self.evv(t, ivkc, "scaling") and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
+            )  # the brief's exact program has no solution there: what the policy is for
+            answer = sentence(  # one fact per sentence (copy edit after readings 150-153)
+                f"In the brief, only {emdm} has a slack. It leaves the straight line and arrives "
+                "in ",
                 self.ttg(t, emdm),
-                f", while {ivkc}",
-                # the brief's exact program has no solution there: what the policy is for
-                ", infeasible from step 0,"
-                if self.evv(t, ivkc, "scaling")
-                and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
-                else "",
-                " cannot leave it and, under our task scaling, stalls. Given the same free slack, ",
-                "both arrive: " if both else "",
-                f"{ivkc} ",
-                "in " if both else "arrives in ",
-                self.evid_goal(key, ivkc),
+                f". {ivkc} ",
+                "cannot meet its task from step 0, must stay on the line and"
+                if infeasible
+                else "cannot leave the line and",
+                ", under our task scaling, stalls. Given the same free slack, ",
             )
+            if both:
+                answer += sentence(
+                    f"both arrive, {ivkc} first (",
+                    self.evid_goal(key, ivkc),
+                    " against ",
+                    self.evid_goal(key, emdm),
+                    ")",
+                )
+            else:
+                answer += sentence(f"{ivkc} arrives in ", self.evid_goal(key, ivkc))
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
             if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
-                answer += sentence(", with a higher mean ", M_SYM, f" than {emdm}")
-            if both:
-                answer += sentence(", which takes ", self.evid_goal(key, emdm))
+                answer += sentence(" and with a higher mean ", M_SYM)
             answer += sentence(" (", Ref("tab", "outcomes"), "). From ", *stall_told)
         elif stalled:
             # the contrast first (who can leave the line), then where the other stops
@@ -550,25 +555,24 @@ class Task2(Claims):
             return []
         saves = run["total_effort"] < self.mv(t, ivkc, "total_effort")
         out = sentence(
-            f"Without the dexterity term, {emdm} ",
+            "Without the dexterity term (",
+            run_label(key),
+            f"), {emdm} ",
             "still" if saves else "no longer",
-            " saves effort, ",
+            " saves effort (",
             self.evidn(key, "runs", emdm, "total_effort", fmt=".2f"),
             " against ",
             self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
-            ", at mean ",
+            ") at mean ",
             M_SYM,
             " ",
             self.evidn(key, "runs", emdm, "mean_manipulability", fmt=".3f"),
-            " (",
-            run_label(key),
-            ")",
         )
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ": the slack saves effort; the term adds ",
+                ". The slack saves effort; the term buys ",
                 self.uc_term_gain(),
-                " to ",
+                " ",
                 M_SYM,
                 " for ",
                 self.uc_term_cost(),
