@@ -1548,7 +1548,7 @@ def slack_figure(
     outside = any(b.max() > 0.0 for b in beyond)
     n = 4 if outside else 3
     paper = medium is PAPER
-    with _figure(stem, medium, medium.column, 1.9 if paper else 2.3) as fig:
+    with _figure(stem, medium, medium.column, 1.7 if paper else 2.3) as fig:
         grid = fig.subplots(2, 2, sharex=True) if paper else fig.subplots(1, n, sharex=True)
         axes = list(np.ravel(grid))[:n]
         for extra in list(np.ravel(grid))[n:]:
@@ -1561,13 +1561,15 @@ def slack_figure(
             if outside:
                 axes[3].plot(run.t, over, **st)
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-        ax_e.set_ylabel(r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)  # (a short Sigma)
-        ax_gap.set_ylabel("gap (m/s)" if paper else "tracking gap (m/s)", labelpad=1)
+        # in print the units alone (the caption names each quantity): two-line-tall labels ran
+        # into each other at 0.5 in a panel
+        ax_e.set_ylabel("rad$^2$/s" if paper else r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)
+        ax_gap.set_ylabel("m/s" if paper else "tracking gap (m/s)", labelpad=1)
         ax_gap.set_ylim(bottom=GAP_FLOOR / 4)  # a run on the floor (an exact task) is a line
         ax_gap.yaxis.set_major_locator(LogLocator(numticks=4))
         ax_gap.yaxis.set_minor_locator(NullLocator())
         if outside:
-            axes[3].set_ylabel("past limit (rad)" if paper else "past a joint limit (rad)")
+            axes[3].set_ylabel("rad" if paper else "past a joint limit (rad)", labelpad=1)
         for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)"), strict=False):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
             if ax is not ax_gap:
@@ -1732,7 +1734,7 @@ def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium =
     )
     scale = 0.16 * arm.reach / biggest if biggest > 0 else 1.0
     width = medium.column if medium is PAPER else 4.4
-    height = 1.2 if medium is PAPER else 2.4
+    height = 1.15 if medium is PAPER else 2.4
     drawn: list[np.ndarray] = []
     with _figure(stem, medium, width, height) as fig:
         axes = fig.subplots(1, len(pairs), squeeze=False)[0]

@@ -461,20 +461,23 @@ class StoryBase:
         when recorded, the run without the dexterity term, in the panels its answer cites."""
         key: EvidenceKey = "t2-uc-emdm-no-manip"
         without = key in self.rec.evidence and not self.evid(key, "runs", emdm).get("error")
+        dotted = (
+            sentence(f", {run_label(key)} (dotted: ", *self.weight_off(key), ")")
+            if without
+            else sentence()
+        )
         return sentence(
             f"{ivkc} (solid), {emdm} (dashed)",
-            *(
-                (f", {emdm} without its dexterity term (dotted, {run_label(key)})",)
-                if without
-                else ()
-            ),
+            *dotted,
             ": (a) ",
             M_SYM,
-            ", (b) effort so far, (c) tracking gap ",
+            ", (b) effort so far ",
+            Math(r"\Sigma E\Delta t", "Σ<i>E</i>Δ<i>t</i>"),
+            ", (c) tracking gap ",
             Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
             " (the slack; log, floor ",
             Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
-            "), (d) the deepest joint's excess past its limit.",
+            "), (d) the largest excess past a joint limit.",
         )
 
     def pair_caption(self, task: str, group: str) -> Sentence:

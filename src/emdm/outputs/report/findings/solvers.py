@@ -391,7 +391,7 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " programs (least dexterous included). ",
+                " programs. ",
                 Unit("ms"),
                 ": median cold time from Python (*: compiled loop); it./ev.: median "
                 "iterations, evaluations (–: none",

@@ -607,7 +607,7 @@ class Task1(StoryBase):
                     if high > low
                     else ()
                 ),
-                f" bounds pin it where {fixed} would do (a degenerate vertex). Active-set methods "
+                f" bounds pin it where {fixed} would do. Active-set methods "
                 "can cycle there; ours uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
