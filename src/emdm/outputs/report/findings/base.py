@@ -45,6 +45,10 @@ EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
 
 GAP_FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the tracking-gap axis is floored at (Fig. 5's caption says it)."""
+GAP_MATH = Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖")
+"""The tracking gap, as the captions of the figures that draw it write it."""
+GAP_FLOOR_MATH = Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>")
+"""Its axis' floor, as they write it."""
 
 # ---------------------------------------------------------------------------- inline math
 ALPHA = Math(r"\alpha", "α")
@@ -474,9 +478,9 @@ class StoryBase:
             ", (b) effort so far ",
             Math(r"\Sigma E\Delta t", "Σ<i>E</i>Δ<i>t</i>"),
             ", (c) tracking gap ",
-            Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+            GAP_MATH,
             " (the slack; log, floor ",
-            Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
+            GAP_FLOOR_MATH,
             "), (d) the largest excess past a joint limit.",
         )
 
@@ -514,11 +518,11 @@ class StoryBase:
         if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
             out += sentence(
                 " with (d) the tracking gap ",
-                Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖"),
+                GAP_MATH,
                 " (slack or scaled-off ",
                 Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
                 "; log, floored at ",
-                Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</sup>"),
+                GAP_FLOOR_MATH,
                 ")" if FOURTH_PANEL["task1"] == "path" else "), joints in (e), (f)",
             )
         for note in notes:
