@@ -379,9 +379,9 @@ def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, dra
 
 
 def test_the_arms_figure_draws_each_runs_postures_path_and_ellipse(tmp_path, drawn):
-    """Task 1's stills in the paper: one panel per pair with both runs overlaid, each run's arm
-    at its end (its joints' positions as the record gives them), its tip path, and its
-    manipulability ellipse there, of the Jacobian's shape."""
+    """Task 1's stills in the paper: one view, every run's arm at its end (its joints'
+    positions as the record gives them), its whole tip path, and its manipulability ellipse
+    there, of the Jacobian's shape; the legend gives each run's final m."""
     from emdm.outputs import paper_figures as pf
     from emdm.outputs.animate import ellipse_points
 
@@ -392,29 +392,29 @@ def test_the_arms_figure_draws_each_runs_postures_path_and_ellipse(tmp_path, dra
     }
     with formats((".png",)):
         pf.arms_figure(pairs, tmp_path / "arms")
-    axes = drawn[-1].axes
-    assert len(axes) == 2
+    (ax,) = drawn[-1].axes
     arm = sc.planar_arm
-    for ax, runs in zip(axes, pairs.values(), strict=True):
-        lines = [line.get_xydata() for line in ax.get_lines()]
-        patches = [p.get_xy() for p in ax.patches]
-        assert [t.get_text() for t in ax.get_legend().get_texts()] == [
-            r.controller.name for r in runs
-        ]
-        for run in runs:
-            posture = np.asarray(arm.joint_positions(run.q[-1]))[:, :2]
-            assert any(x.shape == posture.shape and np.allclose(x, posture) for x in lines)
-            assert any(
-                x.shape == run.p[:, :2].shape and np.allclose(x, run.p[:, :2]) for x in lines
-            )
-            # the ellipse's shape at the end: its axes are the Jacobian's singular values
-            ell = next(
-                x for x in patches if np.allclose(x[:-1].mean(axis=0), run.p[-1, :2], atol=1e-9)
-            )
-            ref = ellipse_points(arm.jacobian(run.q[-1]), run.p[-1, :2], 1.0) - run.p[-1, :2]
-            drawn_shape = ell - run.p[-1, :2]
-            ratio = np.abs(drawn_shape).max() / np.abs(ref).max()
-            assert np.allclose(drawn_shape[: len(ref)], ratio * ref)
+    lines = [line.get_xydata() for line in ax.get_lines()]
+    patches = [p.get_xy() for p in ax.patches]
+    runs = [r for pair in pairs.values() for r in pair]
+    labels = [t.get_text() for t in drawn[-1].legends[0].get_texts()]
+    ends = [r.stalled_from if r.stalled_from is not None else r.steps for r in runs]
+    named = [f"{r.controller.name}  {r.m[k]:.3f}" for r, k in zip(runs, ends, strict=True)]
+    assert labels == [*named, "start"]
+    start = np.asarray(arm.joint_positions(runs[0].q[0]))[:, :2]
+    assert any(x.shape == start.shape and np.allclose(x, start) for x in lines)
+    for run, k in zip(runs, ends, strict=True):  # at its end: its stall, if it stalled
+        posture = np.asarray(arm.joint_positions(run.q[k]))[:, :2]
+        assert any(x.shape == posture.shape and np.allclose(x, posture) for x in lines)
+        path = run.p[: k + 1, :2]
+        assert any(x.shape == path.shape and np.allclose(x, path) for x in lines)
+        # the ellipse's shape at the end: its axes are the Jacobian's singular values
+        # (its 72 distinct points' mean: matplotlib may close the polygon once more)
+        ell = next(x for x in patches if np.allclose(x[:72].mean(axis=0), run.p[k, :2], atol=1e-9))
+        ref = ellipse_points(arm.jacobian(run.q[k]), run.p[k, :2], 1.0) - run.p[k, :2]
+        drawn_shape = ell[: len(ref)] - run.p[k, :2]
+        ratio = np.abs(drawn_shape).max() / np.abs(ref).max()
+        assert np.allclose(drawn_shape, ratio * ref)
 
 
 def test_the_task2_2_figure_draws_the_answers_four_quantities(tmp_path, drawn, task2_runs):

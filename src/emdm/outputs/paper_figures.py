@@ -1719,100 +1719,73 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
 
 
 def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium = PAPER) -> Path:
-    """Animation stills of a task's pairs, one panel per pair with its two runs overlaid: the
-    start arm (grey), each run's arm at its end, its tip path and its manipulability ellipse
-    there (the animation's, on one scale for every panel), so that what tip-space plots cannot
-    show, the postures null-space motion changes, is seen (the caption gives each run's final
-    m: the ellipses' difference, reading 152). An arm halfway, in time or in distance, crowded
-    the end pose or the start arm (reading 152)."""
+    """Animation stills of a task's pairs in one view of the whole motion (readings 150, 154:
+    two cropped panels cut the start arm and the paths, and looked alike): the start arm
+    (grey), each run's arm at its end (its stall, if it stalled) in its own colour and dash,
+    its tip path (dotted) and its manipulability ellipse there (one scale), the goal; the
+    legend gives each run's final m (the ellipses' difference, reading 152)."""
     runs = [r for pair in pairs.values() for r in pair]
     sc = runs[0].scenario
     arm = sc.planar_arm
+    ends = [r.stalled_from if r.stalled_from is not None else r.steps for r in runs]
     biggest = max(
-        float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(r.q[-1]) @ arm.jacobian(r.q[-1]).T)[-1]))
-        for r in runs
+        float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(r.q[k]) @ arm.jacobian(r.q[k]).T)[-1]))
+        for r, k in zip(runs, ends, strict=True)
     )
-    scale = 0.16 * arm.reach / biggest if biggest > 0 else 1.0
+    scale = 0.12 * arm.reach / biggest if biggest > 0 else 1.0
     width = medium.column if medium is PAPER else 4.4
-    height = 1.15 if medium is PAPER else 2.4
-    drawn: list[np.ndarray] = []
+    height = 1.2 if medium is PAPER else 2.4
     with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(1, len(pairs), squeeze=False)[0]
-        for n, (ax, pair) in enumerate(zip(axes, pairs.values(), strict=True)):
-            start = _arm_points(pair[0], pair[0].q[0])  # cut at the frame: the view is the
-            # postures' (the start arm would halve their scale at column width)
+        ax = fig.add_subplot()
+        start = _arm_points(runs[0], runs[0].q[0])
+        ax.plot(*start[:, :2].T, color="#999999", linewidth=medium.line, marker="o", markersize=2)
+        handles: list[Artist] = []
+        for run, last in zip(runs, ends, strict=True):
+            st = _style(run, medium)
+            pts = _arm_points(run, run.q[last])
             ax.plot(
-                *start[:, :2].T,
-                color="#999999",
-                linewidth=medium.line,
+                *pts[:, :2].T,
+                color=st["color"],
+                linestyle=st["linestyle"],
+                linewidth=medium.line * 1.2,
                 marker="o",
-                markersize=2,
-                zorder=1,
+                markersize=1.8,
+                zorder=2,
             )
-            for run in pair:
-                st = _style(run, medium)
-                stalled = run.stalled_from
-                last = stalled if stalled is not None else run.steps
-                pts = _arm_points(run, run.q[last])
-                drawn.append(pts[:, :2])
-                ax.plot(
-                    *pts[:, :2].T,
-                    color=st["color"],
-                    linestyle=st["linestyle"],
-                    linewidth=medium.line * 1.2,
-                    marker="o",
-                    markersize=1.8,
-                    zorder=2,
-                )
-                ell = ellipse_points(arm.jacobian(run.q[last]), run.p[last, :2], scale)
-                drawn.append(ell)
-                ax.fill(*ell.T, color=st["color"], alpha=0.18, linewidth=0)
-                ax.plot(
-                    *ell.T,
-                    color=st["color"],
-                    linestyle=st["linestyle"],
-                    linewidth=0.6 * medium.line,
-                )
-                ax.plot(
-                    *run.p[: last + 1, :2].T,
-                    color=st["color"],
-                    linewidth=0.6 * medium.line,
-                    linestyle=":",
-                    zorder=3,
-                )
+            ell = ellipse_points(arm.jacobian(run.q[last]), run.p[last, :2], scale)
+            ax.fill(*ell.T, color=st["color"], alpha=0.12, linewidth=0)
             ax.plot(
-                *sc.motion.goal, marker="*", color="black", markersize=6, linestyle="none", zorder=4
+                *ell.T, color=st["color"], linestyle=st["linestyle"], linewidth=0.6 * medium.line
             )
-            ax.text(  # inside, in the corner the arms leave free: a title row cost the postures
-                0.97,
-                0.95,
-                f"({'abcd'[n]})",  # the legend names the pair
-                transform=ax.transAxes,
-                ha="right",
-                va="top",
-                fontsize=medium.small,
-                fontweight="bold",
+            ax.plot(
+                *run.p[: last + 1, :2].T,
+                color=st["color"],
+                linewidth=0.6 * medium.line,
+                linestyle=":",
+                zorder=3,
             )
-            ax.legend(  # in the corner the arms leave free (the start arm is cut at the right)
-                handles=[Line2D([], [], **_style(r, medium)) for r in pair],
-                loc="lower left",
-                fontsize=medium.tiny,
-                frameon=False,
-                handlelength=1.6,
-                labelspacing=0.2,
-                borderaxespad=0.2,
+            handles.append(
+                Line2D([], [], **{**st, "label": f"{run.controller.name}  {run.m[last]:.3f}"})
             )
-            ax.set_aspect("equal")
-            ax.set_xlabel(r"$x$ (m)")
-            if n == 0:
-                ax.set_ylabel(r"$y$ (m)")
-        box = np.concatenate(drawn)
-        pad = 0.05 * arm.reach
-        for n, ax in enumerate(axes):  # one view for every pair
-            ax.set_xlim(box[:, 0].min() - pad, box[:, 0].max() + pad)
-            ax.set_ylim(box[:, 1].min() - pad, box[:, 1].max() + pad)
-            if n:
-                ax.tick_params(labelleft=False)
+        ax.plot(
+            *sc.motion.goal, marker="*", color="black", markersize=6, linestyle="none", zorder=4
+        )
+        handles.append(Line2D([], [], color="#999999", marker="o", markersize=2, label="start"))
+        ax.set_aspect("equal")
+        ax.set_xlabel(r"$x$ (m)", labelpad=1)
+        ax.set_ylabel(r"$y$ (m)", labelpad=1)
+        ax.xaxis.set_major_locator(MaxNLocator(4))
+        ax.yaxis.set_major_locator(MaxNLocator(3))
+        fig.legend(  # beside the view: over it, it hid the arms
+            handles=handles,
+            loc="outside right center",
+            fontsize=medium.tiny,
+            frameon=False,
+            handlelength=1.8,
+            labelspacing=0.3,
+            title=r"final $m$ (m$^2$)",
+            title_fontsize=medium.tiny,
+        )
     return stem
 
 

@@ -169,9 +169,7 @@ class Tables(Claims):
             " Indented rows change one thing in the nominal run above: E1–E6 test a cause; free "
             "slack uses (",
             Eqs(("free",)),
-            "), not scaling",
-            *self.finer_note(),
-            ".",
+            "), not scaling.",
         )
 
         def caption(evidence: bool) -> Sentence:
@@ -294,33 +292,6 @@ class Tables(Claims):
         runs = self.rec.grids.get(Name.UC_EMDM, [])
         return next((i for i, r in enumerate(runs) if not r.reached), None)
 
-    def finer_note(self) -> Sentence:
-        """Table II's caption: what E2b is, and the nominal weights' run at its step."""
-        i = self.grid_miss()
-        ctrl = Name.UC_EMDM
-        if i is None or "nominal" not in (self.grid(ctrl, i, "finer_dt") or {}):
-            return sentence()
-        nominal = self.grid(ctrl, i, "finer_dt", "nominal")
-        return sentence(
-            ". ",
-            Upright(run_label(FINER_STEP)),
-            " is ",
-            Upright(run_label(GRID_MISS)),
-            " at ",
-            *self.e3_step(),
-            "; there, nominal weights give ",
-            *(
-                sentence(self.gridn(ctrl, i, "finer_dt", "nominal", "time_to_goal", fmt=".2f"))
-                + sentence(" s")
-                if nominal.get("reached")
-                else unreached(False)
-            ),
-            ", ",
-            self.gridn(ctrl, i, "finer_dt", "nominal", "mean_manipulability", fmt=".3f"),
-            ", ",
-            self.gridn(ctrl, i, "finer_dt", "nominal", "total_effort", fmt=".2f"),
-        )
-
     def grid_outcome_rows(self) -> list[list[Sentence]]:
         """E2a and E2b in Table II's columns: the weight grid's first run that misses the goal,
         and the same weights at a five times smaller step."""
@@ -349,7 +320,17 @@ class Tables(Claims):
         finer = self.grid(ctrl, i, "finer_dt") or {}
         if "nominal" in finer:
             rows.append(
-                [sentence(INDENT, run_label(FINER_STEP), ": ", *self.e3_step()), *cells("finer_dt")]
+                [
+                    sentence(
+                        INDENT,
+                        run_label(FINER_STEP),
+                        ": ",
+                        run_label(GRID_MISS),
+                        " at ",
+                        *self.e3_step(),
+                    ),
+                    *cells("finer_dt"),
+                ]
             )
         return rows
 

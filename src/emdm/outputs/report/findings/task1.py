@@ -39,26 +39,15 @@ PARETO_RECORD = "data/task1-pareto-UC-EMDM/pareto.json"
 
 class Task1(StoryBase):
     def arms_caption(self) -> Sentence:
-        """The caption of Task 1's stills: what is drawn, the animations they come from, and
-        each run's final m (the ellipses differ by less than the eye tells, reading 152)."""
-        t = "task1"
-        finals = sentence()
-        for g, group in enumerate(("UC", "C")):
-            for i, name in enumerate(PAIRS[group]):
-                finals += sentence(
-                    "; " if g and not i else (", " if i else ""),
-                    f"{name} ",
-                    self.mt(t, name, "final_manipulability", ".3f"),
-                )
+        """The caption of Task 1's stills: what is drawn and the animations they come from
+        (each run's final m is in the legend)."""
         return sentence(
             "Stills of Task 1's animations",
             # (the folder holds every pair's, Task 2's too: named once, here)
-            *((" (", File("animations/"), ")") if self.anim(t, "UC") else ()),
-            ": each run's arm at its end, its tip path (dotted) and velocity ellipse there "
-            "(one scale); grey: the start arm, cut at the right; star: goal. Final ",
+            *((" (", File("animations/"), ")") if self.anim("task1", "UC") else ()),
+            ": the start arm (grey) and each run's arm at its end, with its tip path (dotted) "
+            "and velocity ellipse there (one scale); legend: final ",
             M_SYM,
-            ": ",
-            *finals,
             ".",
         )
 
@@ -625,7 +614,7 @@ class Task1(StoryBase):
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")
-            p += sentence(PageOnly(tuple(declines)))
+            p += declines  # (reading 150, 154: the fallback's behaviour is the brief's question)
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,

@@ -570,7 +570,7 @@ class Task2(Claims):
         )
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ". The slack saves effort; the term buys ",
+                ". The slack saves effort; against this run, the term buys ",
                 self.uc_term_gain(),
                 " ",
                 M_SYM,
