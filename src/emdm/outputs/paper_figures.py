@@ -324,8 +324,10 @@ def pair_figure(
             ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
             # the floor inside the frame: a run on it (an exact task) is a line, not the frame
             ax_gap.set_ylim(bottom=GAP_FLOOR / 4)
-        for ax in upper_axes:
-            ax.set_xlabel(r"$t$ (s)", labelpad=1)
+        for ax in upper_axes:  # in print the strips' time label serves (its height went to the
+            # panels, readings 150-155: too small); a slide has room for each
+            if medium is not PAPER:
+                ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
         for ax in upper_axes[1:]:
             ax.yaxis.set_major_locator(LogLocator(numticks=3))
