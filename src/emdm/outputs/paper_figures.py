@@ -1720,6 +1720,13 @@ def stills_figure(runs: Sequence[Run], stem: Path, times: int = 6, medium: Mediu
     return stem
 
 
+_ARM_STYLE: dict[bool, dict[str, Any]] = {
+    True: {"linewidth": 2.6, "marker": "s", "markersize": 3.2, "zorder": 2},
+    False: {"linewidth": 1.1, "marker": "o", "markersize": 2.2, "zorder": 2.5},
+}
+"""The stills' arms by whether the run is constrained (its joints' marker and the line's width)."""
+
+
 def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium = PAPER) -> Path:
     """Animation stills of a task's pairs in one view of the whole motion (readings 150, 154:
     two cropped panels cut the start arm and the paths, and looked alike): the start arm
@@ -1743,17 +1750,12 @@ def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium =
         ax.plot(*start[:, :2].T, color="#999999", linewidth=medium.line, marker="o", markersize=2)
         handles: list[Artist] = []
         for run, last in zip(runs, ends, strict=True):
-            st = _style(run, medium)
+            # a constrained run thick with square joints under an unconstrained one, thin with
+            # round joints: two that end in one pose both show (reading 156), and the pairs'
+            # near hues differ in grey (reading 157)
+            st = {**_style(run, medium), **_ARM_STYLE[run.controller.constrained]}
             pts = _arm_points(run, run.q[last])
-            ax.plot(
-                *pts[:, :2].T,
-                color=st["color"],
-                linestyle=st["linestyle"],
-                linewidth=medium.line * 1.2,
-                marker="o",
-                markersize=1.8,
-                zorder=2,
-            )
+            ax.plot(*pts[:, :2].T, **{**st, "label": None})
             ell = ellipse_points(arm.jacobian(run.q[last]), run.p[last, :2], scale)
             ax.fill(*ell.T, color=st["color"], alpha=0.12, linewidth=0)
             ax.plot(

@@ -92,7 +92,7 @@ class Task1(StoryBase):
             *(
                 (" (", Ref("fig", "t1-uc"), "(d))")
                 if FOURTH_PANEL[t] == "path"
-                else (" (", Ref("fig", "t1-arms"), "(a))")
+                else (" (", Ref("fig", "t1-arms"), ")")
                 if self.has_figure("t1-arms")
                 else ()
             ),
