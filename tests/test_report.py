@@ -1197,11 +1197,17 @@ def test_the_task1_policy_slide_draws_both_policies_from_the_records(
     expected = []
     for ctrl in ("C-IVKC", "C-EMDM"):
         for policy, rec in (("slowed", table["controllers"][ctrl]), ("free slack", slack[ctrl])):
-            expected.append(
-                (ctrl, policy, rec["time_to_goal"], rec["total_effort"], rec["mean_manipulability"])
-            )
+            keys = ("time_to_goal", "total_effort", "mean_manipulability", "path_length")
+            expected.append((ctrl, policy, *(rec[k] for k in keys)))
     got = [
-        (str(r.controller), r.policy, r.time_to_goal, r.total_effort, r.mean_manipulability)
+        (
+            str(r.controller),
+            r.policy,
+            r.time_to_goal,
+            r.total_effort,
+            r.mean_manipulability,
+            r.path_length,
+        )
         for r in runs
     ]
     assert [g[:2] for g in got] == [e[:2] for e in expected]

@@ -1867,12 +1867,15 @@ class PolicyRun:
     time_to_goal: float | None
     total_effort: float
     mean_manipulability: float
+    path_length: float
 
 
 POLICY_PANELS = (
     ("time_to_goal", "time to goal (s)", "{:.2f}"),
     ("total_effort", r"effort $\sum E\Delta t$ (rad$^2$/s)", "{:.2f}"),
     ("mean_manipulability", r"mean $m$ (m$^2$)", "{:.3f}"),
+    # what slowing keeps, drawn beside what it costs (readings 154, 156: said, not shown)
+    ("path_length", "tip path (m)", "{:.2f}"),
 )
 """The policy chart's panels, top to bottom: outcome, axis title, value format."""
 

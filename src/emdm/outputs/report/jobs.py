@@ -424,7 +424,7 @@ def _story_figures(stage: Path) -> list[str]:
     policy = policy_runs(t1, stage / "data" / "evidence.json")
     if policy:
         stem = stage / SLIDE_FIGURES / "task1-policy"
-        out.append(str(pf.policy_figure(policy, stem, height=2.25)))
+        out.append(str(pf.policy_figure(policy, stem, height=2.8)))
     bars = evidence_bars(t2, stage / "data" / "evidence.json")
     if len(bars) > 2:  # the two as run, and at least one run with a cause changed
         max_time = t2[Name.C_EMDM].scenario.motion.max_time
@@ -457,6 +457,7 @@ def policy_runs(runs: dict[str, Run], record: Path) -> list[pf.PolicyRun]:
                 run["time_to_goal"] if run["reached"] else None,
                 float(run["total_effort"]),
                 float(run["mean_manipulability"]),
+                float(run["path_length"]),
             )
         )
         out.append(
@@ -466,6 +467,7 @@ def policy_runs(runs: dict[str, Run], record: Path) -> list[pf.PolicyRun]:
                 other["time_to_goal"] if other.get("reached") else None,
                 float(other["total_effort"]),
                 float(other["mean_manipulability"]),
+                float(other["path_length"]),
             )
         )
     return out

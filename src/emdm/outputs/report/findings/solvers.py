@@ -231,7 +231,7 @@ class Solvers(StoryBase):
                     if 0 < len(unplotted) < len(rows)
                     else ()
                 ),
-                "; broken: gradient-free; marker: answer returned).",
+                "; line: best so far, broken: gradient-free; marker: answer returned).",
             ),
         )
         if self.has_figure("convergence"):

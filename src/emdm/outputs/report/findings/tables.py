@@ -121,7 +121,18 @@ class Tables(Claims):
                 Eqs(("scale",)),
                 ")).",
             ),
-            [sentence("task, ctrl."), sentence("minimise"), sentence("subject to")],
+            [
+                sentence("task, ctrl."),
+                # the decision variables named (reading 156: only implied)
+                sentence(
+                    "minimise over ",
+                    Math(r"\dot q", "<i>q̇</i>"),
+                    " (and ",
+                    Math(r"\delta", "δ"),
+                    ")",
+                ),
+                sentence("subject to"),
+            ],
             align="lll",
             font="scriptsize",
             colsep=1.5,
