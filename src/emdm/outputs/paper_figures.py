@@ -1744,7 +1744,7 @@ def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium =
         float(np.sqrt(np.linalg.eigvalsh(arm.jacobian(r.q[k]) @ arm.jacobian(r.q[k]).T)[-1]))
         for r, k in zip(runs, ends, strict=True)
     )
-    scale = 0.12 * arm.reach / biggest if biggest > 0 else 1.0
+    scale = 0.22 * arm.reach / biggest if biggest > 0 else 1.0
     width = medium.column if medium is PAPER else 4.4
     height = 1.2 if medium is PAPER else 2.4
     with _figure(stem, medium, width, height) as fig:
