@@ -85,8 +85,9 @@ class Pitch:
                 sentence(
                     "The same commands for the first ",
                     s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
-                    # (the slowing's depth is the paper's: not drawn here, readings 154, 156)
-                    ": both hold the same joints at their bounds (shaded)",
+                    # (the slowing's depth is the paper's: not drawn here, readings 154, 156;
+                    # the shading is the span, not the bounds, reading 159)
+                    " (shaded): both hold the same joints at their bounds",
                 )
             )
         if s.pair(t1, "C", "coincide_steps") and more_m:  # the title's second half, measured
