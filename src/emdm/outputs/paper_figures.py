@@ -252,19 +252,31 @@ def pair_figure(
     *,
     gap: bool = False,
     path: bool = False,
+    without: tuple[str, Run] | None = None,
 ) -> Path:
     """A pair in one composite: (a) m(t), (b) E(t), (c) the distance to the goal ||e||(t)
     above, (d) q(t) and (e) qd(t) below, one strip per joint. A fourth panel above, the joints
     then (e) and (f): ``gap``, (d) the velocity-tracking gap of :func:`tracking_gap` (the slack
     at work); ``path``, (d) the tip paths in the plane, start and goal marked (the tracking
-    overlaid where it is exact)."""
+    overlaid where it is exact). ``without``: ``(label, run)``, a run with one cause removed,
+    drawn grey and dotted in every panel (Task 2.2's run without the dexterity term)."""
     if gap and path:
         raise ValueError("pair_figure: one fourth panel, the gap or the path")
     sc = runs[0].scenario
     n = sc.n
     spans = _common_scaled(runs)
+    drawn = [(r, _style(r, medium)) for r in runs]
+    if without is not None:
+        label, extra = without
+        drawn.append(
+            (
+                extra,
+                {"color": "#666666", "linestyle": ":", "linewidth": medium.line, "label": label},
+            )
+        )
+    every = [r for r, _ in drawn]
     upper_row = gap or path  # four panels above: narrower, so taller to stay legible
-    height = ((2.5 if upper_row else 2.35) if n == 3 else 2.1) if medium is PAPER else 3.4
+    height = ((2.5 if upper_row else 2.35) if n == 3 else 2.0) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
         # the joint strips get most of the height: limits, damper zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
@@ -275,7 +287,7 @@ def pair_figure(
         upper = outer[0].subgridspec(1, 4 if gap or path else 3, wspace=0.12)  # labels clear
         # per joint: every run's lowest and highest speed, and the limit; a joint whose speed
         # goes far beyond its limit gets a strip cut at FAR_BEYOND times it
-        extents = [_speed_extent(runs, j) for j in range(n)]
+        extents = [_speed_extent(every, j) for j in range(n)]
         far_joints = {j for j, (lo_, hi_, lim) in enumerate(extents) if _far(lo_, hi_, lim)}
         lower = outer[1].subgridspec(1, 2)
         ax_m = fig.add_subplot(upper[0, 0])
@@ -285,8 +297,7 @@ def pair_figure(
         ax_path = fig.add_subplot(upper[0, 3]) if path else None
         q_axes = _column(fig, lower[0, 0], n)
         qd_axes = _column(fig, lower[0, 1], n)
-        for run in runs:
-            st = _style(run, medium)
+        for run, st in drawn:
             ax_m.plot(run.t, run.m, **st)
             ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
@@ -358,8 +369,8 @@ def pair_figure(
                 for start, stop in ((limit, hi_view), (lo_view, -limit)):
                     if stop > start:
                         qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
-            bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in runs))
-            top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in runs))
+            bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in every))
+            top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in every))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
             qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
@@ -392,7 +403,7 @@ def pair_figure(
         # panel letters above the axes, where no curve can hide them
         for ax, letter in zip(upper_axes, ("(a)", "(b)", "(c)", "(d)"), strict=False):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
-        handles: list[Artist] = [Line2D([], [], **_style(r, medium)) for r in runs]
+        handles: list[Artist] = [Line2D([], [], **st) for _, st in drawn]
         if spans:
             handles.append(_scaled_patch(r"both task-scaled ($\alpha<1$)"))
         fig.legend(

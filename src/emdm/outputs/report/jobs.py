@@ -311,14 +311,20 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
         # tip paths (its task imposed: the tracking overlaid)
         fourth = FOURTH_PANEL[task]
         stem = stage / PAPER_FIGURES / f"{task}-{group}"
-        without = _without_term(emdm) if (task, group) == ("task2", "UC") else None
-        if without is not None:  # Task 2.2: what its answer says, in four larger panels
+        # Task 2.2's pair beside its run without the dexterity term (its answer's evidence),
+        # with the joint strips the other pairs have (readings 152-159 asked them back)
+        extra = _without_term(emdm) if (task, group) == ("task2", "UC") else None
+        if extra is not None:
             from .findings.base import run_label
 
-            label = f"{without[0]} ({run_label(WITHOUT_TERM)})"
-            out = [str(pf.slack_figure(pair, stem, without=(label, without[1])))]
-        else:
-            out = [str(pf.pair_figure(pair, stem, gap=fourth == "gap", path=fourth == "path"))]
+            extra = (f"{extra[0]} ({run_label(WITHOUT_TERM)})", extra[1])
+        out = [
+            str(
+                pf.pair_figure(
+                    pair, stem, gap=fourth == "gap", path=fourth == "path", without=extra
+                )
+            )
+        ]
         if not cfg.quick:
             out.append(
                 str(pf.pair_figure(pair, stage / SLIDE_FIGURES / f"{task}-{group}", pf.SLIDE))

@@ -460,30 +460,6 @@ class StoryBase:
         limit = float(np.min(np.abs(self.rec.scenarios[task].arm.qd_max)))
         return any(self.mv(task, c, "max_abs_qd") > FAR_BEYOND * limit for c in controllers)
 
-    def slack_caption(self, ivkc: str, emdm: str) -> Sentence:
-        """Task 2.2's figure (:func:`~emdm.outputs.paper_figures.slack_figure`): the pair and,
-        when recorded, the run without the dexterity term, in the panels its answer cites."""
-        key: EvidenceKey = "t2-uc-emdm-no-manip"
-        without = key in self.rec.evidence and not self.evid(key, "runs", emdm).get("error")
-        dotted = (
-            sentence(f", {run_label(key)} (dotted: ", *self.weight_off(key), ")")
-            if without
-            else sentence()
-        )
-        return sentence(
-            f"{ivkc} (solid), {emdm} (dashed)",
-            *dotted,
-            ": (a) ",
-            M_SYM,
-            ", (b) effort so far ",
-            Math(r"\Sigma E\Delta t", "Σ<i>E</i>Δ<i>t</i>"),
-            ", (c) tracking gap ",
-            GAP_MATH,
-            " (the slack; log, floor ",
-            GAP_FLOOR_MATH,
-            "), (d) the largest excess past a joint limit.",
-        )
-
     def pair_caption(self, task: str, group: str) -> Sentence:
         """A pair figure's caption: its panels in full for the first (Task 1.1's), by reference
         to it for the others, then what this pair's figure adds (the scaled span, the time axes'
@@ -511,8 +487,11 @@ class StoryBase:
         if (task, group) == ("task1", "UC"):
             far = self.far_beyond(task, PAIRS[group])
             out += sentence(": ") + self.panels(far, path=FOURTH_PANEL[task] == "path")
-        elif (task, group) == ("task2", "UC"):  # paper_figures.slack_figure: the answer's four
-            return self.slack_caption(ivkc, emdm)
+        elif (task, group) == ("task2", "UC"):  # as Task 2.1's, its run without the term dotted
+            key: EvidenceKey = "t2-uc-emdm-no-manip"
+            out += sentence(", as in ", Ref("fig", "t2-c"))
+            if key in self.rec.evidence and not self.evid(key, "runs", emdm).get("error"):
+                out += sentence(f"; dotted: {run_label(key)}")  # (its legend says w_M = 0)
         else:
             out += sentence(", as in ", Ref("fig", "t1-uc"))
         if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
