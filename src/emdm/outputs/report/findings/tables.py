@@ -13,6 +13,7 @@ from .base import (
     FINER_STEP,
     GRID_MISS,
     M_SYM,
+    QDOT,
     W_M,
     bare,
     eq,
@@ -124,13 +125,7 @@ class Tables(Claims):
             [
                 sentence("task, ctrl."),
                 # the decision variables named (reading 156: only implied)
-                sentence(
-                    "minimise over ",
-                    Math(r"\dot q", "<i>q̇</i>"),
-                    " (and ",
-                    Math(r"\delta", "δ"),
-                    ")",
-                ),
+                sentence("minimise over ", QDOT, " (and ", Math(r"\delta", "δ"), ")"),
                 sentence("subject to"),
             ],
             align="lll",
