@@ -444,6 +444,32 @@ def test_the_task2_2_figure_draws_the_answers_four_quantities(tmp_path, drawn, t
     assert labels == ["UC-IVKC", "UC-EMDM", "no term"]
 
 
+def test_the_pair_figure_draws_a_run_without_a_cause_in_every_panel(tmp_path, drawn, task2_runs):
+    """Fig. 8: Task 2.2's pair and, dotted and grey in every panel, its run without the
+    dexterity term (``without``), named in the legend; its joints widen the strips' view."""
+    from emdm.outputs import paper_figures as pf
+
+    pair = [task2_runs["UC-IVKC"], task2_runs["UC-EMDM"]]
+    sc = emdm.load_scenario("task2", {"motion.max_time": 4.0, "weights.manipulability": 0.0})
+    extra = emdm.simulate(sc, "UC-EMDM")
+    with formats((".png",)):
+        pf.pair_figure(pair, tmp_path / "pair", gap=True, without=("no term", extra))
+    fig = drawn[-1]
+    dotted = [
+        line
+        for ax in fig.axes
+        for line in ax.get_lines()
+        if line.get_linestyle() == ":" and line.get_color() == "#666666"
+    ]
+    # m, E, ||e||, the gap and every joint's q and qd strip: one dotted line each
+    assert len(dotted) == 4 + 2 * sc.n
+    assert any(np.array_equal(line.get_ydata(), extra.m) for line in dotted)
+    for j in range(sc.n):
+        assert any(np.array_equal(line.get_ydata(), extra.q[:, j]) for line in dotted)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels == ["UC-IVKC", "UC-EMDM", "no term"]
+
+
 def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
     """The pitch's stills draw a stalled run until its stall, dated by Run.stalled_from (the
     paper's date), and say it is still from then on."""
