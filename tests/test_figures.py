@@ -418,7 +418,7 @@ def test_the_arms_figure_draws_each_runs_postures_path_and_ellipse(tmp_path, dra
 
 
 def test_the_task2_2_figure_draws_the_answers_four_quantities(tmp_path, drawn, task2_runs):
-    """Task 2.2's paper figure: per run (the pair and the run without the dexterity term) its m,
+    """Slide 11's Task 2.2 chart: per run (the pair and the run without the dexterity term) its m,
     the effort spent so far (from 0, summing E dt), the tracking gap (the slack; an exact task
     sits on the floor) and its deepest joint's excursion past the limits."""
     from emdm.outputs import paper_figures as pf
@@ -428,7 +428,7 @@ def test_the_task2_2_figure_draws_the_answers_four_quantities(tmp_path, drawn, t
     sc = emdm.load_scenario("task2", {"motion.max_time": 4.0, "weights.manipulability": 0.0})
     without = emdm.simulate(sc, "UC-EMDM")
     with formats((".png",)):
-        pf.slack_figure(runs, tmp_path / "slack", without=("no term", without))
+        pf.slack_figure(runs, tmp_path / "slack", without=("no term", without), medium=pf.SLIDE)
     ax_m, ax_e, ax_gap, ax_out = drawn[-1].axes[:4]
     for run in (*runs, without):
         assert any(np.array_equal(line.get_ydata(), run.m) for line in ax_m.get_lines())

@@ -1544,17 +1544,17 @@ def slack_figure(
     runs: Sequence[Run],
     stem: Path,
     without: tuple[str, Run] | None = None,
-    medium: Medium = PAPER,
+    medium: Medium = SLIDE,
 ) -> Path:
-    """Task 2.2, what its answer says (in the paper: a 2 x 2 grid, the pair composite's eight
-    panels were too small to read, readings 150-151; on a slide: one row): (a) m(t), (b) the
-    effort spent so far, sum E dt up to t (linear: a saving is a gap that stays), (c) the slack
-    at work, the tracking gap ||J qd - v_d|| of :func:`tracking_gap` (log, floored at
+    """The pitch's Task 2.2 slide, what its bullets say, in one row: (a) m(t), (b) the effort
+    spent so far, sum E dt up to t (linear: a saving is a gap that stays), (c) the slack at
+    work, the tracking gap ||J qd - v_d|| of :func:`tracking_gap` (log, floored at
     :data:`GAP_FLOOR`), and, when a run leaves its joint limits (the unconstrained controllers
     ignore them), (d) how far past them its deepest joint is
     (:func:`~emdm.sim.metrics.limit_excess`). ``without``: ``(label, run)`` with one cause
     removed, drawn grey and dotted in every panel, so that what its removal changes is seen
-    (reading 135: the slide said it without showing it)."""
+    (reading 135: the slide said it without showing it). In the paper, Task 2.2 is a pair
+    composite (:func:`pair_figure` with ``without``)."""
     drawn = [(run, _style(run, medium)) for run in runs]
     if without is not None:
         label, run = without
@@ -1562,13 +1562,8 @@ def slack_figure(
         drawn.append((run, st))
     beyond = [limit_excess(run).max(axis=1) for run, _ in drawn]
     outside = any(b.max() > 0.0 for b in beyond)
-    n = 4 if outside else 3
-    paper = medium is PAPER
-    with _figure(stem, medium, medium.column, 1.7 if paper else 2.3) as fig:
-        grid = fig.subplots(2, 2, sharex=True) if paper else fig.subplots(1, n, sharex=True)
-        axes = list(np.ravel(grid))[:n]
-        for extra in list(np.ravel(grid))[n:]:
-            extra.remove()
+    with _figure(stem, medium, medium.column, 2.3) as fig:
+        axes = list(fig.subplots(1, 4 if outside else 3, sharex=True))
         ax_m, ax_e, ax_gap = axes[:3]
         for (run, st), over in zip(drawn, beyond, strict=True):
             ax_m.plot(run.t, run.m, **st)
@@ -1577,26 +1572,21 @@ def slack_figure(
             if outside:
                 axes[3].plot(run.t, over, **st)
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-        # in print the units alone (the caption names each quantity): two-line-tall labels ran
-        # into each other at 0.5 in a panel
-        ax_e.set_ylabel("rad$^2$/s" if paper else r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)
-        ax_gap.set_ylabel("m/s" if paper else "tracking gap (m/s)", labelpad=1)
+        ax_e.set_ylabel(r"$\Sigma E\Delta t$ (rad$^2$/s)", labelpad=1)  # (a short Sigma)
+        ax_gap.set_ylabel("tracking gap (m/s)", labelpad=1)
         ax_gap.set_ylim(bottom=GAP_FLOOR / 4)  # a run on the floor (an exact task) is a line
         ax_gap.yaxis.set_major_locator(LogLocator(numticks=4))
         ax_gap.yaxis.set_minor_locator(NullLocator())
         if outside:
-            axes[3].set_ylabel("rad" if paper else "past a joint limit (rad)", labelpad=1)
+            axes[3].set_ylabel("past a joint limit (rad)", labelpad=1)
         for ax, letter in zip(axes, ("(a)", "(b)", "(c)", "(d)"), strict=False):
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
             if ax is not ax_gap:
                 ax.yaxis.set_major_locator(MaxNLocator(3))
-        for ax in axes[-2:] if paper else axes:
             ax.set_xlabel(r"$t$ (s)", labelpad=1)
-        # the legend above (paper) or under (slide, as the other slides') the panels: inside
-        # one it hid a curve
-        fig.legend(
+        fig.legend(  # under the panels, as the other slides': inside one it hid a curve
             handles=[Line2D([], [], **st) for _, st in drawn],
-            loc="outside upper center" if paper else "outside lower center",
+            loc="outside lower center",
             ncols=len(drawn),
             frameon=False,
             columnspacing=1.0,

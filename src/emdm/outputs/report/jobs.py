@@ -331,9 +331,7 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
             )
             if (task, group) == ("task2", "UC"):  # the pitch's Task 2.2 slide: two big panels
                 stem = stage / SLIDE_FIGURES / "task2-UC-effort"
-                out.append(
-                    str(pf.slack_figure(pair, stem, without=_without_term(emdm), medium=pf.SLIDE))
-                )
+                out.append(str(pf.slack_figure(pair, stem, without=_without_term(emdm))))
     return out
 
 
