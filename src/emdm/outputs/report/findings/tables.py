@@ -349,14 +349,13 @@ class Tables(Claims):
         return sentence(DT, f"/{self.rec.scenarios['task1'].motion.dt / finer['dt']:.0f}")
 
     def grid_rows(self) -> list[list[Sentence]]:
-        """Table II's two runs from the weight grid (Section III-B): its first setting that misses
-        the goal, against the nominal run (E2a); the same weights at a five times smaller time
-        step, against the nominal weights at that step (E2b), so that each row changes one thing."""
-        runs = self.rec.grids.get("UC-EMDM", [])
-        missed = [i for i, r in enumerate(runs) if not r.reached]
-        if not missed:
+        """The pitch's evidence table's two runs from the weight grid (Section III-B): its first
+        setting that misses the goal, against the nominal run (E2a); the same weights at a five
+        times smaller time step, against the nominal weights at that step (E2b)."""
+        i = self.grid_miss()
+        if i is None:
             return []
-        i = missed[0]
+        runs = self.rec.grids["UC-EMDM"]
         ctrl = Name.UC_EMDM
         finer = runs[i].finer_dt or {}
         columns: tuple[tuple[RunOutcome, str], ...] = (
