@@ -83,11 +83,11 @@ class Pitch:
         if s.pair(t1, "C", "coincide_steps"):  # said under the constrained pair's stills
             out.bullets["task1-stills"].append(
                 sentence(
-                    "The same commands for the first ",
-                    s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
                     # (the slowing's depth is the paper's: not drawn here, readings 154, 156;
-                    # the shading is the span, not the bounds, reading 159)
-                    " (shaded): both hold the same joints at their bounds",
+                    # the shading is the span, not the bounds: said first, readings 158-159)
+                    "Shaded: the first ",
+                    s.pairn(t1, "C", "coincide_until_t", ".2f", "s"),
+                    ", where the limits leave both one command, the same",
                 )
             )
         if s.pair(t1, "C", "coincide_steps") and more_m:  # the title's second half, measured

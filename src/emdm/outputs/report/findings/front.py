@@ -155,7 +155,7 @@ class Front(Claims):
         p = sentence(
             "On the redundant arm EMDM keeps IVKC's tracking and trades effort for "
             "manipulability through null-space motion. On the non-redundant arm the slack, not the "
-            "dexterity term, gets C-EMDM past the joint limits. ",
+            "dexterity term, takes C-EMDM around the disc its joint limits block. ",
         )
         gains = self.slack_gains()
         if gains:

@@ -395,6 +395,11 @@ class Solvers(StoryBase):
                 Unit("ms"),
                 ": median cold time from Python (*: compiled loop); it./ev.: median "
                 "iterations, evaluations (–: none",
+                *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
+                    ("; ", ", ".join(quiet), "'s iterations: not reported")
+                    if (quiet := [k for k, r in rows.items() if not r.median_iterations])
+                    else ()
+                ),
                 *(  # a trust-region method's short steps: iterations that evaluate nothing
                     ("; ", ", ".join(skip), ": not every iteration evaluates")
                     if (

@@ -610,7 +610,7 @@ class Task1(StoryBase):
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved Task 1 programs",
+                " re-solved Task 1 C-EMDM programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")

@@ -176,7 +176,7 @@ class Task2(Claims):
                     sentence(
                         "Task 2: the straight line to the goal enters the disc unreachable with ",
                         Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
-                        " outside its stop zone (hatched); C-IVKC stalls on its edge, C-EMDM "
+                        " outside its stop zone (hatched); C-IVKC stalls just short of it, C-EMDM "
                         "goes around and flips its elbow into the admissible goal configuration.",
                     ),
                 )
@@ -438,7 +438,12 @@ class Task2(Claims):
         same = [n.text for n in within] == [n.text for n in whole]
         crosses = reached_e and not reached_i and bool(self.evv(t, emdm, "singular", "near"))
         p = sentence(  # the cause first, when it is the singular passage (reading 142's edit)
-            *((f"{emdm}'s route crosses ", M_SYM, " = 0: its") if crosses else (f"{emdm}'s",)),
+            # (sampled, its least m is near zero, not zero: reading 161)
+            *(
+                (f"{emdm}'s route dips to ", Math(r"m\approx0", "<i>m</i> ≈ 0"), ": its")
+                if crosses
+                else (f"{emdm}'s",)
+            ),
             " mean ",
             M_SYM,
             " is ",
