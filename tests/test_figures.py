@@ -374,6 +374,18 @@ def test_the_pair_figure_overlays_the_tip_paths_from_start_to_goal(tmp_path, dra
     goal = runs[0].p[0] + runs[0].e[0]
     assert any(np.allclose(line.get_xydata(), [goal]) for line in lines)
     assert any(np.allclose(line.get_xydata(), [runs[0].p[0]]) for line in lines)
+    # (b): the effort spent so far, from 0 to the run's total (Table II's), at every sample
+    from emdm.sim.metrics import metrics
+
+    panel = next(ax for ax in drawn[-1].axes if ax.get_title(loc="left") == "(b)")
+    for run in runs:
+        spent = next(
+            y
+            for y in (line.get_ydata() for line in panel.get_lines())
+            if len(y) == len(run.t) and np.isclose(y[-1], metrics(run)["total_effort"])
+        )
+        assert spent[0] == 0.0 and np.all(np.diff(spent) >= 0)
+        assert np.allclose(np.diff(spent), run.effort * sc.motion.dt)
     with pytest.raises(ValueError, match="one fourth panel"):
         pf.pair_figure(runs, tmp_path / "both", gap=True, path=True)
 

@@ -193,11 +193,6 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
-EFFORT_FLOOR = 1e-9
-"""Where :func:`pair_figure`'s log axis of the effort is floored (rad²/s²): a run at rest has
-zero effort, which a log axis cannot draw."""
-
-
 def time_end(runs: Sequence[Run]) -> float | None:
     """Where a figure's time axes end when some runs arrived and every other one had stalled by
     the last arrival (their records run on unchanged, within the stall band, to the time limit):
@@ -254,7 +249,9 @@ def pair_figure(
     path: bool = False,
     without: tuple[str, Run] | None = None,
 ) -> Path:
-    """A pair in one composite: (a) m(t), (b) E(t), (c) the distance to the goal ||e||(t)
+    """A pair in one composite: (a) m(t), (b) the effort spent so far, sum E dt up to t
+    (linear: Table II's totals at the ends, a saving a gap that stays; readings 160-161: on a
+    log axis of E the +25 % could not be seen), (c) the distance to the goal ||e||(t)
     above, (d) q(t) and (e) qd(t) below, one strip per joint. A fourth panel above, the joints
     then (e) and (f): ``gap``, (d) the velocity-tracking gap of :func:`tracking_gap` (the slack
     at work); ``path``, (d) the tip paths in the plane, start and goal marked (the tracking
@@ -299,7 +296,7 @@ def pair_figure(
         qd_axes = _column(fig, lower[0, 1], n)
         for run, st in drawn:
             ax_m.plot(run.t, run.m, **st)
-            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
+            ax_e.plot(run.t, _effort_so_far(run), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             if ax_gap is not None:
                 ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
@@ -329,7 +326,7 @@ def pair_figure(
             ax_path.set_title("(d)", loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-        ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
+        ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
         ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
         if ax_gap is not None:
             ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
@@ -340,7 +337,9 @@ def pair_figure(
             if medium is not PAPER:
                 ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
-        for ax in upper_axes[1:]:
+        ax_e.yaxis.set_major_locator(MaxNLocator(3))
+        ax_e.set_ylim(bottom=0.0)
+        for ax in upper_axes[2:]:
             ax.yaxis.set_major_locator(LogLocator(numticks=3))
             ax.yaxis.set_minor_locator(NullLocator())
         # time in seconds on every panel: its label only under the joint strips
@@ -1779,7 +1778,9 @@ def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium =
             *sc.motion.goal, marker="*", color="black", markersize=6, linestyle="none", zorder=4
         )
         handles.append(Line2D([], [], color="#999999", marker="o", markersize=2, label="start"))
-        ax.set_aspect("equal")
+        # the view, not the box, takes the slot's shape: a box shrunk to the data's aspect
+        # left its y label outside the figure (reading 161)
+        ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(r"$x$ (m)", labelpad=1)
         ax.set_ylabel(r"$y$ (m)", labelpad=1)
         ax.xaxis.set_major_locator(MaxNLocator(4))
@@ -1960,8 +1961,8 @@ def evidence_figure(
     height: float = 2.5,
 ) -> Path:
     """The pitch's Task 2 evidence: each run's time to the goal as a bar, top to bottom in the
-    order given, in its controller's colour; a run that never arrives is a hatched bar to the
-    end of the run marked 'no arrival', so a stall is seen beside the arrivals (the slide had
+    order given, in its controller's colour; a run that never arrives is an empty dashed bar to
+    the end of the run marked 'no arrival', so a stall is seen beside the arrivals (the slide had
     said the runs in bullets, without drawing them). Drawn at the size shown beside the stills."""
     with _figure(stem, medium, width, height) as fig:
         ax = fig.subplots()
@@ -1978,8 +1979,8 @@ def evidence_figure(
                     height=0.46,
                     color="white",
                     edgecolor=colour,
-                    hatch="///",
-                    linewidth=0.8,
+                    linestyle=(0, (2, 1.5)),  # empty, dashed: hatching is the policy
+                    linewidth=0.9,  # slide's free slack (reading 161)
                 )
                 ax.text(
                     0.5 * max_time,

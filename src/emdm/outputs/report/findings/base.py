@@ -21,7 +21,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....solvers import registered_solvers
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
-from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
+from ...paper_figures import FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -40,9 +40,6 @@ from .records import (
     SolverRow,
 )
 
-EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
-"""The decade the pair figures' effort axis is floored at (Fig. 1's caption says it)."""
-
 GAP_FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the tracking-gap axis is floored at (Fig. 5's caption says it)."""
 GAP_MATH = Math(r"\|J\dot q-v_d\|", "‖<i>J q̇</i> − <i>v</i><sub>d</sub>‖")
@@ -60,6 +57,8 @@ C_S = Math("c_S", "<i>c</i><sub>S</sub>")
 RATIO = Math("w_M/w_E", "<i>w</i><sub>M</sub>/<i>w</i><sub>E</sub>")
 M_SYM = Math("m", "<i>m</i>")
 E_SYM = Math("E", "<i>E</i>")
+SUM_E = Math(r"\sum E\Delta t", "Σ<i>E</i>Δ<i>t</i>")
+"""A run's total effort (rad²/s), Table II's column; spent so far, the pair figures' (b)."""
 MRATE = Math("M", "<i>M</i>")
 ERR = Math(r"\|e\|", "‖<i>e</i>‖")
 DELTA = Math(r"\|\delta\|", "‖δ‖")
@@ -431,10 +430,10 @@ class StoryBase:
         out = sentence(
             "(a) manipulability ",
             M_SYM,
-            ", (b) effort ",
+            ", (b) effort spent so far ",
+            SUM_E,
+            " (slope ",
             E_SYM,
-            " (log, floored at ",
-            Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
             "), (c) distance to the goal ",
             ERR,
             " (log; dotted: the tolerance), ",
