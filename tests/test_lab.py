@@ -170,6 +170,10 @@ def test_lab_measures_gaps_against_the_exact_optimum(small_lab):
     assert summary["nelder-mead"]["family"] == "gradient-free"
     assert summary["slsqp"]["family"] == "gradient"
     assert summary["nelder-mead"]["median_evaluations"] > 10
+    # gradients counted beside the evaluations: SLSQP takes some, the others none
+    assert summary["slsqp"]["median_gradients"] >= 1
+    for name in ("active-set", "daqp", "nelder-mead", "cobyla"):
+        assert summary[name]["median_gradients"] == 0, name
 
 
 def test_closed_loop_records_inexact_solvers_honestly(small_lab):
@@ -391,6 +395,31 @@ def test_slsqp_on_the_reduced_program_reaches_the_exact_optimum(task):
         ), k
         assert qp.violation(got.x) <= 1e-9, k
         assert 0 < got.evaluations == len(got.history), k
+
+
+@pytest.mark.parametrize("name", ["slsqp", "slsqp-reduced"])
+def test_the_gradient_based_methods_count_their_gradients_as_scipy_does(name, monkeypatch):
+    """Table III's fair count (reading 160): a gradient-based method's objective and gradient
+    evaluations are scipy's own tallies (nfev, njev) of the same search, on every kind of step."""
+    import scipy.optimize
+
+    tallies = []
+    minimize = scipy.optimize.minimize
+
+    def spy(*args, **kwargs):
+        res = minimize(*args, **kwargs)
+        tallies.append((res.nfev, res.njev))
+        return res
+
+    monkeypatch.setattr(scipy.optimize, "minimize", spy)
+    sc = emdm.load_scenario("task2")
+    run = emdm.simulate(sc, "C-EMDM")
+    ctrl = emdm.get_controller("C-EMDM")
+    for k in np.linspace(0, run.steps - 1, 5).astype(int):
+        tallies.clear()
+        got = get_solver(name).solve(program_at(ctrl, sc, run.q[k]).qp)
+        assert tallies == [(got.evaluations, got.gradients)], k
+        assert got.gradients >= 1, k
 
 
 def test_the_gradient_free_l1_penalty_is_exact_on_every_preset_program(preset_programs, small_lab):

@@ -1124,7 +1124,7 @@ def test_the_closed_loop_arrivals_name_every_way_a_solver_differs():
             ("resolved_steps", "failures", "over_period", "limit_stops", "optimal_claims"), 0
         )
         numbers = ("median_time", "p95_time", "max_time", "median_iterations")
-        more = ("median_evaluations", "max_gap", "max_abs_gap", "max_violation")
+        more = ("median_evaluations", "median_gradients", "max_gap", "max_abs_gap", "max_violation")
         return SolverRow(
             **fields, **dict.fromkeys(numbers + more, 0.0), reached=reached, time_to_goal=t
         )

@@ -47,6 +47,9 @@ class SolverResult:
     time: float
     history: tuple[dict[str, float], ...] = ()
     evaluations: int = 0
+    """Objective evaluations (a method that evaluates none: 0)."""
+    gradients: int = 0
+    """Gradient evaluations (a gradient-based method's; gradient-free and QP methods: 0)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -129,6 +129,8 @@ class _Recorder:
     penalty: float = 0.0
     keep: bool = False
     evaluations: int = 0
+    gradients: int = 0
+    """Gradient evaluations (the reduced slsqp's: the gradient-free methods take none)."""
     trace: list[dict[str, float]] = field(default_factory=list)
 
     def __call__(self, t: Vector) -> float:
@@ -155,6 +157,7 @@ def _finish(
         time.perf_counter() - start,
         tuple(rec.trace),
         rec.evaluations,
+        rec.gradients,
     )
 
 
@@ -282,6 +285,7 @@ def solve_slsqp_reduced(qp: QP, *, max_iter: int = 500, history: bool = False) -
         return _finish(red, np.zeros(0), "optimal", 0, rec, start)
 
     def grad(t: Vector) -> Vector:
+        rec.gradients += 1
         return np.asarray(red.Z.T @ (qp.P @ red.x(t) + qp.c))
 
     rows = [LinearConstraint(red.G, -np.inf, red.h)] if red.h.size else []
@@ -308,7 +312,7 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
     start = time.perf_counter()
     if infeasible(qp):
         return SolverResult(None, "infeasible", 0, time.perf_counter() - start)
-    evaluations = 0
+    evaluations = gradients = 0
     trace: list[dict[str, float]] = []
 
     def f(x: Vector) -> float:
@@ -317,6 +321,8 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
         return qp.objective(x)
 
     def grad(x: Vector) -> Vector:
+        nonlocal gradients
+        gradients += 1
         return np.asarray(qp.P @ x + qp.c)
 
     def callback(*args: Any) -> None:
@@ -372,4 +378,5 @@ def _scipy_gradient(qp: QP, method: str, max_iter: int, history: bool) -> Solver
         time.perf_counter() - start,
         tuple(trace),
         evaluations,
+        gradients,
     )

@@ -81,6 +81,15 @@ class Front(Claims):
                     grad,
                     " is exact in a median ",
                     self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
+                    *(  # its gradients too (reading 160)
+                        (
+                            " objective and ",
+                            self.sn("task2-lab-C-EMDM", grad, "median_gradients", ".4g"),
+                            " gradient",
+                        )
+                        if rows[grad].median_gradients
+                        else ()
+                    ),
                     " evaluations",
                 )
                 if free:

@@ -210,6 +210,7 @@ SolverKey = Literal[
     "over_period",
     "median_iterations",
     "median_evaluations",
+    "median_gradients",
     "limit_stops",
     "max_gap",
     "max_abs_gap",
@@ -257,6 +258,8 @@ class SolverRow:
     """How many of its programs took longer than the control period."""
     median_iterations: float
     median_evaluations: float
+    median_gradients: float
+    """Gradient evaluations (a gradient-based method's; 0 for the others)."""
     limit_stops: int
     """How many of its searches an iteration or evaluation limit ended."""
     max_gap: float
