@@ -195,8 +195,8 @@ class Pitch:
                         "Gradient-based ",
                         grad,
                         ": the optimum in ",
-                        self.s.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
-                        " evaluations, ",
+                        *self.s.evaluations("task2-lab-C-EMDM", grad),
+                        ", ",
                         self.s.sn("task2-lab-C-EMDM", grad, "median_time", unit="ms"),
                     )
                 )

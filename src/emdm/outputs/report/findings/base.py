@@ -241,6 +241,21 @@ class StoryBase:
             fmt = ".3g"
         return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
 
+    def evaluations(self, lab: LabName, solver: str) -> Sentence:
+        """A solver's median count on a lab's programs: ``6 objective and 5 gradient
+        evaluations`` for a gradient-based method (its gradients counted too, reading 160),
+        ``522 evaluations`` for the others."""
+        gradients = self.solvers(lab)[solver].median_gradients
+        return sentence(
+            self.sn(lab, solver, "median_evaluations", ".4g"),
+            *(
+                (" objective and ", self.sn(lab, solver, "median_gradients", ".4g"), " gradient")
+                if gradients
+                else ()
+            ),
+            " evaluations",
+        )
+
     def scn(self, task: str, *path: str | int, fmt: str, unit: str = "") -> Num:
         """A parameter of a task's scenario (``"motion", "dt"``; ``"arm", "qd_max", 0``), read
         from the typed :class:`~emdm.core.scenario.Scenario` and traced to its record."""

@@ -115,9 +115,9 @@ class Claims(StoryBase):
         return sentence(  # the pair's difference is UC-EMDM's, slack and term together
             "UC-EMDM's slack absorbs up to ",
             self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
-            " of the desired velocity; against UC-IVKC, its effort is ",
+            " of the desired velocity; against UC-IVKC: effort ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            " and its mean ",
+            ", mean ",
             M_SYM,
             " ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),

@@ -80,17 +80,7 @@ class Front(Claims):
                     "On Task 2 gradient-based ",
                     grad,
                     " is exact in a median ",
-                    self.sn("task2-lab-C-EMDM", grad, "median_evaluations", ".4g"),
-                    *(  # its gradients too (reading 160)
-                        (
-                            " objective and ",
-                            self.sn("task2-lab-C-EMDM", grad, "median_gradients", ".4g"),
-                            " gradient",
-                        )
-                        if rows[grad].median_gradients
-                        else ()
-                    ),
-                    " evaluations",
+                    *self.evaluations("task2-lab-C-EMDM", grad),
                 )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)
@@ -164,7 +154,7 @@ class Front(Claims):
         p = sentence(
             "On the redundant arm EMDM keeps IVKC's tracking and trades effort for "
             "manipulability through null-space motion. On the non-redundant arm the slack, not the "
-            "dexterity term, takes C-EMDM around the disc its joint limits block. ",
+            "dexterity term, takes C-EMDM around the blocked disc. ",
         )
         gains = self.slack_gains()
         if gains:

@@ -97,14 +97,7 @@ class Solvers(StoryBase):
                 " reaches the exact optimum (largest gap ",
                 self.sn(lab, grad, "max_abs_gap", ".1e"),
                 ") after a median ",
-                self.sn(lab, grad, "median_evaluations", ".4g"),
-                " objective",
-                *(  # its gradients counted too (reading 160): a fair count against the others
-                    (" and ", self.sn(lab, grad, "median_gradients", ".4g"), " gradient")
-                    if rows[grad].median_gradients
-                    else ()
-                ),
-                " evaluations",
+                *self.evaluations(lab, grad),
                 PageOnly(  # (Table IV's row gives them: room for Task 1's stills)
                     tuple(
                         sentence(
@@ -399,10 +392,10 @@ class Solvers(StoryBase):
                 self.mt("task2", "C-EMDM", "steps", "d"),
                 " programs. ",
                 Unit("ms"),
-                ": median time of a cold call from Python, for all alike (*: iterations compiled); "
+                ": median cold call from Python (*: iterations compiled); "
                 "it./ev.: median iterations, objective evaluations (–: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
-                    ("; ", ", ".join(quiet), "'s iterations: not reported")
+                    ("; ", ", ".join(quiet), ": not reported")
                     if (quiet := [k for k, r in rows.items() if not r.median_iterations])
                     else ()
                 ),

@@ -157,12 +157,12 @@ class Task1(StoryBase):
                     self.ev(t, name, "limits", "excess_joint", fmt="d"),
                     "'s range by ",
                     self.ev(t, name, "limits", "max_excess", fmt=".3f", unit="rad"),
-                    ", ",
+                    "; ",
                 )
         p += sentence(
-            "and both exceed the ",
+            "both exceed the ",
             self.scn(t, "arm", "qd_max", 0, fmt=".1f", unit="rad/s"),
-            " speed limit",
+            " limit",
             " (",
             Ref("tab", "outcomes"),
             ").",
@@ -568,7 +568,7 @@ class Task1(StoryBase):
             ch = self.d.value(lab, "challenges", "solvers")
         if "median_iterations_scaled" in ch.get("active-set", {}):
             p += sentence(
-                "; ",
+                ", ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -585,19 +585,19 @@ class Task1(StoryBase):
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
             p += sentence(
                 # (the widest, rounded: a bound "<=" would understate it)
-                ". Scaled steps are Task 1's challenge: one command is feasible (widest set ",
+                ". These are Task 1's challenge: one command is feasible (widest set ",
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                "), and ",
+                "), pinned by ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
                     if high > low
                     else ()
                 ),
-                f" bounds pin it where {fixed} would do. Active-set methods "
-                "can cycle there; ours uses Bland's rule",
+                f" bounds where {fixed} would do, where active-set methods can cycle (ours "
+                "uses Bland's rule)",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
@@ -610,7 +610,7 @@ class Task1(StoryBase):
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved Task 1 C-EMDM programs",
+                " re-solved C-EMDM programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")

@@ -440,7 +440,7 @@ class Task2(Claims):
         p = sentence(  # the cause first, when it is the singular passage (reading 142's edit)
             # (sampled, its least m is near zero, not zero: reading 161)
             *(
-                (f"{emdm}'s route dips to ", Math(r"m\approx0", "<i>m</i> ≈ 0"), ": its")
+                (f"{emdm} dips to ", Math(r"m\approx0", "<i>m</i> ≈ 0"), ": its")
                 if crosses
                 else (f"{emdm}'s",)
             ),
@@ -455,7 +455,7 @@ class Task2(Claims):
             f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                (", also over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
+                (", also up to ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
                 if same and not reached_i
                 else ()
             ),
@@ -575,7 +575,7 @@ class Task2(Claims):
         )
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ". The slack saves effort; against this run, the term buys ",
+                ": the slack's saving. Against this run, the term buys ",
                 self.uc_term_gain(),
                 " ",
                 M_SYM,
