@@ -193,6 +193,11 @@ def _column(fig: Figure, cell: Any, n: int) -> list[Axes]:
     return [first] + [fig.add_subplot(grid[j, 0], sharex=first) for j in range(1, n)]
 
 
+EFFORT_FLOOR = 1e-9
+"""Where :func:`pair_figure`'s log axis of the effort is floored (rad²/s²): a run at rest has
+zero effort, which a log axis cannot draw."""
+
+
 def time_end(runs: Sequence[Run]) -> float | None:
     """Where a figure's time axes end when some runs arrived and every other one had stalled by
     the last arrival (their records run on unchanged, within the stall band, to the time limit):
@@ -249,9 +254,9 @@ def pair_figure(
     path: bool = False,
     without: tuple[str, Run] | None = None,
 ) -> Path:
-    """A pair in one composite: (a) m(t), (b) the effort spent so far, sum E dt up to t
-    (linear: Table II's totals at the ends, a saving a gap that stays; readings 160-161: on a
-    log axis of E the +25 % could not be seen), (c) the distance to the goal ||e||(t)
+    """A pair in one composite: (a) m(t), (b) the effort E(t) (log: the brief's "effort over
+    time", readings 162-163; in-panel totals hid the curves, the caption points to Table II's),
+    (c) the distance to the goal ||e||(t)
     above, (d) q(t) and (e) qd(t) below, one strip per joint. A fourth panel above, the joints
     then (e) and (f): ``gap``, (d) the velocity-tracking gap of :func:`tracking_gap` (the slack
     at work); ``path``, (d) the tip paths in the plane, start and goal marked (the tracking
@@ -296,7 +301,7 @@ def pair_figure(
         qd_axes = _column(fig, lower[0, 1], n)
         for run, st in drawn:
             ax_m.plot(run.t, run.m, **st)
-            ax_e.plot(run.t, _effort_so_far(run), **st)
+            ax_e.semilogy(run.t[:-1], np.maximum(run.effort, EFFORT_FLOOR), **st)
             ax_err.semilogy(run.t, np.maximum(run.error_norm, 1e-4), **st)
             if ax_gap is not None:
                 ax_gap.semilogy(run.t[:-1], np.maximum(tracking_gap(run), GAP_FLOOR), **st)
@@ -326,7 +331,7 @@ def pair_figure(
             ax_path.set_title("(d)", loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         ax_err.axhline(sc.motion.tolerance, color="black", linewidth=0.6, linestyle=":")
         ax_m.set_ylabel(r"$m$ (m$^2$)", labelpad=1)
-        ax_e.set_ylabel(r"$\sum E\Delta t$ (rad$^2$/s)", labelpad=1)
+        ax_e.set_ylabel(r"$E$ (rad$^2$/s$^2$)", labelpad=1)
         ax_err.set_ylabel(r"$\|e\|$ (m)", labelpad=1)
         if ax_gap is not None:
             ax_gap.set_ylabel("gap (m/s)", labelpad=1)  # the caption names it
@@ -337,9 +342,7 @@ def pair_figure(
             if medium is not PAPER:
                 ax.set_xlabel(r"$t$ (s)", labelpad=1)
         ax_m.yaxis.set_major_locator(MaxNLocator(3))
-        ax_e.yaxis.set_major_locator(MaxNLocator(3))
-        ax_e.set_ylim(bottom=0.0)
-        for ax in upper_axes[2:]:
+        for ax in upper_axes[1:]:
             ax.yaxis.set_major_locator(LogLocator(numticks=3))
             ax.yaxis.set_minor_locator(NullLocator())
         # time in seconds on every panel: its label only under the joint strips
@@ -562,17 +565,17 @@ def workspace_figure(
                 hatch="////",
                 label=rf"blocked: $\|p\|<{inner:.3f}$ m",
             ),
+            Line2D(  # (a slide names them too: its legend had not, reading 163)
+                [],
+                [],
+                color="black",
+                linewidth=0.8 * medium.line,
+                marker="o",
+                markersize=2.5,
+                label="arm: start, goal",
+            ),
             *(
                 [
-                    Line2D(
-                        [],
-                        [],
-                        color="black",
-                        linewidth=0.8 * medium.line,
-                        marker="o",
-                        markersize=2.5,
-                        label="arm: start, goal",
-                    ),
                     Line2D(
                         [],
                         [],

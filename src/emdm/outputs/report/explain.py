@@ -322,13 +322,18 @@ def limits(run: Run) -> dict[str, Any]:
 
 
 def solver_work(run: Run) -> dict[str, Any]:
-    """Iterations, fallbacks and the certificate of the run's solver."""
+    """Iterations, fallbacks and the certificate of the run's solver; ``_warm``: over the steps
+    after the first, which start from the last step's working set (the first starts cold,
+    reading 163: its count had been said as a warm start's)."""
     if run.steps == 0:
         return {}
     its = np.asarray(run.iterations)
+    warm = its[1:] if its.size > 1 else its
     return {
         "median_iterations": float(np.median(its)),
         "max_iterations": int(its.max()),
+        "median_iterations_warm": float(np.median(warm)),
+        "max_iterations_warm": int(warm.max()),
         "t_max_iterations": float(run.t[int(np.argmax(its))]),
         "fallback_steps": int(np.count_nonzero(run.fallback)),
         "max_kkt": float(np.max(run.kkt)),

@@ -427,17 +427,31 @@ class Pitch:
         runs = self.s.rec.grids.get("UC-EMDM", [])
         failed = [i for i, r in enumerate(runs) if not r.reached]
         if failed:
+            i = failed[0]
+            finer = runs[i].finer_dt
             out.append(
-                sentence(
-                    "Too much dexterity weight (",
+                sentence(  # the cause as the paper gives it (reading 162: the step, not the
+                    # weights, makes it miss; a finer step arrives)
+                    "At ",
                     RATIO,
                     " = ",
-                    self.s.gridn("UC-EMDM", failed[0], "w_manip", fmt=".4g"),
+                    self.s.gridn("UC-EMDM", i, "w_manip", fmt=".4g"),
                     Text("/"),
-                    self.s.gridn("UC-EMDM", failed[0], "w_effort", fmt=".2g"),
-                    # (the finer step that fixes it: the paper's and the backup table's, not
-                    # drawn here: reading 151 found the slide overloaded)
-                    ") misses the goal (middle)",
+                    self.s.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
+                    " joints reach ",
+                    self.s.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
+                    ": the ",
+                    self.s.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
+                    " step misses the goal (named in the middle)",
+                    *(
+                        (
+                            ", a ",
+                            self.s.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s"),
+                            " step arrives",
+                        )
+                        if finer and finer.get("reached")
+                        else ()
+                    ),
                 )
             )
         return out

@@ -21,7 +21,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ....solvers import registered_solvers
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
-from ...paper_figures import FAR_BEYOND, GAP_FLOOR
+from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
@@ -39,6 +39,9 @@ from .records import (
     SolverKey,
     SolverRow,
 )
+
+EFFORT_FLOOR_EXP = round(math.log10(EFFORT_FLOOR))
+"""The decade the pair figures' effort axis is floored at (Fig. 1's caption says it)."""
 
 GAP_FLOOR_EXP = round(math.log10(GAP_FLOOR))
 """The decade the tracking-gap axis is floored at (Fig. 5's caption says it)."""
@@ -445,10 +448,14 @@ class StoryBase:
         out = sentence(
             "(a) manipulability ",
             M_SYM,
-            ", (b) effort spent so far ",
-            SUM_E,
-            " (slope ",
+            ", (b) effort ",
             E_SYM,
+            " (log, floored at ",
+            Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
+            "; totals ",
+            SUM_E,
+            " in ",
+            Ref("tab", "outcomes"),
             "), (c) distance to the goal ",
             ERR,
             " (log; dotted: the tolerance), ",

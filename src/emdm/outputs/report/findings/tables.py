@@ -185,8 +185,9 @@ class Tables(Claims):
                 "Closed-loop runs" if evidence else "Outcomes",
                 ": time to goal (",
                 Unit("s"),
-                # (a stall is defined with the task scale, Section II; the pitch's table is alone)
-                *(("; " + STALL_NOTE,) if len(drifted) < len(missed) and not evidence else ()),
+                # (a stall is defined with the task scale, Section II, and again here: a reader
+                # of the table alone met it undefined, reading 162)
+                *(("; " + STALL_NOTE,) if len(drifted) < len(missed) else ()),
                 *((MISS_NOTE,) if evidence and self.grid_miss() is not None else ()),
                 ")",
                 *((" or final error (m)",) if drifted else ()),

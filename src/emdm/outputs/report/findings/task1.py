@@ -92,7 +92,8 @@ class Task1(StoryBase):
             *(
                 (" (", Ref("fig", "t1-uc"), "(d))")
                 if FOURTH_PANEL[t] == "path"
-                else (" (", Ref("fig", "t1-arms"), ")")
+                # (the paths it draws coincide: a per-step distance is not drawn, reading 163)
+                else (" (paths: ", Ref("fig", "t1-arms"), ")")
                 if self.has_figure("t1-arms")
                 else ()
             ),
@@ -391,7 +392,7 @@ class Task1(StoryBase):
                         Math(r"\geq", "≥"),
                         " ",
                         self.frontn("C-EMDM", i, "saturated_from_ratio", ".3g"),
-                        " all give one optimum, a corner of the joint bounds",
+                        " all give one optimum, a vertex of the feasible set",
                     )
                 )
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
@@ -557,9 +558,9 @@ class Task1(StoryBase):
         )
         p = sentence(
             "Warm-started, it takes a median of ",
-            self.ev(t, Name.C_EMDM, "solver", "median_iterations", fmt=".4g"),
+            self.ev(t, Name.C_EMDM, "solver", "median_iterations_warm", fmt=".4g"),
             " and at most ",
-            self.ev(t, Name.C_EMDM, "solver", "max_iterations", fmt="d"),
+            self.ev(t, Name.C_EMDM, "solver", "max_iterations_warm", fmt="d"),
             " iterations",
         )
         lab = SCALED_LAB
