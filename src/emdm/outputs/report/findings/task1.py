@@ -365,18 +365,18 @@ class Task1(StoryBase):
                             "at ",
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
-                            " all ratios give C-EMDM one step: the scaled one (",
+                            " every ratio gives C-EMDM the same step: the scaled one (",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
                             ")",
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            ", or with free slack (",
+                            ", or, with a free slack (",
                             Eqs(("free",)),
-                            ") ",
+                            "), ",
                             Ref("fig", "pareto"),
-                            "'s hollow one",
+                            "'s hollow point",
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
@@ -586,19 +586,19 @@ class Task1(StoryBase):
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
             p += sentence(
                 # (the widest, rounded: a bound "<=" would understate it)
-                ". These are Task 1's challenge: one command is feasible (widest set ",
+                ". These are Task 1's challenge: only one command is feasible (the set is at most ",
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                "), pinned by ",
+                " wide), and ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
                     if high > low
                     else ()
                 ),
-                f" bounds where {fixed} would do, where active-set methods can cycle (ours "
-                "uses Bland's rule)",
+                f" bounds hold it where {fixed} would. At such degenerate points active-set "
+                "methods can cycle; ours uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")

@@ -440,7 +440,11 @@ class Task2(Claims):
         p = sentence(  # the cause first, when it is the singular passage (reading 142's edit)
             # (sampled, its least m is near zero, not zero: reading 161)
             *(
-                (f"{emdm} dips to ", Math(r"m\approx0", "<i>m</i> ≈ 0"), ": its")
+                (
+                    "The passage through ",
+                    Math(r"m\approx0", "<i>m</i> ≈ 0"),
+                    f" costs {emdm} dexterity: its",
+                )
                 if crosses
                 else (f"{emdm}'s",)
             ),
@@ -455,7 +459,7 @@ class Task2(Claims):
             f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                (", also up to ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
+                (", also over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
                 if same and not reached_i
                 else ()
             ),
