@@ -255,7 +255,7 @@ def pair_figure(
     without: tuple[str, Run] | None = None,
 ) -> Path:
     """A pair in one composite: (a) m(t), (b) the effort E(t) (log: the brief's "effort over
-    time", readings 162-163; in-panel totals hid the curves, the caption points to Table II's),
+    time", readings 162-163; in-panel totals hid the curves: Table II has them),
     (c) the distance to the goal ||e||(t)
     above, (d) q(t) and (e) qd(t) below, one strip per joint. A fourth panel above, the joints
     then (e) and (f): ``gap``, (d) the velocity-tracking gap of :func:`tracking_gap` (the slack

@@ -428,13 +428,9 @@ class StoryBase:
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
-            "): the slack (",
-            Math(r"|\delta_i|\leq", "|δ<sub>i</sub>| ≤ "),
-            " ",
+            "); the slack, up to ",
             self.evidn(e2, "runs", emdm, "max_abs_slack", fmt=".2f", unit="m/s"),
-            ") turns the tip off ",
-            Math("v_d", "<i>v</i><sub>d</sub>"),
-            ".",
+            ", bends it.",
         )
         return p
 
@@ -452,10 +448,6 @@ class StoryBase:
             E_SYM,
             " (log, floored at ",
             Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
-            "; totals ",
-            SUM_E,
-            " in ",
-            Ref("tab", "outcomes"),
             "), (c) distance to the goal ",
             ERR,
             " (log; dotted: the tolerance), ",

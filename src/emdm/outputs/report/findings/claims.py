@@ -27,6 +27,39 @@ def listed(words: list[str]) -> str:
 
 
 class Claims(StoryBase):
+    def beyond_nominal(self) -> tuple[int, int, int] | None:
+        """Task 1's whole-run sweep beyond the nominal weight ratio: the nominal run's index,
+        the arriving larger ratio with the highest mean m and the one with the most effort
+        (None: no nominal run, none larger arrives, or none spends more)."""
+        grid = self.rec.grids.get("UC-EMDM", [])
+        w = self.rec.scenarios["task1"].weights
+        nominal = [
+            i for i, r in enumerate(grid) if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
+        ]
+        if not nominal:
+            return None
+        n = nominal[0]
+        ratio = grid[n].w_manip / grid[n].w_effort
+        above = [i for i, r in enumerate(grid) if r.reached and r.w_manip / r.w_effort > ratio]
+        if not above:
+            return None
+        best = max(above, key=lambda i: grid[i].mean_manipulability)
+        dearest = max(above, key=lambda i: grid[i].total_effort)
+        if grid[dearest].total_effort <= grid[n].total_effort:
+            return None
+        return n, best, dearest
+
+    def ratio_levels_off(self) -> bool:
+        """Whether the nominal ratio is the whole-run front's knee: larger ratios that arrive
+        add under 1 % to the mean m and spend more (Section III-B's numbers; the conclusion's
+        recommendation)."""
+        found = self.beyond_nominal()
+        if found is None:
+            return False
+        n, best, _ = found
+        grid = self.rec.grids["UC-EMDM"]
+        return grid[best].mean_manipulability < 1.01 * grid[n].mean_manipulability
+
     def dexterity_gain(self) -> Sentence:
         """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers)."""
         t1 = "task1"

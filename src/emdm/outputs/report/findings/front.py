@@ -167,7 +167,18 @@ class Front(Claims):
                 "a free slack makes C-EMDM ",
                 listed(gains),
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
+                # the recommendation the evidence makes (reading 164 found none)
+                ": we would relax a task by a slack unless the tip must keep its line"
+                if self.slack_better_on_all()
+                else "",
                 ". ",  # (Table II's free-slack rows, cited where the runs are told)
+            )
+        if self.ratio_levels_off():  # the weights' recommendation, from the whole-run sweep
+            p += sentence(
+                "We would keep the weight ratio at the knee, the nominal one, beyond which it "
+                "buys effort, not ",
+                M_SYM,
+                ". ",
             )
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(

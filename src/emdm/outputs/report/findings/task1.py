@@ -23,10 +23,10 @@ from .base import (
     RATIO,
     SCALED_LAB,
     W_M,
-    StoryBase,
     eq,
     run_label,
 )
+from .claims import Claims
 from .claims import cap as capitalised
 from .records import GRID_FILE
 
@@ -37,7 +37,7 @@ PARETO_RECORD = "data/task1-pareto-UC-EMDM/pareto.json"
 """UC-EMDM's Pareto sweep of Task 1 (its ratios and the nominal one)."""
 
 
-class Task1(StoryBase):
+class Task1(Claims):
     def arms_caption(self) -> Sentence:
         """The caption of Task 1's stills: what is drawn and the animations they come from
         (each run's final m is in the legend)."""
@@ -227,7 +227,7 @@ class Task1(StoryBase):
                 self.pairn(t, "C", "coincide_steps", "d"),
                 " steps, ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " scaled) both send the same commands: joints at bounds leave just one solution",
+                " scaled) both send the same commands: joints at bounds leave one solution",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -358,6 +358,7 @@ class Task1(StoryBase):
         if "C-EMDM" in self.rec.fronts:
             csteps = self.rec.fronts["C-EMDM"]
             clauses: list[Sentence] = []
+            page_only: set[int] = set()
             for i, info in enumerate(csteps):
                 if info.degenerate:
                     clauses.append(
@@ -395,6 +396,7 @@ class Task1(StoryBase):
                         " all give one optimum, a vertex of the feasible set",
                     )
                 )
+                page_only.add(len(clauses) - 1)  # Fig. 3 notes it (reading 165): room
             late = [i for i, st in enumerate(csteps) if i > 0 and st.M_max < 0]
             if late and late == list(range(late[0], len(csteps))):  # m falls, whatever w_M
                 top = max(late, key=lambda i: csteps[i].M_max)  # the least negative of them all
@@ -417,7 +419,8 @@ class Task1(StoryBase):
                     )
                 )
             for c, clause in enumerate(clauses):  # one sentence each
-                p += capitalised(clause) if c == 0 else sentence(". ") + capitalised(clause)
+                said = capitalised(clause) if c == 0 else sentence(". ") + capitalised(clause)
+                p += [PageOnly(tuple(said))] if c in page_only and c > 0 else said
             if clauses:
                 p += sentence(". ")
         # the weight grid: failures
@@ -429,28 +432,26 @@ class Task1(StoryBase):
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                ", UC-EMDM misses the goal (",
+                " UC-EMDM misses the goal (",
                 run_label(GRID_MISS),
-                "): joints peak at ",
+                "): its joints reach ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                ", so one ",
+                ", too fast for the ",
                 self.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
-                " step moves the arm too far for ",
-                Math(r"J\dot q=v_d", "<i>J q̇</i> = <i>v</i><sub>d</sub>"),
-                " to hold. ",
+                " step. ",
             )
             finer = r.finer_dt
             if finer.get("reached"):
                 p += sentence(
                     "With ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " it arrives, spending ",
+                    " it arrives (",
+                    run_label(FINER_STEP),
+                    "), spending ",
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
                     " against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
-                    " at nominal weights (",
-                    run_label(FINER_STEP),
-                    "). The step size causes the miss; the weights cause the extra effort. ",
+                    " at nominal weights: the step causes the miss, the weights the extra effort. ",
                 )
             break
         if p:
@@ -460,22 +461,11 @@ class Task1(StoryBase):
     def whole_runs_levelled(self) -> Sentence:
         """What the whole-run sweep (Fig. 2, right) says of the nominal ratio: how much more mean
         m and effort the larger ratios that still reach the goal give UC-EMDM."""
-        grid = self.rec.grids.get("UC-EMDM", [])
-        w = self.rec.scenarios["task1"].weights
-        nominal = [
-            i for i, r in enumerate(grid) if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
-        ]
-        if not nominal:
+        found = self.beyond_nominal()
+        if found is None:
             return []
-        n = nominal[0]
-        ratio = grid[n].w_manip / grid[n].w_effort
-        above = [i for i, r in enumerate(grid) if r.reached and r.w_manip / r.w_effort > ratio]
-        if not above:
-            return []
-        best = max(above, key=lambda i: grid[i].mean_manipulability)
-        dearest = max(above, key=lambda i: grid[i].total_effort)
-        if grid[dearest].total_effort <= grid[n].total_effort:
-            return []
+        n, best, dearest = found
+        grid = self.rec.grids["UC-EMDM"]
         f = GRID_FILE.format(ctrl=Name.UC_EMDM)
         gain = grid[best].mean_manipulability / grid[n].mean_manipulability - 1.0
         more: Sentence = (
@@ -497,9 +487,9 @@ class Task1(StoryBase):
             ", right)",
             *(
                 (
-                    " the mean ",
+                    " the nominal ratio is the knee: the mean ",
                     M_SYM,
-                    " levels off at the nominal ratio. In runs that reach the goal,",
+                    " levels off there. In runs that reach the goal,",
                 )
                 if gain < 0.01
                 else (", in runs that reach the goal,",)
@@ -597,8 +587,8 @@ class Task1(StoryBase):
                     if high > low
                     else ()
                 ),
-                f" bounds hold it where {fixed} would. At such degenerate points active-set "
-                "methods can cycle; ours uses Bland's rule",
+                f" bounds hold it where {fixed} would. There active-set methods can cycle; "
+                "ours uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
