@@ -451,7 +451,8 @@ class Task1(Claims):
                     self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
                     " against ",
                     self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
-                    " at nominal weights: the step causes the miss, the weights the extra effort. ",
+                    " at nominal weights and that step: the step causes the miss, the weights the "
+                    "extra effort. ",
                 )
             break
         if p:
