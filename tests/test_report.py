@@ -107,6 +107,17 @@ def test_format_value_writes_missing_values_as_a_dash():
     assert format_value(3.0, "d") == "3"
 
 
+def test_format_value_keeps_significant_zeros_without_a_bare_point():
+    """Table III's times at three significant digits: 74.0 beside 61.9 (reading 165 took 74 for a
+    rounding slip), and never Python's bare '100.'."""
+    assert [format_value(v, "#.3g") for v in (74.0, 61.94, 0.00869, 100.0)] == [
+        "74.0",
+        "61.9",
+        "0.00869",
+        "100",
+    ]
+
+
 def test_the_page_tells_the_papers_story(report):
     """Same sections in the same order, and every answer of the paper on the page."""
     root, page = report

@@ -30,6 +30,8 @@ def format_value(value: Any, fmt: str) -> str:
         return str(int(value))
     if isinstance(value, float) and not math.isfinite(value):
         return "–"
+    if fmt.startswith("#"):  # significant digits kept ("74.0" beside "61.9"), no bare point
+        return format(float(value), fmt).rstrip(".")
     return format(float(value), fmt)
 
 

@@ -240,8 +240,8 @@ class StoryBase:
         """A solver's field in a lab, traced; ``unit="ms"`` writes a time in milliseconds."""
         value = getattr(self.rec.labs[lab].solvers[solver], key)
         op = "ms" if unit == "ms" else None
-        if op and fmt == ".4g":
-            fmt = ".3g"
+        if op and fmt == ".4g":  # three significant digits, trailing zeros kept (reading 165:
+            fmt = "#.3g"  # a median of 74 beside 61.9 read as a rounding slip)
         return traced(value, f"data/{lab}/solvers.json", ("solvers", solver, key), fmt, unit, op)
 
     def evaluations(self, lab: LabName, solver: str) -> Sentence:
