@@ -769,8 +769,8 @@ def test_the_workspace_figure_names_start_and_goal_on_a_slide_and_keeps_the_full
 ):
     """Fig. 4 and its slide: the paper's legend names every mark (the arm, the goal, the
     reachable disc among them); the slide's names the start and the goal where they are (its
-    legend the arms), leaves the grey disc unnamed and puts its legend under the axes (a ten-entry legend beside the
-    axes took their width)."""
+    legend the arms), leaves the grey disc unnamed and puts its legend under the axes (a
+    ten-entry legend beside the axes took their width)."""
     from emdm.outputs import paper_figures as pf
     from emdm.outputs.report import explain
 

@@ -606,6 +606,43 @@ def test_the_whole_run_sweep_is_read_against_the_nominal_ratio(quick_report, tmp
     assert f"{100 * gain:+.1f}" in text
 
 
+def test_the_sweep_levels_off_where_a_smaller_ratio_comes_within_one_percent(
+    quick_report, tmp_path
+):
+    """Readings 166-167: the nominal ratio had been called the knee, yet a smaller ratio came
+    within 1 % of its mean m for less effort. Where one does, Section III-B names it and the
+    conclusion recommends it with the effort saved; where none does (the quick grid), neither
+    does. The ratios are added to a copy of the record."""
+    import json
+    import shutil
+
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data, render_latex
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report / "data", root / "data")
+    path = root / "data" / "task1-pareto-UC-EMDM" / "weight_grid.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    nominal = next(r for r in record["runs"] if r["w_manip"] == 5.0)
+
+    def conclusion() -> str:
+        story = Story(Data(root))
+        return " ".join(render_latex(p) for p in story.conclusion().paragraphs)
+
+    assert "We would lower" not in conclusion()
+    for w_manip, effort, m in ((1.5, 0.8, 0.995), (0.5, 0.7, 0.95), (20.0, 2.0, 1.001)):
+        run = dict(nominal, w_manip=w_manip, reached=True)
+        run["total_effort"] = nominal["total_effort"] * effort
+        run["mean_manipulability"] = nominal["mean_manipulability"] * m
+        record["runs"].append(run)
+    path.write_text(json.dumps(record), encoding="utf-8")
+    story = Story(Data(root))
+    said = render_latex(story.whole_runs_levelled())
+    assert "$w_M$ = 1.5 comes within 1\\% of the nominal run's" in said  # not 0.5: 5 % below
+    assert "We would lower $w_M$ to 1.5" in conclusion()
+    assert "$-20$\\% effort" in conclusion()
+
+
 def test_the_parameters_sentence_states_one_value_where_every_joint_shares_it():
     """Section II gives one |q_j| bound, one damper (i_j, s_j, K_safe), one q_dot_max per task,
     one K_p and one slack bound: true only while every joint (and axis) shares them."""

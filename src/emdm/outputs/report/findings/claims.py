@@ -12,6 +12,9 @@ from ..trace import Num, Ref, Sentence, Text, sentence
 from .base import M_SYM, StoryBase, run_label
 from .records import EvidenceKey
 
+LEVEL = 0.01
+"""Where the whole-run sweep's mean m has levelled off: within 1 % of the nominal run's."""
+
 
 def cap(parts: Sentence) -> Sentence:
     """The claim at the start of a sentence: its first letter a capital."""
@@ -49,16 +52,24 @@ class Claims(StoryBase):
             return None
         return n, best, dearest
 
-    def ratio_levels_off(self) -> bool:
-        """Whether the nominal ratio is the whole-run front's knee: larger ratios that arrive
-        add under 1 % to the mean m and spend more (Section III-B's numbers; the conclusion's
-        recommendation)."""
-        found = self.beyond_nominal()
-        if found is None:
-            return False
-        n, best, _ = found
-        grid = self.rec.grids["UC-EMDM"]
-        return grid[best].mean_manipulability < 1.01 * grid[n].mean_manipulability
+    def levels_off_at(self) -> tuple[int, int] | None:
+        """Where Task 1's whole-run sweep levels off: the nominal run's index and the smallest
+        weight ratio's whose run reaches the goal with a mean m within :data:`LEVEL` of the
+        nominal's, when that ratio is smaller and spends less (readings 166-167: the nominal
+        ratio, called the knee, lies past it). None otherwise."""
+        grid = self.rec.grids.get("UC-EMDM", [])
+        w = self.rec.scenarios["task1"].weights
+        nominal = [
+            i for i, r in enumerate(grid) if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
+        ]
+        if not nominal:
+            return None
+        n = nominal[0]
+        floor = (1.0 - LEVEL) * grid[n].mean_manipulability
+        near = [i for i, r in enumerate(grid) if r.reached and r.mean_manipulability >= floor]
+        k = min(near, key=lambda i: grid[i].w_manip / grid[i].w_effort)
+        cheaper = grid[k].total_effort < grid[n].total_effort
+        return (n, k) if k != n and cheaper else None
 
     def dexterity_gain(self) -> Sentence:
         """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers)."""
