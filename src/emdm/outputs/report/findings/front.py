@@ -188,13 +188,15 @@ class Front(Claims):
             n, k = knee
             f = GRID_FILE.format(ctrl=Name.UC_EMDM)
             p += sentence(
-                "We would lower ",
+                "We would lower Task 1's ",
                 W_M,
+                " from ",
+                self.gridn("UC-EMDM", n, "w_manip", fmt=".3g"),
                 " to ",
                 self.gridn("UC-EMDM", k, "w_manip", fmt=".3g"),
-                ": it keeps the mean ",
+                ": its mean ",
                 M_SYM,
-                f" within {LEVEL:.0%} for ",
+                f" stays within {LEVEL:.0%} for ",
                 self.d.pct((f, "runs", k, "total_effort"), (f, "runs", n, "total_effort")),
                 " effort. ",
             )
