@@ -928,3 +928,25 @@ def test_the_solver_slide_says_each_verdict_and_what_it_cost(tmp_path, drawn):
             "off by 0.11, out of bounds, 344 evals",
         ]
     )
+
+
+def test_the_task2_1_figure_draws_c_ivkc_with_the_same_free_slack(tmp_path, monkeypatch):
+    """Reading 169: Task 2.1's like-for-like comparison (C-IVKC given the free slack, Table
+    II's row) was in the table only. Fig. 6 draws that run dotted: the evidence record's run,
+    arriving where the record says."""
+    from emdm.outputs import paper_figures as pf
+    from emdm.outputs.report import jobs
+    from emdm.outputs.report.config import EVIDENCE
+
+    drawn: list = []
+    monkeypatch.setattr(
+        pf, "pair_figure", lambda runs, stem, medium=pf.PAPER, **kw: drawn.append(kw) or stem
+    )
+    jobs._job_pair_figures("task2", "C", tmp_path, jobs.QUICK)
+    label, run = drawn[0]["without"]
+    assert label == "C-IVKC, free slack"
+    ev = next(e for e in EVIDENCE if e.key == "t2-c-slack-policy")
+    overrides = {**ev.overrides, **ev.controller_overrides("C-IVKC")}
+    again = emdm.simulate(emdm.load_scenario("task2", overrides), "C-IVKC")
+    assert run.reached and np.array_equal(run.q, again.q)
+    assert drawn[0]["gap"] is True

@@ -318,6 +318,10 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
             from .findings.base import run_label
 
             extra = (f"{extra[0]} ({run_label(WITHOUT_TERM)})", extra[1])
+        if (task, group) == ("task2", "C"):  # Task 2.1's like-for-like run, plotted (reading
+            # 169: the fair comparison was two table rows only)
+            run = _rerun_evidence(SLACK_POLICY, ivkc)
+            extra = (f"{ivkc}, free slack", run) if run is not None else None
         out = [
             str(
                 pf.pair_figure(
@@ -340,17 +344,29 @@ WITHOUT_TERM = "t2-uc-emdm-no-manip"
 dexterity term."""
 
 
-def _without_term(emdm: str) -> tuple[str, Run] | None:
-    """Task 2's UC-EMDM run without the dexterity term, as the evidence record ran it (its
-    overrides from :data:`EVIDENCE`), labelled for the slide; None if it does not run."""
-    ev = next((e for e in EVIDENCE if e.key == WITHOUT_TERM), None)
-    if ev is None or emdm not in ev.controllers:
+SLACK_POLICY = "t2-c-slack-policy"
+
+
+def _rerun_evidence(key: str, ctrl: str) -> Run | None:
+    """``ctrl``'s run in the evidence run ``key`` again, as :func:`_evidence_run` ran it for the
+    record (the overrides of :data:`EVIDENCE` and its own, a like-for-like slack weight), for a
+    figure; None if it does not run."""
+    ev = next((e for e in EVIDENCE if e.key == key), None)
+    if ev is None or ctrl not in ev.controllers:
         return None
     try:
-        run = simulate(load_scenario(ev.task, ev.overrides), emdm)
+        return simulate(
+            load_scenario(ev.task, {**ev.overrides, **ev.controller_overrides(ctrl)}), ctrl
+        )
     except NoSolution:
         return None
-    return f"{emdm}, $w_M=0$", run
+
+
+def _without_term(emdm: str) -> tuple[str, Run] | None:
+    """Task 2's UC-EMDM run without the dexterity term (:func:`_rerun_evidence`), labelled for
+    the slide; None if it does not run."""
+    run = _rerun_evidence(WITHOUT_TERM, emdm)
+    return (f"{emdm}, $w_M=0$", run) if run is not None else None
 
 
 def _job_mmc(stage: Path, cfg: ReportConfig) -> list[str]:

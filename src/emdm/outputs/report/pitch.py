@@ -449,7 +449,7 @@ class Pitch:
                         (
                             ", a ",
                             self.s.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s"),
-                            " step arrives",
+                            " step arrives (backup table)",
                         )
                         if finer and finer.get("reached")
                         else ()

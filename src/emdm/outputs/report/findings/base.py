@@ -24,7 +24,7 @@ from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
-from ..trace import Data, Math, Num, Ref, Sentence, Text, sentence, traced
+from ..trace import Data, Eqs, Math, Num, Ref, Sentence, Text, sentence, traced
 from .records import (
     GRID_FILE,
     EventKey,
@@ -517,6 +517,9 @@ class StoryBase:
                 GAP_FLOOR_MATH,
                 ")" if FOURTH_PANEL["task1"] == "path" else "), joints in (e), (f)",
             )
+            key = "t2-c-slack-policy"  # its like-for-like run, dotted (reading 169)
+            if key in self.rec.evidence and self.evid(key, "runs", ivkc).get("reached"):
+                out += sentence(f"; dotted: {ivkc} with a free slack (", Eqs(("free",)), ")")
         for note in notes:
             out += sentence("; ") + note
         return out + sentence(".")

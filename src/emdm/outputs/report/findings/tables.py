@@ -173,8 +173,7 @@ class Tables(Claims):
         drifted = [m for m in missed if not self.evv(*m, "stall")]
 
         indented = sentence(
-            " Indented rows change one thing in the nominal run above: E1–E6 test a cause; free "
-            "slack uses (",
+            " Indented rows vary the nominal run above: E1–E6 test a cause; free slack uses (",
             Eqs(("free",)),
             "), not scaling.",
         )

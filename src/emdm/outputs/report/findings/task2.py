@@ -6,7 +6,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ..config import PAIRS
 from ..document import Section
-from ..trace import Math, Num, PageOnly, Ref, Segment, Sentence, sentence, traced
+from ..trace import File, Math, Num, PageOnly, Ref, Segment, Sentence, sentence, traced
 from .base import (
     ALPHA,
     COND_J,
@@ -177,7 +177,14 @@ class Task2(Claims):
                         "Task 2: the straight line to the goal enters the disc unreachable with ",
                         Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
                         " outside its stop zone (hatched); C-IVKC stalls just short of it, C-EMDM "
-                        "goes around and flips its elbow into the admissible goal configuration.",
+                        "goes around and flips its elbow into the admissible goal configuration",
+                        # (Task 2's animations named too, reading 169: only Task 1's were)
+                        *(
+                            (" (", File("animations/task2/"), ")")
+                            if self.anim("task2", "C")
+                            else ()
+                        ),
+                        ".",
                     ),
                 )
             )
