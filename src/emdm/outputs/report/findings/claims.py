@@ -53,18 +53,27 @@ class Claims(StoryBase):
             " effort",
         )
 
+    def nominal_in_grid(self) -> int | None:
+        """The index of the nominal weights' run in Task 1's whole-run sweep (None: not run)."""
+        w = self.rec.scenarios["task1"].weights
+        grid = self.rec.grids.get("UC-EMDM", [])
+        return next(
+            (
+                i
+                for i, r in enumerate(grid)
+                if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
+            ),
+            None,
+        )
+
     def beyond_nominal(self) -> tuple[int, int, int] | None:
         """Task 1's whole-run sweep beyond the nominal weight ratio: the nominal run's index,
         the arriving larger ratio with the highest mean m and the one with the most effort
         (None: no nominal run, none larger arrives, or none spends more)."""
         grid = self.rec.grids.get("UC-EMDM", [])
-        w = self.rec.scenarios["task1"].weights
-        nominal = [
-            i for i, r in enumerate(grid) if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
-        ]
-        if not nominal:
+        n = self.nominal_in_grid()
+        if n is None:
             return None
-        n = nominal[0]
         ratio = grid[n].w_manip / grid[n].w_effort
         above = [i for i, r in enumerate(grid) if r.reached and r.w_manip / r.w_effort > ratio]
         if not above:
@@ -81,13 +90,9 @@ class Claims(StoryBase):
         nominal's, when that ratio is smaller and spends less (readings 166-167: the nominal
         ratio, called the knee, lies past it). None otherwise."""
         grid = self.rec.grids.get("UC-EMDM", [])
-        w = self.rec.scenarios["task1"].weights
-        nominal = [
-            i for i, r in enumerate(grid) if (r.w_manip, r.w_effort) == (w.manipulability, w.effort)
-        ]
-        if not nominal:
+        n = self.nominal_in_grid()
+        if n is None:
             return None
-        n = nominal[0]
         floor = (1.0 - LEVEL) * grid[n].mean_manipulability
         near = [i for i, r in enumerate(grid) if r.reached and r.mean_manipulability >= floor]
         k = min(near, key=lambda i: grid[i].w_manip / grid[i].w_effort)
