@@ -1279,8 +1279,9 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     quick_report, tmp_path
 ):
     """Reading 128: the abstract says that C-IVKC's stall comes from task scaling, the paper's
-    own choice, and what a free slack changes: both arrive, C-IVKC first, or C-IVKC alone
-    when C-EMDM's slack run does not arrive (as its record says)."""
+    own choice (in words, reading 170: the terms are the body's), and what a free slack
+    changes: both arrive, C-IVKC first, or C-IVKC alone when C-EMDM's slack run does not arrive
+    (as its record says)."""
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
@@ -1294,13 +1295,16 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
         return "".join(p.plain() for p in Story(Data(root)).abstract())
 
     said = abstract()
-    assert "IVKC stalls under the task scaling we chose" in said
+    assert (
+        "IVKC, which we let slow its tip where the limits forbid the asked velocity, comes to "
+        in said
+    )
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
     assert ("both arrive, IVKC first" in said) == first
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "Given the same free slack, IVKC arrives." in said and "both arrive" not in said
+    assert "Given the same slack, IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):

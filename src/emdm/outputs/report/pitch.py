@@ -234,12 +234,11 @@ class Pitch:
         )
         out.bullets["pareto"] = self.pareto()
         out.bullets["task2-uc"] = self.task2_uc()
-        advice = self.s.weight_advice()  # the paper's conclusion's, said once
-        out.bullets["takeaways"] = [
+        out.bullets["takeaways"] = [  # (the paper's weight advice is not drawn here: reading
+            # 171 found it on no slide)
             sentence(
                 "Redundant arm: EMDM buys dexterity with its spare joint; tracking is untouched"
-            )
-            + (sentence(". We would ") + advice if advice else []),
+            ),
             *self.policy(),
             *(
                 [

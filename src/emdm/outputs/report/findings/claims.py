@@ -32,7 +32,7 @@ def listed(words: list[str]) -> str:
 class Claims(StoryBase):
     def weight_advice(self) -> Sentence:
         """``lower Task 1's w_M from 5 to 1.52: its mean m stays within 1% for -13% effort``:
-        the whole-run sweep's recommendation (the conclusion's and the pitch's take-away), or
+        the whole-run sweep's recommendation (the conclusion's; the page's with it), or
         nothing where no smaller ratio comes within :data:`LEVEL` of the nominal mean m."""
         found = self.levels_off_at()
         if found is None:

@@ -27,9 +27,12 @@ class Front(Claims):
             if self.ivkc_with_slack():
                 both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
                 out += sentence(
-                    "On a two-link arm with limits, only EMDM has the brief's slack, so only it "
-                    "can leave the blocked straight line and arrive; IVKC stalls under the task "
-                    "scaling we chose. Given the same free slack, ",
+                    # (in words, not the body's terms: reading 170 met 'stall' and 'task
+                    # scaling' undefined in the abstract)
+                    "On a two-link arm with limits, only EMDM has the brief's task slack, so only "
+                    "it can leave the blocked straight line and arrive; IVKC, which we let slow "
+                    "its tip where the limits forbid the asked velocity, comes to rest short of "
+                    "the goal. Given the same slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)
@@ -177,7 +180,7 @@ class Front(Claims):
                 listed(gains),
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 # the recommendation the evidence makes (reading 164 found none)
-                ": we would relax a task by a slack unless the tip must keep its line"
+                ": on these tasks we would relax a task by a slack unless the tip must keep its line"
                 if self.slack_better_on_all()
                 else "",
                 ". ",  # (Table II's free-slack rows, cited where the runs are told)
