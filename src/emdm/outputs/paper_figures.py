@@ -1749,7 +1749,7 @@ def arms_figure(pairs: Mapping[str, Sequence[Run]], stem: Path, medium: Medium =
     )
     scale = 0.22 * arm.reach / biggest if biggest > 0 else 1.0
     width = medium.column if medium is PAPER else 4.4
-    height = 1.2 if medium is PAPER else 2.4
+    height = 1.05 if medium is PAPER else 2.4  # (its view takes the slot: datalim)
     with _figure(stem, medium, width, height) as fig:
         ax = fig.add_subplot()
         start = _arm_points(runs[0], runs[0].q[0])

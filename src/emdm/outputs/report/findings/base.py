@@ -430,7 +430,8 @@ class StoryBase:
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
             "); the slack, up to ",
             self.evidn(e2, "runs", emdm, "max_abs_slack", fmt=".2f", unit="m/s"),
-            ", bends it.",
+            # per axis: the record's largest |delta_i| (Task 2 quotes norms; reading 172)
+            " per axis, bends it.",
         )
         return p
 

@@ -180,7 +180,7 @@ class Front(Claims):
                 listed(gains),
                 ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
                 # the recommendation the evidence makes (reading 164 found none)
-                ": on these tasks we would relax a task by a slack unless the tip must keep its line"
+                ": here a slack beats scaling unless the tip must keep its line"
                 if self.slack_better_on_all()
                 else "",
                 ". ",  # (Table II's free-slack rows, cited where the runs are told)

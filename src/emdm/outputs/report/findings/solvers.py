@@ -94,7 +94,7 @@ class Solvers(StoryBase):
                 f" is as exact as {exact_free[0]} and far faster: it"
                 if exact_free
                 else " wins on both counts: it",
-                " reaches the exact optimum (largest gap ",
+                " reaches the optimum (largest gap ",
                 self.sn(lab, grad, "max_abs_gap", ".1e"),
                 ") after a median ",
                 *self.evaluations(lab, grad),
@@ -120,9 +120,7 @@ class Solvers(StoryBase):
                 self.sn(lab, k, "median_evaluations", ".4g"),
                 " evaluations and ",
                 self.sn(lab, k, "median_time", unit="ms"),
-                " on the reduced program (",
-                Ref("sec", "formulation"),
-                ") and, run from Python, ",
+                " on the reduced program and, run from Python, ",
             ) + self.overruns(lab, exact_free, rows, named=False)
         elif exact_free:
             answer += sentence(
@@ -176,7 +174,8 @@ class Solvers(StoryBase):
                     if max(gaps) > min(gaps)
                     else sentence(". The others are inexact")
                 )
-                answer += self.budget_stops(lab, free, rows)
+                # the budget's stops on the page (reading 168: an aside; the paper's room)
+                answer += sentence(PageOnly(tuple(self.budget_stops(lab, free, rows))))
             # the spread over seeds on the page only (readings asked for the room in the paper)
             answer += sentence(PageOnly(tuple(self.seed_spread(lab, rows))), ".")
         elif inexact_free:

@@ -304,7 +304,7 @@ class Task1(Claims):
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
             cap += sentence(
-                "; hollow: a scaled step's front under the free slack (", Eqs(("free",)), ")"
+                "; hollow: a scaled step's optimum under the free slack (", Eqs(("free",)), ")"
             )
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
@@ -617,8 +617,8 @@ class Task1(Claims):
         qp = rows.get("quadprog")
         if qp and qp.failures:  # the fallback's last resort (reading 142): on the page, as
             # it never ran in the loop (reading 149 asked for the room)
-            declines = sentence(
-                ". The last fallback, quadprog, declines ",
+            declines = sentence(  # (offline: the loop's fallback never ran, reading 173)
+                ". In the solver lab the last fallback, quadprog, declines ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
                 " of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),

@@ -328,10 +328,9 @@ class Task2(Claims):
                     "At ",
                     T_EQ,
                     self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
-                    " the arm passes through the singular stretched configuration (",
+                    " the arm passes through the singular stretched pose (",
+                    # (cond J's peak there: Section IV-B's challenge, said once)
                     *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
-                    ", ",
-                    *eq(COND_J, self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g")),
                     ") and flips its elbow into the admissible goal configuration.",
                 )
             sec.paragraphs.append(p)
