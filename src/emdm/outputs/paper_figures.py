@@ -1108,7 +1108,8 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
     family, the control period dashed), and in a column beside the axes, in words, whether its
     answer is the optimum: ``exact`` (:func:`~emdm.studies.lab.exact_answer`, filled), else
     hollow with ``within 10^-k``, ``off by g``, and ``out of bounds`` (violation above 1e-6),
-    then the median objective evaluations of the solvers that count them (``522 evals``). The
+    then the median objective evaluations of the solvers that count them (``522 evals``), and
+    a gradient method's gradient evaluations (``6 evals + 5 grads``). The
     paper's :func:`solver_figure` plots the gaps on an axis."""
     rows = lab["solvers"]
     order = [
@@ -1152,6 +1153,8 @@ def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
             evaluations = r.get("median_evaluations")
             if evaluations:  # what it costs, in the methods' own unit (the slide's bullets)
                 word += f", {evaluations:g} evals"
+            if r.get("median_gradients"):  # and a gradient method's gradients (reading 175)
+                word += f" + {r['median_gradients']:g} grads"
             words.text(-0.1, yi, word, va="center", fontsize=medium.tiny)
         # the one long name shortened: the axes keep the slide's width; a star marks a compiled
         # inner loop, as in the paper's Table III (its times compare implementations too)
