@@ -10,6 +10,7 @@ from typing import Any
 
 from ...core.controllers import Name
 from ...core.loading import load_scenario
+from ...core.scenario import Scenario
 from ...errors import ScenarioError
 
 
@@ -186,6 +187,11 @@ class Evidence:
             return {}
         weights = load_scenario(self.task, self.overrides).weights
         return {"weights.slack": weights.slack / weights.effort}
+
+    def scenario(self, name: str) -> Scenario:
+        """The scenario ``name`` runs in this evidence run: the task with :attr:`overrides`
+        and its own (:meth:`controller_overrides`)."""
+        return load_scenario(self.task, {**self.overrides, **self.controller_overrides(name)})
 
 
 FREE_SLACK = 1e3

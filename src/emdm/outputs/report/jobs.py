@@ -86,7 +86,7 @@ def _evidence_run(ev: Evidence, nominal: dict[str, Run]) -> dict[str, Any]:
         if own:
             entry["controller_overrides"][name] = own
         try:
-            run = simulate(load_scenario(ev.task, {**ev.overrides, **own}), name)
+            run = simulate(ev.scenario(name), name)
         except NoSolution as exc:
             entry["runs"][name] = {"error": str(exc)}
             continue
@@ -354,10 +354,8 @@ def _rerun_evidence(key: str, ctrl: str) -> Run | None:
     ev = next((e for e in EVIDENCE if e.key == key), None)
     if ev is None or ctrl not in ev.controllers:
         return None
-    try:
-        return simulate(
-            load_scenario(ev.task, {**ev.overrides, **ev.controller_overrides(ctrl)}), ctrl
-        )
+    try:  # (the record keeps outcomes, not runs: a figure simulates it again, in milliseconds)
+        return simulate(ev.scenario(ctrl), ctrl)
     except NoSolution:
         return None
 

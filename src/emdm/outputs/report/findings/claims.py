@@ -95,6 +95,8 @@ class Claims(StoryBase):
             return None
         floor = (1.0 - LEVEL) * grid[n].mean_manipulability
         near = [i for i, r in enumerate(grid) if r.reached and r.mean_manipulability >= floor]
+        if not near:  # (the nominal run itself missed the goal)
+            return None
         k = min(near, key=lambda i: grid[i].w_manip / grid[i].w_effort)
         cheaper = grid[k].total_effort < grid[n].total_effort
         return (n, k) if k != n and cheaper else None
