@@ -32,6 +32,8 @@ class ReportConfig:
     mmc_trials: int = 500
     animation_fps: float = 20.0
     """The animations' highest frame rate (the quick preview draws half the frames)."""
+    goal_runs: int = 256
+    """Random starts and goals per task of the many-goals study (``data/many-goals.json``)."""
 
 
 STUDY_SOLVERS = (
@@ -79,6 +81,7 @@ QUICK = ReportConfig(
     mp4=False,
     mmc_trials=20,
     animation_fps=10.0,
+    goal_runs=64,
 )
 
 SLIDE_PARETO_STEP = 0
@@ -244,3 +247,9 @@ EVIDENCE = (
     ),
 )
 """The evidence runs (each isolates one cause; the report says what each shows)."""
+
+SLACK_POLICIES = {"task1": "t1-c-slack-policy", "task2": "t2-c-slack-policy"}
+"""Each task's free-slack policy run (:data:`EVIDENCE`), also run on the many goals."""
+
+MANY_GOALS = "data/many-goals.json"
+"""The many-goals study: each task's controllers on the same random starts and goals."""

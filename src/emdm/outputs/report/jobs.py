@@ -55,8 +55,10 @@ from .config import (
     FOURTH_PANEL,
     FULL,
     GLYPHS,
+    MANY_GOALS,
     PAIRS,
     QUICK,
+    SLACK_POLICIES,
     SLIDE_PARETO_STEP,
     TASKS,
     Evidence,
@@ -320,7 +322,7 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
             extra = (f"{extra[0]} ({run_label(WITHOUT_TERM)})", extra[1])
         if (task, group) == ("task2", "C"):  # Task 2.1's like-for-like run, plotted (reading
             # 169: the fair comparison was two table rows only)
-            run = _rerun_evidence(SLACK_POLICY, ivkc)
+            run = _rerun_evidence(SLACK_POLICIES["task2"], ivkc)
             extra = (f"{ivkc}, free slack", run) if run is not None else None
         out = [
             str(
@@ -342,9 +344,6 @@ def _job_pair_figures(task: str, group: str, stage: Path, cfg: ReportConfig) -> 
 WITHOUT_TERM = "t2-uc-emdm-no-manip"
 """The evidence run the pitch's Task 2.2 slide draws beside its pair: UC-EMDM without its
 dexterity term."""
-
-
-SLACK_POLICY = "t2-c-slack-policy"
 
 
 def _rerun_evidence(key: str, ctrl: str) -> Run | None:
@@ -385,6 +384,36 @@ def _job_mmc(stage: Path, cfg: ReportConfig) -> list[str]:
     with pf.png_only(cfg.quick):
         stem = spatial_path_figure(list(runs.values()), stage / PAPER_FIGURES / "panda-baselines")
     return [str(stem)]
+
+
+def _job_many_goals(stage: Path, cfg: ReportConfig) -> str:
+    """Whether the one-goal answers hold elsewhere: each task's controllers, with their
+    nominal task scaling and with the free slack of its policy run, on the same random starts
+    and goals; Task 1's UC-EMDM at each weight of its whole-run sweep (``data/many-goals.json``)."""
+    from ...studies.goals import policy_study, weight_study
+
+    tasks: dict[str, Any] = {}
+    for task in TASKS:
+        sc = load_scenario(task)
+        ev = next(e for e in EVIDENCE if e.key == SLACK_POLICIES[task])
+        pairs = {group: (str(a), str(b)) for group, (a, b) in PAIRS.items()}
+        tasks[task] = {
+            "reach": sc.reach,
+            "policies": {
+                "scale": policy_study({c: sc for c in CONTROLLERS}, pairs, cfg.goal_runs, 0),
+                "slack": policy_study(
+                    {c: ev.scenario(c) for c in ev.controllers},
+                    {"C": (str(ev.controllers[0]), str(ev.controllers[1]))},
+                    cfg.goal_runs,
+                    0,
+                ),
+            },
+        }
+    task1 = load_scenario("task1")  # the whole-run sweep's weights (Fig. 3, right)
+    grid = default_grid(task1, cfg.grid)
+    tasks["task1"]["weights"] = weight_study(task1, Name.UC_EMDM, grid, cfg.goal_runs, 0)
+    write_json(stage / MANY_GOALS, {"runs": cfg.goal_runs, "seed": 0, "tasks": tasks})
+    return MANY_GOALS
 
 
 def _job_story_figures(stage: Path, cfg: ReportConfig) -> list[str]:
@@ -451,7 +480,7 @@ def _story_figures(stage: Path) -> list[str]:
     return out
 
 
-POLICY_RUN = "t1-c-slack-policy"
+POLICY_RUN = SLACK_POLICIES["task1"]
 """The evidence run the pitch's Task 1 policy chart sets beside the constrained pair: the
 same runs with a free slack instead of task scaling."""
 
@@ -507,8 +536,8 @@ def evidence_bars(runs: dict[str, Run], record: Path) -> list[pf.EvidenceBar]:
     bars = []
     for ctrl in (Name.C_IVKC, Name.C_EMDM):
         bars.append(pf.EvidenceBar(ctrl, "as run", arrival(runs[ctrl])))
-        if ctrl in ev.get("t2-c-slack-policy", {}).get("runs", {}):
-            run = ev["t2-c-slack-policy"]["runs"][ctrl]
+        if ctrl in ev.get(SLACK_POLICIES["task2"], {}).get("runs", {}):
+            run = ev[SLACK_POLICIES["task2"]]["runs"][ctrl]
             bars.append(pf.EvidenceBar(ctrl, "free slack", goal(run)))
     if Name.C_EMDM in ev.get("t2-c-emdm-no-manip", {}).get("runs", {}):
         run = ev["t2-c-emdm-no-manip"]["runs"][Name.C_EMDM]
@@ -756,6 +785,7 @@ def build_report(
             for name in reversed(solvers2):
                 futures[f"lab2:{name}"] = pool.submit(_job_lab, "task2", Name.C_EMDM, [name], cfg)
             futures["mmc"] = pool.submit(_job_mmc, stage, cfg)
+            futures["many-goals"] = pool.submit(_job_many_goals, stage, cfg)
             for ctrl in (Name.UC_EMDM, Name.C_EMDM):
                 futures[f"pareto:{ctrl}"] = pool.submit(
                     _job_pareto, "task1", ctrl, cfg, stage / "data" / f"task1-pareto-{ctrl}"

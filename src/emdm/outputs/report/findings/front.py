@@ -6,10 +6,11 @@ from ....core.controllers import Name
 from ..document import Section
 from ..trace import Cite, Math, Sentence, sentence
 from .base import M_SYM
-from .claims import Claims, listed
+from .claims import listed
+from .goals import Goals
 
 
-class Front(Claims):
+class Front(Goals):
     # ------------------------------------------------------------------ abstract, intro
     def abstract(self) -> Sentence:
         t2 = "task2"
@@ -163,9 +164,13 @@ class Front(Claims):
 
     def conclusion(self) -> Section:
         sec = Section("conclusion", "Conclusion")
+        # each answer tried from other starts to other goals (readings 171, 174: one goal each)
+        gain = self.goals_gain()
         p = sentence(
             "On the redundant arm EMDM keeps IVKC's tracking and trades effort for "
-            "manipulability through null-space motion. On the non-redundant arm the slack, not the "
+            "manipulability through null-space motion",
+            *(sentence(": ", *gain) if gain else []),
+            ". On the non-redundant arm the slack, not the "
             "dexterity term, takes C-EMDM around the blocked disc. ",
         )
         gains = self.slack_gains()
@@ -178,23 +183,27 @@ class Front(Claims):
                 "; " if self.slack_better_on_all() else ", but ",
                 "a free slack makes C-EMDM ",
                 listed(gains),
-                ", and in Task 2 lets C-IVKC arrive" if self.ivkc_with_slack() else "",
+                *(
+                    sentence(", and lets C-IVKC arrive in Task 2", *self.goals_policy())
+                    if self.ivkc_with_slack()
+                    else []
+                ),
                 # the recommendation the evidence makes (reading 164 found none)
                 ": here a slack beats scaling unless the tip must keep its line"
                 if self.slack_better_on_all()
                 else "",
                 ". ",  # (Table II's free-slack rows, cited where the runs are told)
             )
+        p += self.beyond_reach()
         advice = self.weight_advice()  # the weights' recommendation, from the whole-run sweep
         if advice:
-            p += sentence("We would ", *advice, ". ")
+            p += sentence("We would ", *advice, *self.goals_weight(), ". ")
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(
-            "For programs this small, certified active-set QP solvers are the right tool, "
-            "not gradient-free ones. ",
+            "For programs this small, certified active-set QP solvers beat gradient-free ones. ",
         )
         p += sentence(  # what the study does not show (reading 145: no limitations said)
-            "Limits: two planar arms, one goal each, kinematics only, Python timings."
+            "Limits: two planar arms, kinematics only, Python timings."
         )
         sec.paragraphs.append(p)
         return sec

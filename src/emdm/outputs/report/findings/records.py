@@ -27,6 +27,7 @@ from typing import Any, Literal, Union
 
 from ....core.scenario import Scenario, scenario_from_dict
 from ....errors import EmdmError
+from ..config import MANY_GOALS
 from ..trace import Data
 
 
@@ -549,6 +550,81 @@ class MmcRecord:
     paper: PaperProtocol | None = None
 
 
+@dataclass(frozen=True)
+class Missed:
+    """Where a controller's missed runs of the many-goals study ended: the range of their
+    goals' and resting tips' distances from the base (m), of their final errors (m) and of
+    the last joint's angle at rest (|q_n|, rad); the farthest goal it reached."""
+
+    count: int
+    goal_radius: list[Any]
+    arrived_goal_radius_max: float | None
+    final_error: list[Any]
+    rest_tip_radius: list[Any]
+    rest_last_joint: list[Any]
+
+
+@dataclass(frozen=True)
+class GoalsRow:
+    """One controller in the many-goals study: its arrivals among ``runs`` draws, the
+    quartiles of its times to the goal (s) and where its missed runs ended."""
+
+    runs: int
+    arrived: int
+    time_to_goal: list[Any] | None
+    missed: Missed | None
+
+
+@dataclass(frozen=True)
+class PairChange:
+    """A pair compared run by run on the draws both reach: quartiles of the second's relative
+    change of mean m, total effort and time to the goal against the first's; on how many
+    the second has the higher mean m."""
+
+    both_arrived: int
+    mean_manipulability: list[Any] | None
+    total_effort: list[Any] | None
+    time_to_goal: list[Any] | None
+    higher_mean_manipulability: int
+
+
+@dataclass(frozen=True)
+class PolicyGoals:
+    """One task's controllers under one infeasibility policy, on the many goals."""
+
+    controllers: dict[str, GoalsRow]
+    pairs: dict[str, PairChange]
+
+
+@dataclass(frozen=True)
+class WeightGoals(PairChange):
+    """Task 1's UC-EMDM at one weight pair, against the nominal weights, on the many goals."""
+
+    w_effort: float = 0.0
+    w_manip: float = 0.0
+    arrived: int = 0
+
+
+@dataclass(frozen=True)
+class TaskGoals:
+    """One task in the many-goals study: its arm's reach (m), each policy's study (``scale``,
+    ``slack``) and, for Task 1, its whole-run sweep's weights."""
+
+    reach: float
+    policies: dict[str, PolicyGoals]
+    weights: list[WeightGoals] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class ManyGoals:
+    """``data/many-goals.json``: every task's controllers on the same ``runs`` random starts
+    and goals (seed ``seed``)."""
+
+    runs: int
+    seed: int
+    tasks: dict[str, TaskGoals]
+
+
 def _accepts(hint: Any, value: Any) -> bool:
     """Whether ``value`` (decoded JSON) has the type ``hint`` (the few kinds used above)."""
     origin = typing.get_origin(hint)
@@ -647,6 +723,8 @@ class Records:
     """Task 1's Pareto fronts at the steps studied, by controller."""
     grids: dict[str, list[GridRun]]
     """Task 1's weight grid of whole runs, by controller."""
+    goals: ManyGoals | None = None
+    """The many-goals study (absent: the report ran none)."""
 
     @classmethod
     def load(cls, data: Data, tasks: tuple[str, ...] = ("task1", "task2")) -> Records:
@@ -709,4 +787,7 @@ class Records:
         mmc = (
             load_record(MmcRecord, data, "data/mmc.json") if data.exists("data/mmc.json") else None
         )
-        return cls(scenarios, outcomes, events, pairs, evidence, labs, geometry, mmc, fronts, grids)
+        goals = load_record(ManyGoals, data, MANY_GOALS) if data.exists(MANY_GOALS) else None
+        return cls(
+            scenarios, outcomes, events, pairs, evidence, labs, geometry, mmc, fronts, grids, goals
+        )

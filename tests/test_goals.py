@@ -1,0 +1,143 @@
+"""The many-goals study (:mod:`emdm.studies.goals`) and what the conclusion says of it."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from emdm import simulate
+from emdm.core.loading import load_scenario
+from emdm.sim.metrics import metrics
+from emdm.studies.goals import (
+    controller_summary,
+    pair_summary,
+    quartiles,
+    run_on_draws,
+    weight_study,
+)
+from emdm.studies.montecarlo import draw
+
+
+def test_quartiles_and_paired_changes_on_known_values():
+    assert quartiles(np.array([])) is None
+    assert quartiles(np.arange(5.0)) == [1.0, 2.0, 3.0]
+    base = {
+        "reached": np.array([True, True, True, False]),
+        "mean_manipulability": np.array([1.0, 2.0, 4.0, 1.0]),
+        "total_effort": np.array([1.0, 1.0, 1.0, 1.0]),
+        "time_to_goal": np.array([2.0, 2.0, 2.0, np.nan]),
+    }
+    other = {
+        "reached": np.array([True, True, False, True]),
+        "mean_manipulability": np.array([1.5, 1.0, 8.0, 9.0]),
+        "total_effort": np.array([2.0, 3.0, 1.0, 1.0]),
+        "time_to_goal": np.array([1.0, 3.0, np.nan, 1.0]),
+    }
+    out = pair_summary(base, other)
+    assert out["both_arrived"] == 2  # runs 0 and 1 only
+    assert out["mean_manipulability"] == pytest.approx([-0.5 + 0.25 * 1.0, 0.0, 0.5 - 0.25])
+    assert out["total_effort"] == pytest.approx([1.25, 1.5, 1.75])
+    assert out["time_to_goal"] == pytest.approx([-0.5 + 0.25, 0.0, 0.25])
+    assert out["higher_mean_manipulability"] == 1  # run 0 (runs 2, 3: not both arrived)
+
+
+@pytest.fixture(scope="module")
+def task2_draws():
+    sc = load_scenario("task2")
+    controllers = {"UC-IVKC": sc, "UC-EMDM": sc}
+    return sc, run_on_draws(controllers, 8, 0)
+
+
+def test_every_controller_runs_from_the_same_draws_as_simulate_would(task2_draws):
+    sc, (q0s, goals, out) = task2_draws
+    want_q0s, want_goals = draw(sc, 8, 0)
+    np.testing.assert_array_equal(q0s, want_q0s)
+    np.testing.assert_array_equal(goals, want_goals)
+    for r in (0, 4):
+        one = sc.with_overrides({"motion.goal": goals[r].tolist(), "motion.q0": q0s[r].tolist()})
+        mt = metrics(simulate(one, "UC-EMDM"))
+        assert bool(out["UC-EMDM"]["reached"][r]) == mt["reached"]
+        assert out["UC-EMDM"]["total_effort"][r] == pytest.approx(mt["total_effort"], rel=1e-9)
+
+
+def test_task2_uc_emdm_rests_where_the_dexterity_term_outweighs_a_slack_pulling_with_c_s(
+    task2_draws,
+):
+    """The conclusion's explanation of Task 2's misses: at rest (q_dot = 0) the slack is the
+    whole desired velocity, delta = K_p e, so with w_S = c_S/||e|| it pulls with w_S ||delta||
+    = c_S K_p however close the goal; the dexterity term balances it where, for a radial error,
+    tan q2 = w_M r / (c_S K_p) (m = l1 l2 |sin q2|, and the radial speed is -l1 l2 sin q2 / r
+    per unit q2_dot). Checked on the first missed draw, and the summary records that rest."""
+    sc, (q0s, goals, out) = task2_draws
+    missed = np.flatnonzero(~out["UC-EMDM"]["reached"])
+    assert missed.size, "the first 8 draws of seed 0 hold a miss"
+    r = int(missed[0])
+    one = sc.with_overrides({"motion.goal": goals[r].tolist(), "motion.q0": q0s[r].tolist()})
+    run = simulate(one, "UC-EMDM")
+    assert np.linalg.norm(run.qd[-1]) < 1e-3  # at rest
+    e, delta = run.e[-2], run.delta[-1]
+    w = sc.weights
+    pull = w.slack / np.linalg.norm(e) * np.linalg.norm(delta)
+    assert pull == pytest.approx(w.slack * sc.motion.kp, rel=1e-3)
+    q2 = abs(np.angle(np.exp(1j * run.q[-1][1])))
+    r_tip = np.linalg.norm(run.p[-1])
+    assert np.tan(q2) == pytest.approx(
+        w.manipulability * r_tip / (w.slack * sc.motion.kp), rel=1e-3
+    )
+    summary = controller_summary(sc, "UC-EMDM", q0s, goals, out["UC-EMDM"])
+    assert summary["arrived"] == 8 - missed.size
+    assert summary["missed"]["count"] == missed.size
+    low, high = summary["missed"]["rest_last_joint"]
+    assert low - 1e-12 <= q2 <= high + 1e-12
+    radius = np.linalg.norm(goals, axis=1)
+    assert summary["missed"]["goal_radius"] == [radius[missed].min(), radius[missed].max()]
+
+
+def test_the_weight_study_compares_each_weight_with_the_nominal_run_by_run():
+    sc = load_scenario("task1")
+    rows = weight_study(sc, "UC-EMDM", [(0.1, 5.0), (0.1, 0.0)], 4, 0)
+    assert rows[0]["mean_manipulability"] == [0.0, 0.0, 0.0]  # the nominal against itself
+    assert rows[0]["higher_mean_manipulability"] == 0
+    assert rows[1]["mean_manipulability"][1] < 0  # without the term, less dexterity
+    assert rows[1]["arrived"] == 4
+
+
+def _conclusion(root):
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data, render_latex
+
+    story = Story(Data(root))
+    return " ".join(render_latex(p) for p in story.conclusion().paragraphs)
+
+
+def test_the_conclusion_tries_its_answers_on_the_many_goals(quick_report, tmp_path):
+    """The conclusion says what the many goals show, from the record; a distance is said to
+    separate Task 2's UC-EMDM misses only while one does, as printed."""
+    root = tmp_path / "report"
+    shutil.copytree(quick_report / "data", root / "data")
+    path = root / "data" / "many-goals.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    text = _conclusion(root)
+    runs = record["runs"]
+    assert f"on {runs} random start-goal pairs" in text
+    uc = record["tasks"]["task2"]["policies"]["scale"]["controllers"]["UC-EMDM"]
+    assert uc["missed"] is not None, "the quick study's draws hold Task 2's misses"
+    assert f"In Task 2 UC-EMDM misses the {uc['missed']['count']} random goals beyond" in text
+    # a miss nearer the base than an arrival: no distance separates them
+    uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] - 1e-3
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert "UC-EMDM misses" not in _conclusion(root)
+    # separated by less than the printed digits: more digits
+    uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] + 2.6e-5
+    path.write_text(json.dumps(record), encoding="utf-8")
+    said = _conclusion(root)
+    printed = said.split("random goals beyond ")[1].split("~")[0]
+    assert len(printed.split(".")[1]) >= 4
+    assert (
+        uc["missed"]["arrived_goal_radius_max"] < float(printed) <= uc["missed"]["goal_radius"][0]
+    )
+    path.unlink()  # without the study, nothing of it is said
+    assert "random" not in _conclusion(root)
