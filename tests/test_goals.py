@@ -141,3 +141,12 @@ def test_the_conclusion_tries_its_answers_on_the_many_goals(quick_report, tmp_pa
     )
     path.unlink()  # without the study, nothing of it is said
     assert "random" not in _conclusion(root)
+
+
+def test_the_pitch_has_the_many_goals_in_a_backup_table(quick_report):
+    record = json.loads((quick_report / "data" / "many-goals.json").read_text(encoding="utf-8"))
+    tex = (quick_report / "paper" / "pitch.tex").read_text(encoding="utf-8")
+    slide = tex.split("Backup: many goals")[1].split("\\end{frame}")[0]
+    for task, entry in record["tasks"].items():
+        for ctrl, row in entry["policies"]["scale"]["controllers"].items():
+            assert f"{task[-1]}, {ctrl} & {row['arrived']} &" in slide

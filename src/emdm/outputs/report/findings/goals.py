@@ -6,7 +6,8 @@ from __future__ import annotations
 from typing import Any
 
 from ....core.controllers import Name
-from ..config import MANY_GOALS
+from ..config import MANY_GOALS, PAIRS
+from ..document import Table
 from ..trace import Math, Num, PageOnly, Sentence, Text, sentence, traced
 from .base import M_SYM
 from .claims import Claims
@@ -161,3 +162,65 @@ class Goals(Claims):
             ),
             ". ",
         )
+
+    def goals_table(self) -> None:
+        """The pitch's backup slide of the many goals: each controller's arrivals, scaled and
+        with a free slack, and each EMDM against its IVKC run by run (medians, quartiles)."""
+        rec = self.rec.goals
+        if rec is None or not self.has_goals():
+            return
+        table = Table(
+            "many-goals",
+            sentence(
+                "Many goals: ",
+                self.goaln("runs"),
+                " random start-goal pairs per task (joint angles uniform within the limits, seed ",
+                self.goaln("seed"),
+                "). Arrivals scaled and with a free slack; EMDM against IVKC on the runs both "
+                "reach: median (quartiles).",
+            ),
+            [
+                sentence("task, ctrl."),
+                sentence("arrive"),
+                sentence("free slack"),
+                sentence("mean ", M_SYM),
+                sentence("effort"),
+            ],
+            align="lrrrr",
+            font="scriptsize",
+            html_only=True,
+        )
+        order = [str(c) for pair in PAIRS.values() for c in pair]  # each pair together
+        for task, entry in rec.tasks.items():
+            for ctrl in sorted(entry.policies["scale"].controllers, key=order.index):
+                here = ("tasks", task, "policies")
+                slack = entry.policies.get("slack")
+                group = ctrl.split("-")[0]
+                pair = entry.policies["scale"].pairs.get(group)
+                emdm = ctrl.endswith("EMDM") and pair is not None and pair.both_arrived > 0
+                cells = [
+                    sentence(task[-1], ", ", ctrl),
+                    sentence(self.arrivals(task, "scale", ctrl)),
+                    sentence(self.arrivals(task, "slack", ctrl))
+                    if slack and ctrl in slack.controllers
+                    else sentence("–"),
+                ]
+                for key in ("mean_manipulability", "total_effort"):
+                    where = (*here, "scale", "pairs", group, key)
+                    spread = self.goal(*where) if emdm else None
+                    # a decimal where the quartiles are small (+0.2%, not +0%)
+                    fmt = "+.1%" if spread and max(map(abs, spread)) < 0.1 else "+.0%"
+                    cells.append(
+                        sentence(
+                            self.goaln(*where, 1, fmt=fmt),
+                            " (",
+                            self.goaln(*where, 0, fmt=fmt),
+                            ", ",
+                            self.goaln(*where, 2, fmt=fmt),
+                            ")",
+                        )
+                        if emdm
+                        else sentence("")
+                    )
+                table.rows.append(cells)
+        self.tables["many-goals"] = table
