@@ -105,48 +105,67 @@ def test_the_weight_study_compares_each_weight_with_the_nominal_run_by_run():
     assert rows[1]["arrived"] == 4
 
 
-def _conclusion(root):
+def _said(root):
+    """Section V's paragraph and the conclusion's, as LaTeX (None: no Section V)."""
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data, render_latex
 
     story = Story(Data(root))
-    return " ".join(render_latex(p) for p in story.conclusion().paragraphs)
+    section = story.goals_section()
+    conclusion = " ".join(render_latex(p) for p in story.conclusion().paragraphs)
+    if section is None:
+        return None, conclusion
+    return " ".join(render_latex(p) for p in section.paragraphs), conclusion
 
 
-def test_the_conclusion_tries_its_answers_on_the_many_goals(quick_report, tmp_path):
-    """The conclusion says what the many goals show, from the record; a distance is said to
-    separate Task 2's UC-EMDM misses only while one does, as printed."""
+def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
+    """Section V says what the many goals show, from the record, and the conclusion cites it; a
+    distance is said to separate Task 2's UC-EMDM misses only while one does, as printed."""
     root = tmp_path / "report"
     shutil.copytree(quick_report / "data", root / "data")
     path = root / "data" / "many-goals.json"
     record = json.loads(path.read_text(encoding="utf-8"))
-    text = _conclusion(root)
+    text, conclusion = _said(root)
     runs = record["runs"]
-    assert f"on {runs} random start-goal pairs" in text
+    assert f"ran from {runs} random starts to as many random goals per task" in text
+    pairs = record["tasks"]["task1"]["policies"]["scale"]["pairs"]
+    for group in ("UC", "C"):
+        pair = pairs[group]
+        assert f"{pair['higher_mean_manipulability']} of {pair['both_arrived']}" in text
     uc = record["tasks"]["task2"]["policies"]["scale"]["controllers"]["UC-EMDM"]
     assert uc["missed"] is not None, "the quick study's draws hold Task 2's misses"
-    assert f"In Task 2 UC-EMDM misses the {uc['missed']['count']} random goals beyond" in text
+    assert f"UC-EMDM misses the {uc['missed']['count']} goals beyond" in text
+    assert "UC-EMDM misses goals near the reach" in conclusion
     # a miss nearer the base than an arrival: no distance separates them
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] - 1e-3
     path.write_text(json.dumps(record), encoding="utf-8")
-    assert "UC-EMDM misses" not in _conclusion(root)
+    text, conclusion = _said(root)
+    assert "UC-EMDM misses" not in text + conclusion
     # separated by less than the printed digits: more digits
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] + 2.6e-5
     path.write_text(json.dumps(record), encoding="utf-8")
-    said = _conclusion(root)
-    printed = said.split("random goals beyond ")[1].split("~")[0]
+    text, _ = _said(root)
+    printed = text.split("goals beyond ")[1].split("~")[0]
     assert len(printed.split(".")[1]) >= 4
-    assert (
-        uc["missed"]["arrived_goal_radius_max"] < float(printed) <= uc["missed"]["goal_radius"][0]
-    )
-    path.unlink()  # without the study, nothing of it is said
-    assert "random" not in _conclusion(root)
+    low, high = uc["missed"]["arrived_goal_radius_max"], uc["missed"]["goal_radius"][0]
+    assert low < float(printed) <= high
+    path.unlink()  # without the study, no section and nothing of it in the conclusion
+    text, conclusion = _said(root)
+    assert text is None and "random" not in conclusion and "Section" not in conclusion
 
 
-def test_the_pitch_has_the_many_goals_in_a_backup_table(quick_report):
+def test_table_iv_and_the_pitch_backup_give_every_pairs_arrivals(quick_report):
+    """Every controller's count of the many goals is printed (reading 177: the first draft left
+    C-EMDM's on the page): Table IV in the paper, the same table on the pitch's backup."""
+    from emdm.outputs.report.config import PAIRS
+
     record = json.loads((quick_report / "data" / "many-goals.json").read_text(encoding="utf-8"))
+    paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    table = paper.split(r"\label{tab:many-goals}")[1].split(r"\end{tabular}")[0]
     tex = (quick_report / "paper" / "pitch.tex").read_text(encoding="utf-8")
     slide = tex.split("Backup: many goals")[1].split("\\end{frame}")[0]
-    for task, entry in record["tasks"].items():
-        for ctrl, row in entry["policies"]["scale"]["controllers"].items():
-            assert f"{task[-1]}, {ctrl} & {row['arrived']} &" in slide
+    for entry in record["tasks"].values():
+        rows = entry["policies"]["scale"]["controllers"]
+        for group, (ivkc, emdm) in PAIRS.items():
+            cell = f"{group} & {rows[ivkc]['arrived']}/{rows[emdm]['arrived']} &"
+            assert cell in table and cell in slide

@@ -46,7 +46,7 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
     """Builds the :class:`Document` from the report's data files."""
 
     def build(self) -> Document:
-        sections = [
+        maybe = [
             self.introduction(),
             Section("formulation", "Formulation", partial="formulation"),
             Section("task1", "Task 1: the redundant three-link arm"),
@@ -58,9 +58,11 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
             self.task2_c(),
             self.task2_challenges(self.task2_solvers()),
             self.task2_uc(),
+            self.goals_section(),
             self.conclusion(),
             self.beyond(),
         ]
+        sections = [s for s in maybe if s is not None]
         self.outcome_table(sections)
         self.programs_table(sections)
         self.evidence_table()
@@ -73,7 +75,7 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
             or "Effort-Minimising, Dexterity-Maximising Velocity Control of Planar Arms",
             authors=tuple(byline.get("authors", ())),
             abstract=self.abstract(),
-            sections=[s for s in sections if s is not None],
+            sections=sections,
             figures=self.figures,
             tables=self.tables,
             answers=self.answers,

@@ -1,5 +1,6 @@
 """Many goals: whether the one-goal answers hold from other starts to other goals
-(``data/many-goals.json``, :func:`emdm.studies.goals.policy_study`)."""
+(``data/many-goals.json``, :func:`emdm.studies.goals.policy_study`): a section with its table,
+and the conclusion's clauses that cite it."""
 
 from __future__ import annotations
 
@@ -7,10 +8,13 @@ from typing import Any
 
 from ....core.controllers import Name
 from ..config import MANY_GOALS, PAIRS
-from ..document import Table
-from ..trace import Math, Num, PageOnly, Sentence, Text, sentence, traced
-from .base import M_SYM
+from ..document import Section, Table
+from ..trace import Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
+from .base import M_SYM, W_M
 from .claims import Claims
+
+TASK_ROWS = {"task1": "Task 1 (three links)", "task2": "Task 2 (two links)"}
+"""The table's group headings, as Table II's."""
 
 
 class Goals(Claims):
@@ -24,6 +28,9 @@ class Goals(Claims):
     def arrivals(self, task: str, policy: str, ctrl: str) -> Num:
         return self.goaln("tasks", task, "policies", policy, "controllers", ctrl, "arrived")
 
+    def has_goals(self) -> bool:
+        return self.rec.goals is not None and {"task1", "task2"} <= set(self.rec.goals.tasks)
+
     def weight_row(self) -> int | None:
         """The many-goals row of the weights the conclusion recommends (:meth:`levels_off_at`)."""
         found = self.levels_off_at()
@@ -33,86 +40,61 @@ class Goals(Claims):
         rows = self.rec.goals.tasks["task1"].weights
         return next((i for i, r in enumerate(rows) if abs(r.w_manip - w_m) <= 1e-12), None)
 
-    def has_goals(self) -> bool:
-        return self.rec.goals is not None and {"task1", "task2"} <= set(self.rec.goals.tasks)
-
-    def goals_gain(self) -> Sentence:
-        """``on 256 random start-goal pairs (...), UC-EMDM has the higher mean m in 254 runs
-        (median +11%) for +57% effort``: Task 1's pair over the many goals (nothing without
-        them)."""
-        if not self.has_goals():
-            return []
-        uc1 = ("tasks", "task1", "policies", "scale", "pairs", "UC")
-        return sentence(
-            "on ",
-            self.goaln("runs"),
-            " random start-goal pairs (uniform in joint space, seed ",
-            self.goaln("seed"),
-            "), UC-EMDM has the higher mean ",
-            M_SYM,
-            " in ",
-            self.goaln(*uc1, "higher_mean_manipulability"),
-            " runs (median ",
-            self.goaln(*uc1, "mean_manipulability", 1, fmt="+.0%"),
-            ") for ",
-            self.goaln(*uc1, "total_effort", 1, fmt="+.0%"),
-            " effort",
-        )
-
-    def goals_policy(self) -> Sentence:
-        """`` and on more random goals (217 against 146 C-IVKC runs in Task 1, 216 against 143
-        in Task 2)``: how many of the many goals C-IVKC reaches with a free slack and scaled (C-EMDM's
-        on the page); nothing where the slack does not bring more in both tasks."""
-        if not self.has_goals():
-            return []
-        more = all(
+    def slack_brings_more(self) -> bool:
+        """Whether a free slack brings C-IVKC to more of the random goals in both tasks."""
+        return self.has_goals() and all(
             self.goal("tasks", t, "policies", "slack", "controllers", Name.C_IVKC, "arrived")
             > self.goal("tasks", t, "policies", "scale", "controllers", Name.C_IVKC, "arrived")
             for t in ("task1", "task2")
         )
-        if not more:
-            return []
-        return sentence(
-            " and on more random goals (",
-            self.arrivals("task1", "slack", Name.C_IVKC),
-            " against ",
-            self.arrivals("task1", "scale", Name.C_IVKC),
-            " C-IVKC runs in Task 1, ",
-            self.arrivals("task2", "slack", Name.C_IVKC),
-            " against ",
-            self.arrivals("task2", "scale", Name.C_IVKC),
-            " in Task 2",
-            PageOnly(
-                tuple(
-                    sentence(
-                        "; C-EMDM: ",
-                        self.arrivals("task1", "slack", Name.C_EMDM),
-                        " against ",
-                        self.arrivals("task1", "scale", Name.C_EMDM),
-                        ", and ",
-                        self.arrivals("task2", "slack", Name.C_EMDM),
-                        " against ",
-                        self.arrivals("task2", "scale", Name.C_EMDM),
-                    )
-                )
-            ),
-            ")",
-        )
 
-    def goals_weight(self) -> Sentence:
-        """``(over the random goals, -1.7% for -27%)``: the recommended weights against the
-        nominal ones, run by run over the many goals (medians)."""
-        k = self.weight_row()
-        if k is None:
-            return []
-        row = ("tasks", "task1", "weights", k)
-        return sentence(
-            " (random goals, medians: ",
-            self.goaln(*row, "mean_manipulability", 1, fmt="+.1%"),
-            " for ",
-            self.goaln(*row, "total_effort", 1, fmt="+.0%"),
-            ")",
+    # ------------------------------------------------------------------ the section
+    def goals_section(self) -> Section | None:
+        """Section V: the answers tried on many goals, every controller's count in Table IV,
+        what does not carry over said with its cause (reading 177: the first draft, in the
+        conclusion only, left C-EMDM's count and Task 2's small gain on the page)."""
+        if not self.has_goals():
+            return None
+        sec = Section("goals", "Many goals", tables=["many-goals"])
+        t1 = ("tasks", "task1", "policies", "scale", "pairs")
+        p = sentence(
+            "Every controller ran from ",
+            self.goaln("runs"),
+            " random starts to as many random goals per task (uniform in joint space; ",
+            Ref("tab", "many-goals"),
+            "). In Task 1 the answers hold: EMDM has the higher mean ",
+            M_SYM,
+            " in ",
+            self.goaln(*t1, "UC", "higher_mean_manipulability"),
+            " of ",
+            self.goaln(*t1, "UC", "both_arrived"),
+            " runs without limits and ",
+            self.goaln(*t1, "C", "higher_mean_manipulability"),
+            " of ",
+            self.goaln(*t1, "C", "both_arrived"),
+            " with them",
         )
+        k = self.weight_row()
+        if k is not None:
+            row = ("tasks", "task1", "weights", k)
+            p += sentence(
+                "; at ",
+                W_M,
+                " = ",
+                self.goaln(*row, "w_manip", fmt=".3g"),
+                " UC-EMDM's mean ",
+                M_SYM,
+                " changes by a median ",
+                self.goaln(*row, "mean_manipulability", 1, fmt="+.1%"),
+                " for ",
+                self.goaln(*row, "total_effort", 1, fmt="+.0%"),
+                " effort",
+            )
+        p += sentence(". In Task 2 the dexterity term gains little")
+        reach = self.beyond_reach()
+        p += sentence(", and ", *reach) if reach else sentence(". ")
+        sec.paragraphs.append(p)
+        return sec
 
     def beyond_reach(self) -> Sentence:
         """Task 2's UC-EMDM misses, when it misses exactly the goals beyond some distance: why
@@ -134,53 +116,81 @@ class Goals(Claims):
         )
         where = ("tasks", "task2", "policies", "scale", "controllers", Name.UC_EMDM)
         return sentence(
-            "In Task 2 UC-EMDM misses the ",
+            "UC-EMDM misses the ",
             self.goaln(*where, "missed", "count"),
-            " random goals beyond ",
+            " goals beyond ",
             self.goaln(*where, "missed", "goal_radius", 0, fmt=f".{digits}f", unit="m"),
             " (reach ",
             self.goaln("tasks", "task2", "reach", fmt=".2g", unit="m"),
-            "): at rest its slack pulls with ",
+            "): at rest ",
+            Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"),
+            ", so its slack pulls with ",
             Math(r"w_S\|\delta\|=c_S", "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>"),
             " however small ",
             Math(r"\|e\|", "‖<i>e</i>‖"),
-            ", and near the reach the dexterity term outweighs it, holding the tip ",
+            ", and near the reach the dexterity term outweighs it: the tip rests ",
             self.goaln(*where, "missed", "final_error", 0, fmt=".2g"),
             " to ",
             self.goaln(*where, "missed", "final_error", 1, fmt=".2g", unit="m"),
             " short",
             PageOnly(
-                (
-                    Text(" ("),
-                    Math("|q_2|", "|<i>q</i><sub>2</sub>|"),
-                    Text(" = "),
-                    self.goaln(*where, "missed", "rest_last_joint", 0, fmt=".3f"),
-                    Text(" to "),
-                    self.goaln(*where, "missed", "rest_last_joint", 1, fmt=".3f", unit="rad"),
-                    Text(" at rest)"),
+                tuple(
+                    sentence(
+                        ", with ",
+                        Math("|q_2|", "|<i>q</i><sub>2</sub>|"),
+                        " = ",
+                        self.goaln(*where, "missed", "rest_last_joint", 0, fmt=".3f"),
+                        " to ",
+                        self.goaln(*where, "missed", "rest_last_joint", 1, fmt=".3f", unit="rad"),
+                        " (where ",
+                        Math(
+                            r"\tan q_2=w_M\|p\|/(c_SK_p)",
+                            "tan <i>q</i><sub>2</sub> = <i>w</i><sub>M</sub>‖<i>p</i>‖ / "
+                            "(<i>c</i><sub>S</sub><i>K</i><sub>p</sub>)",
+                        ),
+                        " balances the two pulls)",
+                    )
                 )
             ),
             ". ",
         )
 
+    # ------------------------------------------------------------------ the conclusion's
+    def goals_policy(self) -> Sentence:
+        """`` and on more random goals (Table IV)``: where a free slack brings C-IVKC to more of
+        the many goals in both tasks."""
+        if not self.slack_brings_more():
+            return []
+        return sentence(" and on more random goals (", Ref("tab", "many-goals"), ")")
+
+    def goals_limit(self) -> Sentence:
+        """``; UC-EMDM cannot reach goals near the two-link arm's reach (Section V)``."""
+        if not self.beyond_reach():
+            return []
+        return sentence(
+            ". UC-EMDM misses goals near the reach (",
+            Ref("sec", "goals"),
+            ")",
+        )
+
+    # ------------------------------------------------------------------ Table IV
     def goals_table(self) -> None:
-        """The pitch's backup slide of the many goals: each controller's arrivals, scaled and
-        with a free slack, and each EMDM against its IVKC run by run (medians, quartiles)."""
+        """Table IV, and the pitch's backup slide: each pair's arrivals (IVKC/EMDM), scaled and
+        with a free slack, and its EMDM against its IVKC run by run (median, quartiles)."""
         rec = self.rec.goals
         if rec is None or not self.has_goals():
             return
         table = Table(
             "many-goals",
             sentence(
-                "Many goals: ",
                 self.goaln("runs"),
-                " random start-goal pairs per task (joint angles uniform within the limits, seed ",
+                " random start-goal pairs per task (seed ",
                 self.goaln("seed"),
-                "). Arrivals scaled and with a free slack; EMDM against IVKC on the runs both "
-                "reach: median (quartiles).",
+                "): arrivals of IVKC/EMDM, scaled and with a free slack; EMDM against IVKC "
+                "where both arrive: median (quartiles).",
             ),
             [
-                sentence("task, ctrl."),
+                sentence("pair"),
                 sentence("arrive"),
                 sentence("free slack"),
                 sentence("mean ", M_SYM),
@@ -188,39 +198,48 @@ class Goals(Claims):
             ],
             align="lrrrr",
             font="scriptsize",
-            html_only=True,
+            colsep=3.0,
         )
-        order = [str(c) for pair in PAIRS.values() for c in pair]  # each pair together
         for task, entry in rec.tasks.items():
-            for ctrl in sorted(entry.policies["scale"].controllers, key=order.index):
-                here = ("tasks", task, "policies")
-                slack = entry.policies.get("slack")
-                group = ctrl.split("-")[0]
-                pair = entry.policies["scale"].pairs.get(group)
-                emdm = ctrl.endswith("EMDM") and pair is not None and pair.both_arrived > 0
+            table.rows.append([sentence(TASK_ROWS.get(task, task))])
+            here = ("tasks", task, "policies")
+            for group, (ivkc, emdm) in PAIRS.items():
+                scale, slack = entry.policies["scale"], entry.policies.get("slack")
+                pair = scale.pairs.get(group)
+                if pair is None:
+                    continue
                 cells = [
-                    sentence(task[-1], ", ", ctrl),
-                    sentence(self.arrivals(task, "scale", ctrl)),
-                    sentence(self.arrivals(task, "slack", ctrl))
-                    if slack and ctrl in slack.controllers
+                    sentence(group),
+                    sentence(
+                        self.arrivals(task, "scale", ivkc),
+                        "/",
+                        self.arrivals(task, "scale", emdm),
+                    ),
+                    sentence(
+                        self.arrivals(task, "slack", ivkc),
+                        "/",
+                        self.arrivals(task, "slack", emdm),
+                    )
+                    if slack and {ivkc, emdm} <= set(slack.controllers)
                     else sentence("–"),
                 ]
                 for key in ("mean_manipulability", "total_effort"):
                     where = (*here, "scale", "pairs", group, key)
-                    spread = self.goal(*where) if emdm else None
+                    spread = self.goal(*where)
+                    if not spread:
+                        cells.append(sentence("–"))
+                        continue
                     # a decimal where the quartiles are small (+0.2%, not +0%)
-                    fmt = "+.1%" if spread and max(map(abs, spread)) < 0.1 else "+.0%"
+                    fmt = "+.1%" if max(map(abs, spread)) < 0.1 else "+.0%"
                     cells.append(
                         sentence(
                             self.goaln(*where, 1, fmt=fmt),
-                            " (",
+                            Text(" ("),
                             self.goaln(*where, 0, fmt=fmt),
                             ", ",
                             self.goaln(*where, 2, fmt=fmt),
                             ")",
                         )
-                        if emdm
-                        else sentence("")
                     )
                 table.rows.append(cells)
         self.tables["many-goals"] = table

@@ -28,6 +28,13 @@ SHOWN_ZERO_EXP = -12
 """Table III writes a gap or a bound violation below 10**SHOWN_ZERO_EXP as 0 (its caption says so)."""
 
 
+CONVERGENCE_IN_PAPER = False
+"""Whether the convergence figure (each solver's error against its evaluations on one program)
+is printed in the paper, Table III's rows carrying its legend. It is on the page only: readings
+176 and 177 found it repeating Table III's evaluations and gaps, and Section V (many goals)
+needed its room."""
+
+
 class Solvers(StoryBase):
     def budget_stops(self, lab: LabName, free: list[str], rows: dict[str, SolverRow]) -> Sentence:
         """``; the 600-evaluation budget ends all 41 of A's searches, 2 of B's``:
@@ -83,9 +90,10 @@ class Solvers(StoryBase):
                 "'s ",
                 self.d.count(f, "resolved_steps"),
                 " programs",
-                *(  # the convergence figure, when it was drawn
+                *(  # the convergence figure, when it was drawn into the paper
                     (" (", Ref("fig", "convergence"), ")")
-                    if self.d.exists("paper/figures/convergence.png")  # (registered below)
+                    if CONVERGENCE_IN_PAPER
+                    and self.d.exists("paper/figures/convergence.png")  # (registered below)
                     else ()
                 ),
                 " the gradient-based ",
@@ -231,6 +239,7 @@ class Solvers(StoryBase):
                 ),
                 "; line: best so far, broken: gradient-free; marker: answer returned).",
             ),
+            paper=CONVERGENCE_IN_PAPER,
         )
         if self.has_figure("convergence"):
             sec.figures.append(conv)
@@ -420,7 +429,7 @@ class Solvers(StoryBase):
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
                 "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: arrival, each solver alone in the closed loop",
+                " period; goal: arrival, each solver alone in the loop",
                 *(
                     (
                         f"; {'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1}",
@@ -454,10 +463,11 @@ class Solvers(StoryBase):
                     sentence(self.sn(lab, k, "time_to_goal", ".2f")) if r.reached else sentence("–")
                 )
                 glyph = f"{GLYPHS}/{k}"  # its curve in the convergence figure
+                mark = Glyph(glyph if self.d.exists(f"paper/{glyph}.png") else None)
                 table.rows.append(
                     [
                         sentence(
-                            Glyph(glyph if self.d.exists(f"paper/{glyph}.png") else None),
+                            mark if CONVERGENCE_IN_PAPER else PageOnly((mark,)),
                             k,
                             "*" if r.loop == "compiled" else "",
                         ),

@@ -319,6 +319,10 @@ class Tables(Claims):
 
             out = [sentence(num("time_to_goal", ".2f")) if value("reached") else unreached(False)]
             for metric, fmt in self.OUTCOME_COLUMNS:
+                if not value("reached") and fmt != "d":
+                    # a run that blew up: its digits depend on rounding (reading 177 got
+                    # 10,674 where the record has 11,749), so two or three significant ones
+                    fmt = ".2g" if metric != "max_abs_qd" else ".3g"
                 big = fmt.endswith("f") and abs(value(metric)) >= 1e3  # 11749 read as 117.49
                 out.append(sentence(num(metric, ",.0f" if big else fmt)))
             return out

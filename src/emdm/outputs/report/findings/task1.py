@@ -415,7 +415,7 @@ class Task1(Claims):
                         self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
                         "): late in the run, ",
                         M_SYM,
-                        " falls whatever the weights",
+                        " falls at any weights",
                     )
                 )
             for c, clause in enumerate(clauses):  # one sentence each
@@ -427,7 +427,9 @@ class Task1(Claims):
         for i, r in enumerate(self.rec.grids.get("UC-EMDM", [])):
             if r.reached or r.finer_dt is None:
                 continue
-            p += sentence(
+            # on the page only: Table II's E2a and E2b rows tell it in the paper (room for
+            # Section V's many goals; readings 174-176 asked the passage cut to its rows)
+            said = sentence(
                 "At ",
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
@@ -440,34 +442,18 @@ class Task1(Claims):
             )
             finer = r.finer_dt
             if finer.get("reached"):
-                p += sentence(
+                said += sentence(
                     "; with ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " they arrive (",
                     run_label(FINER_STEP),
-                    "): the step causes the miss",
-                    PageOnly(
-                        tuple(
-                            sentence(
-                                ", spending ",
-                                self.gridn(
-                                    "UC-EMDM",
-                                    i,
-                                    "finer_dt",
-                                    "total_effort",
-                                    fmt=".3g",
-                                    unit="rad²/s",
-                                ),
-                                " against ",
-                                self.gridn(
-                                    "UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"
-                                ),
-                                " at nominal weights and that step (the weights' extra effort)",
-                            )
-                        )
-                    ),
+                    "): the step causes the miss, spending ",
+                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
+                    " against ",
+                    self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
+                    " at nominal weights and that step (the weights' extra effort)",
                 )
-            p += sentence(". ")
+            p += [PageOnly(tuple(sentence(*said, ". ")))]
             break
         if p:
             sec.paragraphs.append(p)

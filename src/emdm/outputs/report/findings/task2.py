@@ -176,7 +176,7 @@ class Task2(Claims):
                     sentence(
                         "Task 2: the straight line to the goal enters the disc unreachable with ",
                         Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
-                        " outside its stop zone (hatched); C-IVKC stalls just short of it, C-EMDM "
+                        " outside its stop zone (hatched); C-IVKC stalls short of it, C-EMDM "
                         "goes around and flips its elbow into the admissible goal configuration",
                         # (Task 2's animations named too, reading 169: only Task 1's were)
                         *(
