@@ -25,6 +25,12 @@ class Goals(Claims):
     def goaln(self, *path: str | int, fmt: str = "d", unit: str = "") -> Num:
         return traced(self.goal(*path), MANY_GOALS, path, fmt, unit)
 
+    def goal_range(self, *path: str | int, fmt: str, unit: str) -> Sentence:
+        """``0.0012 to 0.019 m``: the ``[low, high]`` pair at ``path``."""
+        return sentence(
+            self.goaln(*path, 0, fmt=fmt), " to ", self.goaln(*path, 1, fmt=fmt, unit=unit)
+        )
+
     def arrivals(self, task: str, policy: str, ctrl: str) -> Num:
         return self.goaln("tasks", task, "policies", policy, "controllers", ctrl, "arrived")
 
@@ -129,9 +135,7 @@ class Goals(Claims):
             " however small ",
             Math(r"\|e\|", "‖<i>e</i>‖"),
             ", and near the reach the dexterity term outweighs it: the tip rests ",
-            self.goaln(*where, "missed", "final_error", 0, fmt=".2g"),
-            " to ",
-            self.goaln(*where, "missed", "final_error", 1, fmt=".2g", unit="m"),
+            *self.goal_range(*where, "missed", "final_error", fmt=".2g", unit="m"),
             " short",
             PageOnly(
                 tuple(
@@ -139,9 +143,9 @@ class Goals(Claims):
                         ", with ",
                         Math("|q_2|", "|<i>q</i><sub>2</sub>|"),
                         " = ",
-                        self.goaln(*where, "missed", "rest_last_joint", 0, fmt=".3f"),
-                        " to ",
-                        self.goaln(*where, "missed", "rest_last_joint", 1, fmt=".3f", unit="rad"),
+                        *self.goal_range(
+                            *where, "missed", "rest_last_joint", fmt=".3f", unit="rad"
+                        ),
                         " (where ",
                         Math(
                             r"\tan q_2=w_M\|p\|/(c_SK_p)",
