@@ -601,15 +601,16 @@ class Task1(Claims):
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                " wide), and ",
+                " wide) and degenerate: ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
                     if high > low
                     else ()
                 ),
-                f" bounds hold it where {fixed} would. There active-set methods can cycle; "
-                "ours uses Bland's rule",
+                # (in words: readings 174-177 found "2 bounds hold it where 1 would" cryptic)
+                f" speed bounds are active where {fixed} would fix it, and active-set methods "
+                "can then cycle; ours uses Bland's rule",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
