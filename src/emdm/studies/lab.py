@@ -590,6 +590,7 @@ def challenges(lab: LabResult) -> dict[str, Any]:
             ],
             "unknowns": int(on_scaled[0]["unknowns"]),
             "task_rows": int(on_scaled[0]["rows"]),
+            "steps": len(on_scaled),  # how many scaled steps these rest on (the lab's sample)
         }
         if on_scaled
         else None

@@ -120,6 +120,16 @@ them E1, E2, ..., and the runs of a group E2a, E2b, ... (the free-slack policy r
 I's rows, not ablations)."""
 
 
+def upper_fmt(value: float, digits: int = 2) -> str:
+    """The format of ``value`` as an upper bound ("at most"): ``digits`` significant digits,
+    more where rounding would print a smaller number (-4.79e-5 printed -4.8e-5, reading 178)."""
+    for d in range(digits, 18):
+        fmt = f".{d - 1}e"
+        if float(format(value, fmt)) >= value:
+            return fmt
+    return ".17e"
+
+
 def glossed(solver: str) -> str:
     """A solver's name with what kind of method it is, at its first mention in the paper's
     text ("slsqp (sequential quadratic programming)"); the name alone where the registry says

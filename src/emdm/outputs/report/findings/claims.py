@@ -30,7 +30,7 @@ def listed(words: list[str]) -> str:
 
 
 class Claims(StoryBase):
-    def weight_advice(self) -> Sentence:
+    def weight_advice(self, why: bool = True) -> Sentence:
         """``lower Task 1's w_M from 5 to 1.52: its mean m stays within 1% for -13% effort``:
         the whole-run sweep's recommendation (the conclusion's; the page's with it), or
         nothing where no smaller ratio comes within :data:`LEVEL` of the nominal mean m."""
@@ -46,11 +46,17 @@ class Claims(StoryBase):
             self.gridn("UC-EMDM", n, "w_manip", fmt=".3g"),
             " to ",
             self.gridn("UC-EMDM", k, "w_manip", fmt=".3g"),
-            ": its mean ",
-            M_SYM,
-            f" stays within {LEVEL:.0%} for ",
-            self.d.pct((f, "runs", k, "total_effort"), (f, "runs", n, "total_effort")),
-            " effort",
+            *(
+                sentence(
+                    ": its mean ",
+                    M_SYM,
+                    f" stays within {LEVEL:.0%} for ",
+                    self.d.pct((f, "runs", k, "total_effort"), (f, "runs", n, "total_effort")),
+                    " effort",
+                )
+                if why
+                else []
+            ),
         )
 
     def nominal_in_grid(self) -> int | None:

@@ -194,7 +194,18 @@ class Front(Goals):
                 ". ",  # (Table II's free-slack rows, cited where the runs are told)
             )
         advice = self.weight_advice()  # the weights' recommendation, from the whole-run sweep
-        if advice:
+        cost = self.weight_cost()  # ... and over the many goals (reading 178: one run's)
+        if advice and cost:
+            p += sentence(
+                "We would ",
+                *self.weight_advice(why=False),
+                ": over the random goals, its mean ",
+                M_SYM,
+                " changes by ",
+                *cost,
+                ". ",
+            )
+        elif advice:
             p += sentence("We would ", *advice, ". ")
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(

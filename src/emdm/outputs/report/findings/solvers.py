@@ -378,17 +378,26 @@ class Solvers(StoryBase):
                     " control period",
                 )
             else:
+                seeds = [s.over_period for s in rows[k].seeds]
+                varies = len(set(seeds)) > 1  # a count that varies with the seed: its range
+                # over the seeds (readings 174, 179: seed 0's was its largest)
+                ends = (
+                    [
+                        self.d.num(f, "solvers", k, "seeds", j, "over_period", fmt="d")
+                        for j in (int(np.argmin(seeds)), int(np.argmax(seeds)))
+                    ]
+                    if varies
+                    else []
+                )
                 out += sentence(
                     k if named else "",
                     " overruns the " if named else "overruns the ",
                     self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
                     " control period on ",
-                    *count,
-                    *((" of ", self.d.count(f, "resolved_steps")) if n != total else ()),
+                    *(sentence(ends[0], "–", ends[1]) if varies else count),
+                    *((" of ", self.d.count(f, "resolved_steps")) if varies or n != total else ()),
                     " programs",
-                    # a count that varies with the seed is seed 0's (reading 174; the page
-                    # gives the range)
-                    " (seed 0)" if len({s.over_period for s in rows[k].seeds}) > 1 else "",
+                    f" (seeds 0–{len(seeds) - 1})" if varies else "",
                 )
         return out
 

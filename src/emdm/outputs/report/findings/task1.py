@@ -25,6 +25,7 @@ from .base import (
     W_M,
     eq,
     run_label,
+    upper_fmt,
 )
 from .claims import LEVEL, Claims
 from .claims import cap as capitalised
@@ -412,7 +413,13 @@ class Task1(Claims):
                         " every optimum has ",
                         MRATE,
                         " < 0 (at most ",
-                        self.frontn("C-EMDM", top, "M_max", ".1e", "m²/s"),
+                        self.frontn(
+                            "C-EMDM",
+                            top,
+                            "M_max",
+                            upper_fmt(self.front("C-EMDM", top, "M_max")),
+                            "m²/s",
+                        ),
                         "): late in the run, ",
                         M_SYM,
                         " falls at any weights",
@@ -597,7 +604,20 @@ class Task1(Claims):
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
             p += sentence(
                 # (the widest, rounded: a bound "<=" would understate it)
-                ". These are Task 1's challenge: only one command is feasible (the set is at most ",
+                # on how many scaled steps it was measured (reading 178: the lab's sample)
+                *(
+                    (
+                        ". On the ",
+                        self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
+                        " scaled steps the lab re-solved, Task 1's challenge, only one command is "
+                        "feasible (the set is at most ",
+                    )
+                    if "steps" in vertex
+                    else (
+                        ". These are Task 1's challenge: only one command is feasible (the set is "
+                        "at most ",
+                    )
+                ),
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
