@@ -16,6 +16,7 @@ from emdm.studies.goals import (
     pair_summary,
     quartiles,
     run_on_draws,
+    term_study,
     weight_study,
 )
 from emdm.studies.montecarlo import draw
@@ -96,6 +97,21 @@ def test_task2_uc_emdm_rests_where_the_dexterity_term_outweighs_a_slack_pulling_
     assert summary["missed"]["goal_radius"] == [radius[missed].min(), radius[missed].max()]
 
 
+def test_the_term_study_counts_the_goals_a_change_wins_and_loses():
+    """Task 2's UC-EMDM without its dexterity term reaches every goal of the first 8 draws,
+    the goal it misses with the term among them: a goal lost to the term, beyond where it
+    misses."""
+    sc = load_scenario("task2")
+    out = term_study(sc, "UC-EMDM", {"weights.manipulability": 0.0}, 8, 0, beyond=0.5)
+    _, goals, base = run_on_draws({"UC-EMDM": sc}, 8, 0)
+    missed = ~base["UC-EMDM"]["reached"]
+    assert out["arrived"] == 8 and out["gained"] == 0
+    assert out["lost"] == missed.sum() >= 1
+    radius = np.linalg.norm(goals, axis=1)
+    assert out["lost_beyond"] == (missed & (radius >= 0.5)).sum()
+    assert term_study(sc, "UC-EMDM", {}, 8, 0)["lost"] == 0  # no change, nothing lost
+
+
 def test_the_weight_study_compares_each_weight_with_the_nominal_run_by_run():
     sc = load_scenario("task1")
     rows = weight_study(sc, "UC-EMDM", [(0.1, 5.0), (0.1, 0.0)], 4, 0)
@@ -135,7 +151,14 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
     uc = record["tasks"]["task2"]["policies"]["scale"]["controllers"]["UC-EMDM"]
     assert uc["missed"] is not None, "the quick study's draws hold Task 2's misses"
     assert f"UC-EMDM misses the {uc['missed']['count']} goals beyond" in text
-    assert "UC-EMDM misses goals near the reach" in conclusion
+    assert "EMDM misses goals near the reach" in conclusion
+    # what the dexterity term costs C-EMDM in arrivals (reading 179), said where it costs any
+    term = record["tasks"]["task2"]["no_term"]["C-EMDM"]
+    said = "without its dexterity term"
+    assert (said in text) == (term["lost"] > 0)
+    if term["lost"]:
+        assert f", {term['arrived']} {said}" in text
+        assert f"the term costs it {term['lost']}, {term['lost_beyond']} beyond" in text
     # a miss nearer the base than an arrival: no distance separates them
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] - 1e-3
     path.write_text(json.dumps(record), encoding="utf-8")

@@ -146,3 +146,35 @@ def weight_study(
             }
         )
     return rows
+
+
+def term_study(
+    scenario: Scenario,
+    controller: str,
+    overrides: Mapping[str, Any],
+    runs: int,
+    seed: int,
+    beyond: float | None = None,
+) -> dict[str, Any]:
+    """What a change (``overrides``: a term's weight set to 0, say) does to ``controller``'s
+    arrivals on the same draws: how many arrive with it, how many goals the scenario's own
+    controller reaches that the changed one does not (``gained``) and the reverse (``lost``:
+    the goals the unchanged one misses and the changed one reaches), and of those lost, how
+    many lie farther than ``beyond`` from the base (None: not asked)."""
+    changed = scenario.with_overrides(dict(overrides))
+    _, goals, out = run_on_draws({controller: scenario}, runs, seed)
+    other = simulate_batch(
+        changed, controller, goals=goals, q0s=draw(scenario, runs, seed)[0]
+    ).outcomes()
+    base = np.asarray(out[controller]["reached"], dtype=bool)
+    new = np.asarray(other["reached"], dtype=bool)
+    lost = new & ~base
+    radius = np.linalg.norm(goals[:, :2], axis=1)
+    return {
+        "overrides": dict(overrides),
+        "arrived": int(new.sum()),
+        "lost": int(lost.sum()),
+        "gained": int((base & ~new).sum()),
+        "lost_beyond": int((lost & (radius >= beyond)).sum()) if beyond is not None else None,
+        "beyond": beyond,
+    }

@@ -199,20 +199,18 @@ class Front(Goals):
             p += sentence(
                 "We would ",
                 *self.weight_advice(why=False),
-                ": over the random goals, its mean ",
-                M_SYM,
-                " changes by ",
+                ": ",
                 *cost,
-                ". ",
+                " over the random goals. ",
             )
         elif advice:
             p += sentence("We would ", *advice, ". ")
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
         p += sentence(
-            "For programs this small, active-set QP solvers beat gradient-free ones. ",
+            "On programs this small, active-set QP solvers beat gradient-free ones. ",
         )
         p += sentence(  # what the study does not show (reading 145: no limitations said)
-            "Limits: planar arms, kinematics only."
+            "Limits: planar arms, kinematics."
         )
         sec.paragraphs.append(p)
         return sec

@@ -606,6 +606,20 @@ class WeightGoals(PairChange):
 
 
 @dataclass(frozen=True)
+class TermGoals:
+    """An EMDM controller on the many goals with one change (its dexterity term off): how many
+    arrive, the goals the change wins (``lost`` by the controller as it is) and loses
+    (``gained``), and how many of those won lie beyond ``beyond`` (m from the base)."""
+
+    overrides: dict[str, Any]
+    arrived: int
+    lost: int
+    gained: int
+    lost_beyond: int | None
+    beyond: float | None
+
+
+@dataclass(frozen=True)
 class TaskGoals:
     """One task in the many-goals study: its arm's reach (m), each policy's study (``scale``,
     ``slack``) and, for Task 1, its whole-run sweep's weights."""
@@ -613,6 +627,7 @@ class TaskGoals:
     reach: float
     policies: dict[str, PolicyGoals]
     weights: list[WeightGoals] = field(default_factory=list)
+    no_term: dict[str, TermGoals] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -503,10 +503,19 @@ class Task1(Claims):
                 self.gridn("UC-EMDM", knee[1], "total_effort", fmt=".3g"),
                 " against ",
                 self.gridn("UC-EMDM", n, "total_effort", fmt=".3g", unit="rad²/s"),
-                "; larger ratios ",
-                *more,
-                " it for up to ",
-                self.gridn("UC-EMDM", dearest, "total_effort", fmt=".3g"),
+                PageOnly(  # (reading 178 found it cryptic at the paper's length; room)
+                    tuple(
+                        sentence(
+                            "; larger ratios ",
+                            *more,
+                            " its mean ",
+                            M_SYM,
+                            " for up to ",
+                            self.gridn("UC-EMDM", dearest, "total_effort", fmt=".3g"),
+                            " of effort",
+                        )
+                    )
+                ),
                 ".",
             )
         return sentence(
