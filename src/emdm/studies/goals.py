@@ -52,9 +52,16 @@ def _wrapped(angle: np.ndarray) -> np.ndarray:
 
 
 def controller_summary(
-    scenario: Scenario, name: str, q0s: np.ndarray, goals: np.ndarray, o: Mapping[str, Any]
+    scenario: Scenario,
+    name: str,
+    q0s: np.ndarray,
+    goals: np.ndarray,
+    o: Mapping[str, Any],
+    rest: bool = True,
 ) -> dict[str, Any]:
-    """One controller's arrivals and, where it missed, where its arm came to rest."""
+    """One controller's arrivals and, where it missed, how far its goals and final errors
+    were; with ``rest``, its missed runs are run again one by one to record where the arm came
+    to rest (its tip's distance from the base and its last joint; None without)."""
     reached = np.asarray(o["reached"], dtype=bool)
     radius = np.linalg.norm(goals[:, :2], axis=1)
     out: dict[str, Any] = {
@@ -66,7 +73,7 @@ def controller_summary(
     missed = np.flatnonzero(~reached)
     if missed.size:
         tips, last = [], []
-        for r in missed:
+        for r in missed if rest else ():
             sc = scenario.with_overrides(
                 {"motion.goal": goals[r].tolist(), "motion.q0": q0s[r].tolist()}
             )
@@ -81,8 +88,8 @@ def controller_summary(
                 float(np.min(o["final_error"][missed])),
                 float(np.max(o["final_error"][missed])),
             ],
-            "rest_tip_radius": [min(tips), max(tips)],
-            "rest_last_joint": [min(last), max(last)],
+            "rest_tip_radius": [min(tips), max(tips)] if tips else None,
+            "rest_last_joint": [min(last), max(last)] if last else None,
         }
     return out
 
@@ -111,13 +118,15 @@ def policy_study(
     pairs: Mapping[str, tuple[str, str]],
     runs: int,
     seed: int,
+    rest: tuple[str, ...] = (),
 ) -> dict[str, Any]:
     """Every controller of ``controllers`` on the same draws, summarised, and each pair
-    ``label -> (base, other)`` compared run by run."""
+    ``label -> (base, other)`` compared run by run; the missed runs of the controllers in
+    ``rest`` are run again to record where they came to rest (one by one: seconds)."""
     q0s, goals, out = run_on_draws(controllers, runs, seed)
     return {
         "controllers": {
-            name: controller_summary(sc, name, q0s, goals, out[name])
+            name: controller_summary(sc, name, q0s, goals, out[name], rest=name in rest)
             for name, sc in controllers.items()
         },
         "pairs": {

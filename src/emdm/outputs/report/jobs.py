@@ -400,7 +400,10 @@ def _job_many_goals(stage: Path, cfg: ReportConfig) -> str:
         tasks[task] = {
             "reach": sc.reach,
             "policies": {
-                "scale": policy_study({c: sc for c in CONTROLLERS}, pairs, cfg.goal_runs, 0),
+                # where UC-EMDM rests when it misses (Section V's explanation, on the page)
+                "scale": policy_study(
+                    {c: sc for c in CONTROLLERS}, pairs, cfg.goal_runs, 0, rest=(Name.UC_EMDM,)
+                ),
                 "slack": policy_study(
                     {c: ev.scenario(c) for c in ev.controllers},
                     {"C": (str(ev.controllers[0]), str(ev.controllers[1]))},

@@ -140,24 +140,30 @@ class Goals(Claims):
             ", and near the reach the dexterity term outweighs it: the tip rests ",
             *self.goal_range(*where, "missed", "final_error", fmt=".2g", unit="m"),
             " short",
-            PageOnly(
-                tuple(
-                    sentence(
-                        ", with ",
-                        Math("|q_2|", "|<i>q</i><sub>2</sub>|"),
-                        " = ",
-                        *self.goal_range(
-                            *where, "missed", "rest_last_joint", fmt=".3f", unit="rad"
-                        ),
-                        " (where ",
-                        Math(
-                            r"\tan q_2=w_M\|p\|/(c_SK_p)",
-                            "tan <i>q</i><sub>2</sub> = <i>w</i><sub>M</sub>‖<i>p</i>‖ / "
-                            "(<i>c</i><sub>S</sub><i>K</i><sub>p</sub>)",
-                        ),
-                        " balances the two pulls)",
+            *(
+                []
+                if missed.rest_last_joint is None  # (not run again)
+                else [
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                ", with ",
+                                Math("|q_2|", "|<i>q</i><sub>2</sub>|"),
+                                " = ",
+                                *self.goal_range(
+                                    *where, "missed", "rest_last_joint", fmt=".3f", unit="rad"
+                                ),
+                                " (where ",
+                                Math(
+                                    r"\tan q_2=w_M\|p\|/(c_SK_p)",
+                                    "tan <i>q</i><sub>2</sub> = <i>w</i><sub>M</sub>‖<i>p</i>‖ / "
+                                    "(<i>c</i><sub>S</sub><i>K</i><sub>p</sub>)",
+                                ),
+                                " balances the two pulls)",
+                            )
+                        )
                     )
-                )
+                ]
             ),
             ". ",
         )

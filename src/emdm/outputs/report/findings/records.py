@@ -554,14 +554,15 @@ class MmcRecord:
 class Missed:
     """Where a controller's missed runs of the many-goals study ended: the range of their
     goals' and resting tips' distances from the base (m), of their final errors (m) and of
-    the last joint's angle at rest (|q_n|, rad); the farthest goal it reached."""
+    the last joint's angle at rest (|q_n|, rad; None: not run again); the farthest goal it
+    reached."""
 
     count: int
     goal_radius: list[Any]
     arrived_goal_radius_max: float | None
     final_error: list[Any]
-    rest_tip_radius: list[Any]
-    rest_last_joint: list[Any]
+    rest_tip_radius: list[Any] | None
+    rest_last_joint: list[Any] | None
 
 
 @dataclass(frozen=True)
