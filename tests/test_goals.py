@@ -158,7 +158,8 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
     assert (said in text) == (term["lost"] > 0)
     if term["lost"]:
         assert f", {term['arrived']} {said}" in text
-        assert f"the term costs it {term['lost']}, {term['lost_beyond']} beyond" in text
+        assert f"the term loses it {term['lost']}, {term['lost_beyond']} beyond" in text
+        assert (f"and wins {term['gained']}." in text) == (term["gained"] > 0)
     # a miss nearer the base than an arrival: no distance separates them
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] - 1e-3
     path.write_text(json.dumps(record), encoding="utf-8")

@@ -24,7 +24,7 @@ from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
-from ..trace import Data, Eqs, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
+from ..trace import Data, Eqs, File, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
 from .records import (
     GRID_FILE,
     EventKey,
@@ -120,16 +120,6 @@ them E1, E2, ..., and the runs of a group E2a, E2b, ... (the free-slack policy r
 I's rows, not ablations)."""
 
 
-def upper_fmt(value: float, digits: int = 2) -> str:
-    """The format of ``value`` as an upper bound ("at most"): ``digits`` significant digits,
-    more where rounding would print a smaller number (-4.79e-5 printed -4.8e-5, reading 178)."""
-    for d in range(digits, 18):
-        fmt = f".{d - 1}e"
-        if float(format(value, fmt)) >= value:
-            return fmt
-    return ".17e"
-
-
 def glossed(solver: str) -> str:
     """A solver's name with what kind of method it is, at its first mention in the paper's
     text ("slsqp (sequential quadratic programming)"); the name alone where the registry says
@@ -155,6 +145,12 @@ def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
         node = node[int(key)] if isinstance(node, list) else node[str(key)]
     return node
 
+
+ARMS_IN_PAPER = False
+"""Whether Task 1's stills (the arms at the end of each run, their tip paths) are printed in
+the paper. On the page only: every reading found the four end poses piled up (UC-EMDM's and
+C-EMDM's coincide), and readings 178-180 asked for the convergence figure in its room; Fig. 1
+(c) overlays the distance to the goal, and its caption names the animations."""
 
 SINGLE_POINT = 1e-9
 """rad/s: an admissible set no wider than this (by linear programming) is one point."""
@@ -519,6 +515,8 @@ class StoryBase:
         if (task, group) == ("task1", "UC"):
             far = self.far_beyond(task, PAIRS[group])
             out += sentence(": ") + self.panels(far, path=FOURTH_PANEL[task] == "path")
+            if not ARMS_IN_PAPER and self.anim(task, group):  # (the stills' caption named them)
+                out += sentence("; animations: ", File(f"animations/{task}/"))
         elif (task, group) == ("task2", "UC"):  # as Task 2.1's, its run without the term dotted
             key: EvidenceKey = "t2-uc-emdm-no-manip"
             out += sentence(", as in ", Ref("fig", "t2-c"))

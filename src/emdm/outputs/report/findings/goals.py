@@ -193,7 +193,7 @@ class Goals(Claims):
                 if slack and ivkc in slack.controllers
                 else []
             ),
-            ": the term costs it ",
+            ": the term loses it ",
             self.goaln(*where, "lost"),
             *(
                 sentence(
@@ -205,6 +205,8 @@ class Goals(Claims):
                 if entry.lost_beyond is not None and entry.beyond is not None
                 else []
             ),
+            # and the goals it wins (reading 180: 55 lost, 1 won, 54 net)
+            *(sentence(", and wins ", self.goaln(*where, "gained")) if entry.gained else []),
             ". ",
         )
 

@@ -12,6 +12,7 @@ from ..document import Section
 from ..trace import Eqs, File, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
 from .base import (
     ALPHA,
+    ARMS_IN_PAPER,
     COND_J,
     DT,
     E_SYM,
@@ -25,7 +26,6 @@ from .base import (
     W_M,
     eq,
     run_label,
-    upper_fmt,
 )
 from .claims import LEVEL, Claims
 from .claims import cap as capitalised
@@ -79,7 +79,9 @@ class Task1(Claims):
         # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
         # paths when drawn (reading 146: (c) shows the distance to the goal, not the gap)
         where = sentence(" (", Ref("fig", "t1-uc"), "(c))")
-        arms = self.figure("t1-arms", "figures/task1-arms", self.arms_caption())
+        arms = self.figure(
+            "t1-arms", "figures/task1-arms", self.arms_caption(), paper=ARMS_IN_PAPER
+        )
         if same_time and self.mv(t, emdm, "reached"):
             answer += sentence("Both reach it in ", self.ttg(t, emdm), *where)
         else:
@@ -95,7 +97,7 @@ class Task1(Claims):
                 if FOURTH_PANEL[t] == "path"
                 # (the paths it draws coincide: a per-step distance is not drawn, reading 163)
                 else (" (paths: ", Ref("fig", "t1-arms"), ")")
-                if self.has_figure("t1-arms")
+                if self.has_figure("t1-arms") and ARMS_IN_PAPER
                 else ()
             ),
             ".",
@@ -412,14 +414,9 @@ class Task1(Claims):
                         *ks,
                         " every optimum has ",
                         MRATE,
-                        " < 0 (at most ",
-                        self.frontn(
-                            "C-EMDM",
-                            top,
-                            "M_max",
-                            upper_fmt(self.front("C-EMDM", top, "M_max")),
-                            "m²/s",
-                        ),
+                        # the largest, rounded (reading 178: "at most -4.8e-5" under it)
+                        " < 0 (largest ",
+                        self.frontn("C-EMDM", top, "M_max", ".2e", "m²/s"),
                         "): late in the run, ",
                         M_SYM,
                         " falls at any weights",
