@@ -160,11 +160,25 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         assert f", {term['arrived']} {said}" in text
         assert f"the term loses it {term['lost']}, {term['lost_beyond']} beyond" in text
         assert (f"and wins {term['gained']}." in text) == (term["gained"] > 0)
+    # every scaled C-IVKC miss at a joint's stop (reading 181): said only while all are
+    rows = [
+        record["tasks"][t]["policies"]["scale"]["controllers"]["C-IVKC"] for t in record["tasks"]
+    ]
+    all_at_stop = all(
+        r["missed"] is None or r["missed"]["at_stop"] == r["missed"]["count"] for r in rows
+    )
+    assert ("Every scaled C-IVKC miss ends with a joint at its stop" in text) == (
+        all_at_stop and any(r["missed"] for r in rows)
+    )
     # a miss nearer the base than an arrival: no distance separates them
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] - 1e-3
+    for r in rows:
+        if r["missed"]:
+            r["missed"]["at_stop"] = r["missed"]["count"] - 1
     path.write_text(json.dumps(record), encoding="utf-8")
     text, conclusion = _said(root)
     assert "UC-EMDM misses" not in text + conclusion
+    assert "ends with a joint at its stop" not in text
     # separated by less than the printed digits: more digits
     uc["missed"]["goal_radius"][0] = uc["missed"]["arrived_goal_radius_max"] + 2.6e-5
     path.write_text(json.dumps(record), encoding="utf-8")

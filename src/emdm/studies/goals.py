@@ -22,6 +22,10 @@ from ..sim.batch import simulate_batch
 from ..sim.loop import simulate
 from .montecarlo import draw
 
+AT_STOP = 1e-4
+"""rad: a missed run whose smallest joint margin came within this of the stop distance ended
+with a joint at its stop (the damper lets it no closer)."""
+
 
 def quartiles(values: np.ndarray) -> list[float] | None:
     """``[first quartile, median, third quartile]`` of ``values`` (None: no values)."""
@@ -80,8 +84,11 @@ def controller_summary(
             run = simulate(sc, name)
             tips.append(float(np.linalg.norm(run.p[-1][:2])))
             last.append(float(abs(_wrapped(run.q[-1][-1]))))
+        margin = np.asarray(o["min_joint_margin"])[missed]
         out["missed"] = {
             "count": int(missed.size),
+            # how many came to rest with a joint at its stop distance (the dampers' floor)
+            "at_stop": int(np.sum(margin <= float(np.min(scenario.damper.stop)) + AT_STOP)),
             "goal_radius": [float(radius[missed].min()), float(radius[missed].max())],
             "arrived_goal_radius_max": float(radius[reached].max()) if reached.any() else None,
             "final_error": [

@@ -95,7 +95,9 @@ class Goals(Claims):
             " with them",
         )
         # (the weights' advice over these goals: the conclusion's, said once)
-        p += sentence(". In Task 2 the dexterity term gains little")
+        p += sentence(". ")
+        p += self.misses_at_stop()
+        p += sentence("In Task 2 the dexterity term gains little")
         reach = self.beyond_reach()
         p += sentence(", and ", *reach) if reach else sentence(". ")
         p += self.term_cost("task2", Name.C_EMDM)
@@ -165,6 +167,34 @@ class Goals(Claims):
                     )
                 ]
             ),
+            ". ",
+        )
+
+    def misses_at_stop(self) -> Sentence:
+        """``Every miss of the scaled C-IVKC ends with a joint at its stop distance (110 in Task
+        1, 113 in Task 2), where the limits block the straight line, as in Section IV-A.`` Said
+        only where every one of its misses does (reading 181: the misses were unexplained)."""
+        rec = self.rec.goals
+        if rec is None:
+            return []
+        rows = {t: rec.tasks[t].policies["scale"].controllers.get(Name.C_IVKC) for t in rec.tasks}
+        missed = {t: r.missed for t, r in rows.items() if r is not None and r.missed}
+        if not missed or any(m.at_stop != m.count for m in missed.values()):
+            return []
+        counts = [
+            sentence(
+                self.goaln(
+                    "tasks", t, "policies", "scale", "controllers", Name.C_IVKC, "missed", "count"
+                ),
+                f" in Task {t[-1]}",
+            )
+            for t in missed
+        ]
+        return sentence(
+            "Every scaled C-IVKC miss ends with a joint at its stop (",
+            *[seg for i, c in enumerate(counts) for seg in ([Text(", ")] if i else []) + c],
+            "), as in ",
+            Ref("sec", "t2-c"),
             ". ",
         )
 

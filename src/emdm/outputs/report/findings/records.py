@@ -552,12 +552,14 @@ class MmcRecord:
 
 @dataclass(frozen=True)
 class Missed:
-    """Where a controller's missed runs of the many-goals study ended: the range of their
+    """Where a controller's missed runs of the many-goals study ended: how many with a joint at
+    its stop distance (``at_stop``), the range of their
     goals' and resting tips' distances from the base (m), of their final errors (m) and of
     the last joint's angle at rest (|q_n|, rad; None: not run again); the farthest goal it
     reached."""
 
     count: int
+    at_stop: int
     goal_radius: list[Any]
     arrived_goal_radius_max: float | None
     final_error: list[Any]

@@ -169,7 +169,7 @@ class Solvers(StoryBase):
                 hi = max(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
                 answer += (
                     sentence(
-                        ". The others stop ",
+                        ". The others miss the optimum by ",
                         self.sn(lab, lo, "max_abs_gap", ".2g"),
                         " (",
                         lo,
@@ -177,7 +177,7 @@ class Solvers(StoryBase):
                         self.sn(lab, hi, "max_abs_gap", ".2g"),
                         " (",
                         hi,
-                        ") from the optimum",
+                        ")",
                     )
                     if max(gaps) > min(gaps)
                     else sentence(". The others are inexact")

@@ -349,7 +349,7 @@ class Task1(Claims):
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
-                ", where the minimum is only ",
+                ", where the minimum is ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
         answer += sentence(".")
@@ -496,7 +496,7 @@ class Task1(Claims):
                 M_SYM,
                 " levels off: ",
                 *eq(W_M, self.gridn("UC-EMDM", knee[1], "w_manip", fmt=".3g")),
-                f" comes within {LEVEL:.0%} of the nominal run's for ",
+                f" is within {LEVEL:.0%} of the nominal for ",
                 self.gridn("UC-EMDM", knee[1], "total_effort", fmt=".3g"),
                 " against ",
                 self.gridn("UC-EMDM", n, "total_effort", fmt=".3g", unit="rad²/s"),
