@@ -613,10 +613,10 @@ class Task1(Claims):
                 # on how many scaled steps it was measured (reading 178: the lab's sample)
                 *(
                     (
-                        ". On the ",
+                        ". Task 1's challenge: on the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled steps the lab re-solved, Task 1's challenge, only one command is "
-                        "feasible (the set is at most ",
+                        " scaled steps the lab re-solved, only one command is feasible (the set "
+                        "is at most ",
                     )
                     if "steps" in vertex
                     else (
