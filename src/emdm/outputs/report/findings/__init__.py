@@ -36,6 +36,7 @@ from .base import (
 )
 from .beyond import Beyond
 from .front import Front
+from .goals import GOALS_IN_PAPER
 from .solvers import Solvers
 from .tables import Tables
 from .task1 import Task1
@@ -58,8 +59,9 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
             self.task2_c(),
             self.task2_challenges(self.task2_solvers()),
             self.task2_uc(),
-            self.goals_section(),
+            *((self.goals_section(),) if GOALS_IN_PAPER else ()),
             self.conclusion(),
+            *(() if GOALS_IN_PAPER else (self.goals_section(),)),  # the page's, after
             self.beyond(),
         ]
         sections = [s for s in maybe if s is not None]

@@ -146,11 +146,12 @@ def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
     return node
 
 
-ARMS_IN_PAPER = False
+ARMS_IN_PAPER = True
 """Whether Task 1's stills (the arms at the end of each run, their tip paths) are printed in
-the paper. On the page only: every reading found the four end poses piled up (UC-EMDM's and
-C-EMDM's coincide), and readings 178-180 asked for the convergence figure in its room; Fig. 1
-(c) overlays the distance to the goal, and its caption names the animations."""
+the paper. Every reading finds the four end poses piled up (UC-EMDM's and C-EMDM's coincide);
+taken out for the convergence figure (readings 178-180), they were missed (183: no picture of
+Task 1's arm): in the paper, beside the convergence figure, since the many goals went to the
+page."""
 
 SINGLE_POINT = 1e-9
 """rad/s: an admissible set no wider than this (by linear programming) is one point."""

@@ -431,8 +431,6 @@ class Task1(Claims):
         for i, r in enumerate(self.rec.grids.get("UC-EMDM", [])):
             if r.reached or r.finer_dt is None:
                 continue
-            # on the page only: Table II's E2a and E2b rows tell it in the paper (room for
-            # Section V's many goals; readings 174-176 asked the passage cut to its rows)
             said = sentence(
                 "At ",
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
@@ -451,13 +449,29 @@ class Task1(Claims):
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " they arrive (",
                     run_label(FINER_STEP),
-                    "): the step causes the miss, spending ",
-                    self.gridn("UC-EMDM", i, "finer_dt", "total_effort", fmt=".3g", unit="rad²/s"),
-                    " against ",
-                    self.gridn("UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"),
-                    " at nominal weights and that step (the weights' extra effort)",
+                    "): the step causes the miss",
+                    PageOnly(  # (its effort on the page only)
+                        tuple(
+                            sentence(
+                                ", spending ",
+                                self.gridn(
+                                    "UC-EMDM",
+                                    i,
+                                    "finer_dt",
+                                    "total_effort",
+                                    fmt=".3g",
+                                    unit="rad²/s",
+                                ),
+                                " against ",
+                                self.gridn(
+                                    "UC-EMDM", i, "finer_dt", "nominal", "total_effort", fmt=".3g"
+                                ),
+                                " at nominal weights and that step (the weights' extra effort)",
+                            )
+                        )
+                    ),
                 )
-            p += [PageOnly(tuple(sentence(*said, ". ")))]
+            p += sentence(*said, ". ")  # (in the paper again: the many goals went to the page)
             break
         if p:
             sec.paragraphs.append(p)
@@ -653,9 +667,9 @@ class Task1(Claims):
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")
-            # (reading 150, 154: the fallback's behaviour is the brief's question; on the page,
-            # as the loop never needed it: room for the many goals)
-            p += [PageOnly(tuple(declines))]
+            # (reading 150, 154: the fallback's behaviour is the brief's question; 182, 183
+            # missed it while it was on the page only)
+            p += declines
         p += sentence(
             ". Otherwise Task 1 is benign (",
             COND_J,
