@@ -33,7 +33,7 @@ class Front(Goals):
                     "On a two-link arm with limits, only EMDM has the brief's task slack, so only "
                     "it can leave the blocked straight line and arrive; IVKC, which we let slow "
                     "its tip where the limits forbid its velocity, comes to rest short of "
-                    "the goal. Given the same slack, ",
+                    "the goal. Given the same free slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)

@@ -629,7 +629,7 @@ class Task1(Claims):
                     (
                         ". Task 1's challenge: on the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled steps the lab re-solved, only one command is feasible (the set "
+                        " scaled steps re-solved offline, only one command is feasible (the set "
                         "is at most ",
                     )
                     if "steps" in vertex
