@@ -31,7 +31,7 @@ def listed(words: list[str]) -> str:
 
 class Claims(StoryBase):
     def weight_advice(self, why: bool = True) -> Sentence:
-        """``lower Task 1's w_M from 5 to 1.52: its mean m stays within 1% for -13% effort``:
+        """``lower UC-EMDM's w_M in Task 1 from 5 to 1.52: its mean m stays within 1% for -13% effort``:
         the whole-run sweep's recommendation (the conclusion's; the page's with it), or
         nothing where no smaller ratio comes within :data:`LEVEL` of the nominal mean m."""
         found = self.levels_off_at()
@@ -40,9 +40,10 @@ class Claims(StoryBase):
         n, k = found
         f = GRID_FILE.format(ctrl=Name.UC_EMDM)
         return sentence(
-            "lower Task 1's ",
+            # UC-EMDM's: the sweep ran it alone (reading 185: "Task 1's" read as both pairs')
+            "lower UC-EMDM's ",
             W_M,
-            " from ",
+            " in Task 1 from ",
             self.gridn("UC-EMDM", n, "w_manip", fmt=".3g"),
             " to ",
             self.gridn("UC-EMDM", k, "w_manip", fmt=".3g"),

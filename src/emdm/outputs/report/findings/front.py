@@ -217,5 +217,6 @@ class Front(Goals):
             if GOALS_IN_PAPER
             else "Limits: two planar arms, one goal each, kinematics only."
         )
+        p += self.goals_in_brief()  # (what the page's many goals weaken)
         sec.paragraphs.append(p)
         return sec

@@ -9,7 +9,7 @@ from typing import Any
 from ....core.controllers import Name
 from ..config import MANY_GOALS, PAIRS
 from ..document import Section, Table
-from ..trace import Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
+from ..trace import File, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
 from .base import M_SYM
 from .claims import Claims
 
@@ -264,6 +264,41 @@ class Goals(Claims):
             d for d in range(3, 18) if low < float(format(high, f".{d}f")) <= high or d == 17
         )
         return f".{digits}f"
+
+    def goals_in_brief(self) -> Sentence:
+        """The conclusion's sentence on the many goals where the paper has no section of them
+        (readings 184, 185: the study was in the data and the pitch, the paper said only "one
+        goal each"): what weakens its answers, with the record's file."""
+        if GOALS_IN_PAPER or not self.has_goals():
+            return []
+        t1 = ("tasks", "task1", "policies", "scale", "controllers", Name.C_IVKC)
+        uc = ("tasks", "task2", "policies", "scale", "controllers", Name.UC_EMDM)
+        out = sentence(
+            " On ",
+            self.goaln("runs"),
+            " random start-goal pairs per task (",
+            File(MANY_GOALS),
+            ")",
+        )
+        rec = self.rec.goals
+        c1 = rec.tasks["task1"].policies["scale"].controllers.get(Name.C_IVKC) if rec else None
+        stops = c1 is not None and c1.missed is not None and c1.missed.at_stop == c1.missed.count
+        if stops:
+            out += sentence(
+                ", ",
+                self.goaln(*t1, "missed", "count"),
+                " scaled Task 1 runs stall at a joint's stop",
+            )
+        reach = self.beyond_reach()
+        if reach:
+            out += sentence(
+                ", and in Task 2 UC-EMDM misses the ",
+                self.goaln(*uc, "missed", "count"),
+                " goals beyond ",
+                self.goaln(*uc, "missed", "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
+                ": its dexterity term outweighs the slack's pull there",
+            )
+        return out + sentence(".") if stops or reach else []
 
     # ------------------------------------------------------------------ the conclusion's
     def goals_policy(self) -> Sentence:
