@@ -178,10 +178,8 @@ def term_study(
     the goals the unchanged one misses and the changed one reaches), and of those lost, how
     many lie farther than ``beyond`` from the base (None: not asked)."""
     changed = scenario.with_overrides(dict(overrides))
-    _, goals, out = run_on_draws({controller: scenario}, runs, seed)
-    other = simulate_batch(
-        changed, controller, goals=goals, q0s=draw(scenario, runs, seed)[0]
-    ).outcomes()
+    q0s, goals, out = run_on_draws({controller: scenario}, runs, seed)
+    other = simulate_batch(changed, controller, goals=goals, q0s=q0s).outcomes()
     base = np.asarray(out[controller]["reached"], dtype=bool)
     new = np.asarray(other["reached"], dtype=bool)
     lost = new & ~base

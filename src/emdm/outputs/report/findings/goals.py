@@ -124,12 +124,8 @@ class Goals(Claims):
         row = self.rec.goals.tasks["task2"].policies["scale"] if self.rec.goals else None
         uc = row.controllers.get(Name.UC_EMDM) if row else None
         missed = uc.missed if uc else None
-        if missed is None or missed.arrived_goal_radius_max is None:
+        if missed is None or not missed.separated():
             return []
-        if missed.goal_radius[0] <= missed.arrived_goal_radius_max:
-            return []  # no distance separates its misses from its arrivals
-        # the distance as printed must separate them too: above every arrival, at most the
-        # nearest miss (0.880 between 0.8793 and 0.8805), with more digits where needed
         where = ("tasks", "task2", "policies", "scale", "controllers", Name.UC_EMDM)
         return sentence(
             "UC-EMDM misses the ",
@@ -253,7 +249,9 @@ class Goals(Claims):
         )
 
     def beyond_fmt(self) -> str:
-        """How Task 2's farthest-reach boundary is printed (:meth:`beyond_reach`'s digits)."""
+        """How Task 2's farthest-reach boundary is printed (:meth:`beyond_reach`'s digits): as
+        printed it must separate the misses too, above every arrival and at most the nearest
+        miss (0.880 between 0.8793 and 0.8805), with more digits where needed."""
         rec = self.rec.goals
         uc = rec.tasks["task2"].policies["scale"].controllers.get(Name.UC_EMDM) if rec else None
         missed = uc.missed if uc else None

@@ -566,6 +566,12 @@ class Missed:
     rest_tip_radius: list[Any] | None
     rest_last_joint: list[Any] | None
 
+    def separated(self) -> bool:
+        """Whether a distance from the base separates these misses from the arrivals: every
+        goal missed lies farther out than every goal reached."""
+        reached = self.arrived_goal_radius_max
+        return reached is not None and self.goal_radius[0] > reached
+
 
 @dataclass(frozen=True)
 class GoalsRow:
