@@ -146,12 +146,13 @@ def _dig(node: Any, path: tuple[str | int, ...]) -> Any:
     return node
 
 
-ARMS_IN_PAPER = True
+ARMS_IN_PAPER = False
 """Whether Task 1's stills (the arms at the end of each run, their tip paths) are printed in
 the paper. Every reading finds the four end poses piled up (UC-EMDM's and C-EMDM's coincide);
 taken out for the convergence figure (readings 178-180), they were missed (183: no picture of
-Task 1's arm): in the paper, beside the convergence figure, since the many goals went to the
-page."""
+Task 1's arm) and put back; readings 176, 179 and 184 asked them cut. They are on the page
+(Fig. 1's caption names the animations) so that the paper has room for its definitions and
+plainer sentences (readability: the MAJOR of readings 176-185)."""
 
 SINGLE_POINT = 1e-9
 """rad/s: an admissible set no wider than this (by linear programming) is one point."""

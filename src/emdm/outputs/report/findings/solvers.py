@@ -410,10 +410,10 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                " programs. ",
+                # (reading 183: six lines of caption; one list, in the columns' order)
+                " programs, each solved cold from Python (*: compiled iterations): median time (",
                 Unit("ms"),
-                ": median cold call from Python (*: iterations compiled); "
-                "it./ev.: median iterations, objective evaluations (–: none",
+                "), median iterations/objective evaluations (–: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
                     ("; ", ", ".join(quiet), ": not reported")
                     if (quiet := [k for k, r in rows.items() if not r.median_iterations])
@@ -430,18 +430,18 @@ class Solvers(StoryBase):
                     )
                     else ()
                 ),
-                "); gap, viol.: largest ",
+                "), largest gap ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
-                ", bound violation (0: below ",
+                " and bound violation (0: below ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "; exact: both ",
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
-                "); over: programs over the ",
+                "), programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: arrival, each solver alone in the loop",
+                " period, arrival time with the solver alone in the loop",
                 *(
                     (
-                        f"; {'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1}",
+                        f" ({'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1})",
                     )
                     if (seeded := [k for k in rows if k in SEEDED])
                     else ()
