@@ -425,14 +425,14 @@ class StoryBase:
             ),
         }
         p = sentence(
-            "Scaling has a price: with a free slack (",
+            "Scaling has a price: with a free slack instead (",
             Ref("tab", "outcomes"),
-            ") C-EMDM ",
+            "), C-EMDM ",
         )
         for metric, better in self._policy_terms():
             p += words[metric][0 if better else 1]
         p += sentence(
-            ". Scaling keeps a straighter path (",
+            "; scaling only keeps its path straighter (",
             self.mt("task1", emdm, "path_length", ".2f"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),

@@ -15,10 +15,13 @@ class Front(Goals):
     def abstract(self) -> Sentence:
         t2 = "task2"
         out = sentence(
-            "For planar arms, EMDM solves one quadratic program per step: the tip follows a "
-            "proportional controller, effort (joint speed) is minimised and the growth "
-            "rate of manipulability maximised. We compare it with inverse velocity kinematics "
-            "(IVKC). On a redundant three-link arm, EMDM tracks as well as IVKC; it ",
+            # (readability, readings 176-185: whole sentences, one comparison each)
+            "EMDM is a velocity controller for planar arms that solves one quadratic program "
+            "per control step: the tip follows a proportional controller while the joint-speed "
+            "effort is minimised and the growth rate of the manipulability ",
+            M_SYM,
+            " (dexterity) is maximised. We compare it with inverse velocity kinematics control "
+            "(IVKC). On a redundant three-link arm both track the goal equally well, and EMDM ",
             *self.dexterity_gain(),
             ". ",
         )
@@ -30,10 +33,10 @@ class Front(Goals):
                 out += sentence(
                     # (in words, not the body's terms: reading 170 met 'stall' and 'task
                     # scaling' undefined in the abstract)
-                    "On a two-link arm with limits, only EMDM has the brief's task slack, so only "
-                    "it can leave the blocked straight line and arrive; IVKC, which we let slow "
-                    "its tip where the limits forbid its velocity, comes to rest short of "
-                    "the goal. Given the same free slack, ",
+                    "On a two-link arm, the joint limits block the straight line to the goal. "
+                    "A slack on the task velocity lets EMDM leave the line and arrive; IVKC, which "
+                    "we let only slow down along it, comes to rest short of the goal. Given the "
+                    "same unbounded slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)
@@ -62,9 +65,9 @@ class Front(Goals):
                 # pair's -21 % effort is the slack's -35 % less what the term spends)
                 *(
                     (
-                        "Without limits, EMDM's slack alone cuts effort (",
+                        "Without limits, the slack alone cuts EMDM's effort (",
                         self.uc_slack_alone(),
-                        "); its dexterity term trades ",
+                        "), and the dexterity term adds ",
                         self.uc_term_cost(),
                         " effort for ",
                         self.uc_term_gain(),
@@ -90,14 +93,14 @@ class Front(Goals):
             free = self.best(rows, "gradient-free")
             if grad:
                 out += sentence(
-                    "On Task 2 gradient-based ",
+                    "On the two-link programs, the gradient-based solver ",
                     grad,
-                    " is exact in a median ",
+                    " reaches the exact optimum in a median ",
                     *self.evaluations("task2-lab-C-EMDM", grad),
                 )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)
-                        ", gradient-free ",
+                        ", the gradient-free ",
                         free,
                         " in ",
                         self.sn("task2-lab-C-EMDM", free, "median_evaluations", ".4g"),
@@ -132,7 +135,8 @@ class Front(Goals):
             "unconstrained (UC-) or with joint limits (C-). We coded both from the brief's "
             "definitions (its code was unavailable)",
             *self.derivatives_checked(),
-            ".",
+            ". Sections III and IV take the brief's questions in order: each subsection opens "
+            "with its answer, then gives the evidence.",
         )
         # the animations: named with their stills (Task 1's figure, Task 2's workspace)
         sec.paragraphs.append(intro)
@@ -165,34 +169,36 @@ class Front(Goals):
     def conclusion(self) -> Section:
         sec = Section("conclusion", "Conclusion")
         p = sentence(
-            "On the redundant arm EMDM keeps IVKC's tracking and trades effort for "
-            "manipulability through null-space motion. On the non-redundant arm the slack, not the "
-            "dexterity term, takes C-EMDM around the blocked disc",
+            "On the redundant arm, EMDM tracks as well as IVKC and trades effort for "
+            "manipulability through null-space motion. On the non-redundant arm, the slack, not "
+            "the dexterity term, takes C-EMDM around the blocked disc",
             # each answer tried from other starts to other goals (readings 171, 174: one goal)
             *self.goals_limit(),
             ". ",
         )
         gains = self.slack_gains()
         if gains:
-            p += sentence(
-                "In Task 1, scaling's only gain is a tip moving along "
-                if self.slack_better_on_all()
-                else "In Task 1, scaling keeps the tip moving along ",
-                Math("v_d", "<i>v</i><sub>d</sub>"),
-                "; " if self.slack_better_on_all() else ", but ",
-                "a free slack makes C-EMDM ",
-                listed(gains),
-                *(
-                    sentence(", and lets C-IVKC arrive in Task 2", *self.goals_policy())
-                    if self.ivkc_with_slack()
-                    else []
-                ),
-                # the recommendation the evidence makes (reading 164 found none)
-                ": here a slack beats scaling unless the tip must keep its line"
-                if self.slack_better_on_all()
-                else "",
-                ". ",  # (Table II's free-slack rows, cited where the runs are told)
+            arrive = (
+                sentence(" and lets C-IVKC arrive in Task 2", *self.goals_policy())
+                if self.ivkc_with_slack()
+                else []
             )
+            if self.slack_better_on_all():  # the recommendation first (reading 164 found none)
+                p += sentence(
+                    "Here a free slack beats task scaling: it makes C-EMDM ",
+                    listed(gains),
+                    " in Task 1",
+                    *arrive,
+                    ", while scaling only keeps the tip's path straighter. ",
+                )
+            else:
+                p += sentence(
+                    "In Task 1, scaling keeps the tip's path straighter, but a free slack makes "
+                    "C-EMDM ",
+                    listed(gains),
+                    *(sentence(",", *arrive) if arrive else []),
+                    ". ",  # (Table II's free-slack rows, cited where the runs are told)
+                )
         advice = self.weight_advice()  # the weights' recommendation, from the whole-run sweep
         cost = self.weight_cost()  # ... and over the many goals (reading 178: one run's)
         if advice and cost and GOALS_IN_PAPER:
@@ -213,9 +219,9 @@ class Front(Goals):
             "On programs this small, active-set QP solvers beat gradient-free ones. ",
         )
         p += sentence(  # what the study does not show (reading 145: no limitations said)
-            "Limits: planar arms, kinematics."
+            "The study covers planar arms and kinematics only."
             if GOALS_IN_PAPER
-            else "Limits: two planar arms, one goal each, kinematics only."
+            else "The study covers two planar arms, one goal each, and kinematics only."
         )
         p += self.goals_in_brief()  # (what the page's many goals weaken)
         sec.paragraphs.append(p)

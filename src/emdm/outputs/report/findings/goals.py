@@ -285,7 +285,7 @@ class Goals(Claims):
             out += sentence(
                 ", ",
                 self.goaln(*t1, "missed", "count"),
-                " scaled Task 1 runs stall at a joint's stop",
+                " Task 1 runs of C-IVKC under task scaling stall with a joint at its stop zone",
             )
         reach = self.beyond_reach()
         if reach:

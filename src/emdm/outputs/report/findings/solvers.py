@@ -28,7 +28,7 @@ SHOWN_ZERO_EXP = -12
 """Table III writes a gap or a bound violation below 10**SHOWN_ZERO_EXP as 0 (its caption says so)."""
 
 
-CONVERGENCE_IN_PAPER = True
+CONVERGENCE_IN_PAPER = False
 """Whether the convergence figure (each solver's error against its evaluations on one program)
 is printed in the paper, Table III's rows carrying its legend. Readings 176 and 177 found it
 repeating Table III's evaluations and gaps; 178-180 asked for it back (the brief asks for the
@@ -410,10 +410,10 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                # (reading 183: six lines of caption; one list, in the columns' order)
-                " programs, each solved cold from Python (*: compiled iterations): median time (",
+                # (reading 183: six lines of caption; the columns in order)
+                " programs, cold, from Python (*: compiled iterations): median ",
                 Unit("ms"),
-                "), median iterations/objective evaluations (–: none",
+                "; median iterations/evaluations (–: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
                     ("; ", ", ".join(quiet), ": not reported")
                     if (quiet := [k for k, r in rows.items() if not r.median_iterations])
@@ -430,15 +430,15 @@ class Solvers(StoryBase):
                     )
                     else ()
                 ),
-                "), largest gap ",
+                "); largest gap ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
-                " and bound violation (0: below ",
+                ", bound violation (0: < ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "; exact: both ",
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
-                "), programs over the ",
+                "); programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period, arrival time with the solver alone in the loop",
+                " period; arrival, alone in the loop",
                 *(
                     (
                         f" ({'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1})",

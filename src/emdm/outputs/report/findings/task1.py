@@ -126,13 +126,18 @@ class Task1(Claims):
                     )
                 )
             ),
-            "EMDM adds only null-space motion: ",
+            # why (reading 183: say why null-space motion raises m)
+            "Without bounds, EMDM's program has a closed-form solution, ",
             Math(
                 r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
                 "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
                 "<i>w</i><sub>E</sub>)(<i>I</i> − <i>J</i><sup>+</sup><i>J</i>)<i>J</i><sub>m</sub>",
             ),
-            ". With ",
+            ": IVKC's command plus the manipulability gradient projected into ",
+            Math("J", "<i>J</i>"),
+            "'s null space, a motion that raises ",
+            M_SYM,
+            " without moving the tip. With ",
             W_M,
             " = 0, ",
         )
@@ -145,15 +150,15 @@ class Task1(Claims):
             )
         else:  # what the bound means: the two are one controller up to rounding
             p += sentence(
-                "the commands agree to rounding error: within ",
+                "the two commands agree to rounding error (within ",
                 self.evidn(
                     "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
                 ),
-                " (",
+                ", ",
                 run_label("t1-uc-no-manip"),
                 "). ",
             )
-        p += sentence("Neither sees the limits: ")
+        p += sentence("Neither controller sees the limits: ")
         for name in (ivkc, emdm):
             if self.evv(t, name, "limits", "max_excess") > 0:
                 p += sentence(
@@ -161,12 +166,12 @@ class Task1(Claims):
                     self.ev(t, name, "limits", "excess_joint", fmt="d"),
                     "'s range by ",
                     self.ev(t, name, "limits", "max_excess", fmt=".3f", unit="rad"),
-                    "; ",
+                    ", and ",
                 )
         p += sentence(
             "both exceed the ",
             self.scn(t, "arm", "qd_max", 0, fmt=".1f", unit="rad/s"),
-            " limit",
+            " speed limit",
             " (",
             Ref("tab", "outcomes"),
             ").",
@@ -230,7 +235,8 @@ class Task1(Claims):
                 self.pairn(t, "C", "coincide_steps", "d"),
                 " steps, ",
                 self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " scaled) both send the same commands: joints at bounds leave one solution",
+                " of them scaled) both send the same commands: with joints at their speed bounds, "
+                "only one command is feasible",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -325,20 +331,24 @@ class Task1(Claims):
             *eq(MRATE, self.frontn("UC-EMDM", 0, "M_min", ".3g")),
             " to ",
             self.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-            " and its effort from ",
+            ", while its effort grows from ",
             self.frontn("UC-EMDM", 0, "E_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
-            ". ",
+            # what the fronts say (reading 183: never interpreted); the weighted sum's optima
+            # lie on the convex hull of the attainable (M, E) set
+            ": every front is convex, so each gain in ",
+            MRATE,
+            " costs more effort than the last. ",
         )
-        answer += sentence("The nominal ratio adds ")
+        answer += sentence("The nominal ratio costs ")
         e0 = self.front("UC-EMDM", 0, "zero_E")
         en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(
             self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f")
             if e0 > 0
             else Text("little"),
-            *((" to the minimal effort at ", K_EQ, "0") if en >= e0 else (" to the effort",)),
+            *((" over the minimal effort at ", K_EQ, "0") if en >= e0 else (" in effort",)),
         )
         i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
@@ -349,7 +359,7 @@ class Task1(Claims):
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
-                ", where the minimum is ",
+                ", near the goal, where the minimal effort is only ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
         answer += sentence(".")
@@ -369,18 +379,19 @@ class Task1(Claims):
                             "at ",
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
-                            " every ratio gives C-EMDM the same step: the scaled one (",
+                            " C-EMDM's front is a single point: the speed limits leave one "
+                            "feasible step, the scaled one (",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
-                            ")",
+                            "), whatever the ratio",
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            ", or, with a free slack (",
+                            "; with a free slack (",
                             Eqs(("free",)),
-                            "), ",
+                            ") it is another single point, ",
                             Ref("fig", "pareto"),
-                            "'s hollow point",
+                            "'s hollow one",
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
@@ -415,11 +426,11 @@ class Task1(Claims):
                         " every optimum has ",
                         MRATE,
                         # the largest, rounded (reading 178: "at most -4.8e-5" under it)
-                        " < 0 (largest ",
+                        " < 0 (the largest is ",
                         self.frontn("C-EMDM", top, "M_max", ".2e", "m²/s"),
                         "): late in the run, ",
                         M_SYM,
-                        " falls at any weights",
+                        " falls whatever the weights",
                     )
                 )
             for c, clause in enumerate(clauses):  # one sentence each
@@ -436,9 +447,9 @@ class Task1(Claims):
                 *eq(RATIO, self.gridn("UC-EMDM", i, "w_manip", fmt=".4g")),
                 Text("/"),
                 self.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                " UC-EMDM's joints reach ",
+                ", UC-EMDM's joints reach ",
                 self.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                " and miss the goal (",
+                " and it misses the goal (",
                 run_label(GRID_MISS),
                 ")",
             )
@@ -447,9 +458,9 @@ class Task1(Claims):
                 said += sentence(
                     "; with ",
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
-                    " they arrive (",
+                    " it arrives (",
                     run_label(FINER_STEP),
-                    "): the step causes the miss",
+                    "), so the miss comes from the Euler step, not the weights",
                     PageOnly(  # (its effort on the page only)
                         tuple(
                             sentence(
@@ -510,10 +521,11 @@ class Task1(Claims):
                 M_SYM,
                 " levels off: ",
                 *eq(W_M, self.gridn("UC-EMDM", knee[1], "w_manip", fmt=".3g")),
-                f" is within {LEVEL:.0%} of the nominal for ",
+                f" comes within {LEVEL:.0%} of the nominal mean for ",
                 self.gridn("UC-EMDM", knee[1], "total_effort", fmt=".3g"),
                 " against ",
                 self.gridn("UC-EMDM", n, "total_effort", fmt=".3g", unit="rad²/s"),
+                " of effort",
                 PageOnly(  # (reading 178 found it cryptic at the paper's length; room)
                     tuple(
                         sentence(
@@ -595,11 +607,11 @@ class Task1(Claims):
             )
         )
         p = sentence(
-            "Warm-started, it takes a median of ",
+            "Started from the previous step's active set, it takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations_warm", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations_warm", fmt="d"),
-            " iterations",
+            " iterations per step",
         )
         lab = SCALED_LAB
         ch: dict[str, Any] = {}
@@ -627,10 +639,9 @@ class Task1(Claims):
                 # on how many scaled steps it was measured (reading 178: the lab's sample)
                 *(
                     (
-                        ". Task 1's challenge: on the ",
+                        ". Task 1's numerical challenge is its scaled steps. On the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled steps re-solved offline, only one command is feasible (the set "
-                        "is at most ",
+                        " we re-solved offline, the feasible set is a single command (at most ",
                     )
                     if "steps" in vertex
                     else (
@@ -649,8 +660,8 @@ class Task1(Claims):
                     else ()
                 ),
                 # (in words: readings 174-177 found "2 bounds hold it where 1 would" cryptic)
-                f" speed bounds are active where {fixed} would fix it, and active-set methods "
-                "can then cycle; ours uses Bland's rule",
+                f" speed bounds are active where {fixed} would fix it, which can make "
+                "active-set methods cycle; ours uses Bland's rule against this",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
@@ -659,11 +670,10 @@ class Task1(Claims):
         if qp and qp.failures:  # the fallback's last resort (reading 142): on the page, as
             # it never ran in the loop (reading 149 asked for the room)
             declines = sentence(  # (offline: the loop's fallback never ran, reading 173)
-                ". In the solver lab the last fallback, quadprog, declines ",
-                self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
-                " of ",
+                ". Of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " re-solved C-EMDM programs",
+                " C-EMDM programs re-solved offline, the last fallback, quadprog, declines ",
+                self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")
@@ -671,13 +681,13 @@ class Task1(Claims):
             # missed it while it was on the page only)
             p += declines
         p += sentence(
-            ". Otherwise Task 1 is benign (",
+            ". Otherwise Task 1 is well conditioned (",
             COND_J,
             " ",
             Math(r"\leq", "≤"),
             " ",
             self.ev(t, Name.C_EMDM, "conditioning", "cond_J_max", fmt=".3g"),
-            ", no slack).",
+            ") and has no slack.",
         )
         sec.paragraphs.append(p)
         return sec

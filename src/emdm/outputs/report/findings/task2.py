@@ -97,14 +97,22 @@ class Task2(Claims):
                 self.evv(t, ivkc, "scaling") and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
             )  # the brief's exact program has no solution there: what the policy is for
             answer = sentence(  # one fact per sentence (copy edit after readings 150-153)
-                f"In the brief, only {emdm} has a slack. It leaves the straight line and arrives "
-                "in ",
+                f"As the brief defines them, only {emdm} has a slack. It leaves the straight line "
+                "and arrives in ",
                 self.ttg(t, emdm),
                 f". {ivkc} ",
-                "cannot meet its task from step 0, must stay on the line and"
+                "cannot meet its task from step 0 and must stay on the line"
                 if infeasible
-                else "cannot leave the line and",
-                ", under our task scaling, stalls. Given the same free slack, ",
+                else "cannot leave the line",
+                # where and when it stalls, then the like-for-like runs (readability: the
+                # stall was told after the free-slack runs, in a sentence of its own)
+                "; under our task scaling it stalls, from ",
+                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+                " on, ",
+                self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
+                f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
+                *figs,
+                "). Given the same free slack, ",
             )
             if both:
                 answer += sentence(
@@ -119,7 +127,7 @@ class Task2(Claims):
             m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
             if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
                 answer += sentence(" and with a higher mean ", M_SYM)
-            answer += sentence(" (", Ref("tab", "outcomes"), "). From ", *stall_told)
+            answer += sentence(" (", Ref("tab", "outcomes"), ")")
         elif stalled:
             # the contrast first (who can leave the line), then where the other stops
             scaled = " under task scaling" if self.ivkc_with_slack() else ""
@@ -257,8 +265,9 @@ class Task2(Claims):
         stall = self.evv(t, ivkc, "stall")
         if stall:
             p = sentence(
-                "A two-link arm without slack has one command per task velocity, and scaling "
-                f"keeps its direction: {ivkc} can only slow down. ",
+                "Why it stalls: a two-link arm without slack has exactly one command for each "
+                "task velocity, and scaling keeps the velocity's direction, so "
+                f"{ivkc} can only slow down along the line. ",
             )
             sc = self.evv(t, ivkc, "scaling")
             if sc:
@@ -269,7 +278,7 @@ class Task2(Claims):
                 )
             told = reached_e and not reached_i  # the answer above gives the stall's time
             p += sentence(  # (and its distance to the goal)
-                "it freezes " if sc else f"{ivkc} freezes ",
+                "it comes to rest " if sc else f"{ivkc} comes to rest ",
                 self.ev(t, ivkc, "stall", "progress", fmt=".3f", unit="m"),
                 " along the line",
                 *(
@@ -283,7 +292,7 @@ class Task2(Claims):
                 p += sentence(
                     ", joint ",
                     self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
-                    f" on its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                    f" at its {pins[0]['side']} {pins[0]['kind']} bound from ",
                     self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
                     " on",
                 )
@@ -512,7 +521,9 @@ class Task2(Claims):
         )
         outside = [c for c in (ivkc, emdm) if self.evv(t, c, "limits", "max_excess") > 0]
         if outside:
-            answer += sentence(" for the elbow-up configuration (", Ref("sec", "t2-c"), "). ")
+            answer += sentence(" for the elbow-up configuration (", Ref("sec", "t2-c"), ")")
+            # by how much: on the page (room for the paper's plainer sentences)
+            excess = sentence(". ")
             first: list[int] = []
             for i, c in enumerate(
                 outside
@@ -520,13 +531,13 @@ class Task2(Claims):
                 joints = [
                     j for j, x in enumerate(self.evv(t, c, "limits", "excess_by_joint")) if x > 0
                 ]
-                answer += sentence(
+                excess += sentence(
                     ", " if i else "",
                     f"{c} exceeds them by " if not i else f"{c} by ",
                     "" if i else "up to ",
                 )
                 for n, j in enumerate(joints):
-                    answer += sentence(
+                    excess += sentence(
                         " and " if n == len(joints) - 1 and n else (", " if n else ""),
                         self.ev(
                             t,
@@ -540,11 +551,12 @@ class Task2(Claims):
                     )
                 if joints != first:
                     names = [str(j + 1) for j in joints]
-                    answer += sentence(
+                    excess += sentence(
                         " at joint" + ("s " if len(names) > 1 else " "),
                         ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1],
                     )
                     first = first or joints
+            answer += [PageOnly(tuple(excess))]
         answer += (
             sentence(". " if outside else "; ")
             + (cap(self.uc_slack_saving()) if outside else self.uc_slack_saving())
@@ -607,13 +619,13 @@ class Task2(Claims):
         emdm = Name.C_EMDM
         f = "data/task2-lab-C-EMDM/solvers.json"
         answer = sentence(
-            "Task 2's programs pose two numerical challenges: the slack weight ",
+            "Task 2's programs are harder: the slack weight ",
             W_S,
             " grows from ",
             self.ev(t, emdm, "conditioning", "w_slack_start", fmt=".3g"),
             " to ",
             self.ev(t, emdm, "conditioning", "w_slack_max_solved", fmt=".3g"),
-            " over the solved steps, and the singular passage drives ",
+            ", and the singular passage drives ",
             COND_J,
             " to ",
             self.ev(t, emdm, "conditioning", "cond_J_max", fmt=".2g"),
@@ -626,9 +638,10 @@ class Task2(Claims):
                     )
                 )
             ),
-            ".",
         )
-        self.answers.append(("Task 2.1: convergence behaviour and numerical challenges", answer))
+        self.answers.append(
+            ("Task 2.1: convergence behaviour and numerical challenges", answer + sentence("."))
+        )
         sec.figures.append(
             self.figure(
                 "conditioning",
@@ -645,11 +658,13 @@ class Task2(Claims):
             )
         )
         p = answer  # one paragraph: the challenges, then how the active set meets them
-        if self.d.exists(f):
+        if not self.d.exists(f):
+            p += sentence(".")
+        else:
             p += sentence(
-                " The reduced Hessian's condition number reaches ",
+                " (reduced Hessian: ",
                 self.d.num(f, "challenges", "feature_ranges", "cond_reduced", 1, fmt=".3g"),
-                ", yet the active-set solver needs ",
+                "). Yet the active-set solver needs ",
                 "no fallback and, " if self.mv(t, emdm, "fallback_steps") == 0 else "",
                 "warm-started, a median ",
                 self.ev(t, emdm, "solver", "median_iterations_warm", fmt=".4g"),
