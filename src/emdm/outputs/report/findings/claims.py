@@ -196,11 +196,11 @@ class Claims(StoryBase):
         return sentence(  # the pair's difference is UC-EMDM's, slack and term together
             "UC-EMDM's slack absorbs up to ",
             self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
-            " of the desired velocity; against UC-IVKC: effort ",
+            " of the desired velocity; against UC-IVKC, its effort changes by ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            ", mean ",
+            " and its mean ",
             M_SYM,
-            " ",
+            " by ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
         )
 

@@ -356,9 +356,9 @@ class Task2(Claims):
                 run_label("t2-c-ivkc-wide-limits"),
                 ", ",
                 Ref("tab", "outcomes"),
-                f") {ivkc} arrives too, in ",
+                f"), {ivkc} arrives too, in ",
                 self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
-                ". ",
+                ": its stall comes from the limits. ",
             )
         elif not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
@@ -435,10 +435,10 @@ class Task2(Claims):
             e7 = self.evid("t2-c-emdm-tight-slack", "runs", emdm)
             if not e7.get("reached", True):
                 p += sentence(
-                    ". With ",
+                    ". With its slack bounded by ",
                     Math(r"|\delta|\leq", "|δ| ≤ "),
                     self.override("t2-c-emdm-tight-slack", "slack.max", 0, fmt=".3g", unit="m/s"),
-                    " it stalls (",
+                    f", {emdm} stalls too (",
                     run_label("t2-c-emdm-tight-slack"),
                     ")",
                 )
