@@ -160,7 +160,23 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
     assert ("one goal each" in conclusion) != GOALS_IN_PAPER
     if not GOALS_IN_PAPER:  # what the many goals weaken, said in the paper (readings 184-185)
         assert f"On {runs} random start-goal pairs per task" in conclusion
-        assert f"UC-EMDM misses the {uc['missed']['count']} goals beyond" in conclusion
+        assert f"UC-EMDM misses the {uc['missed']['count']} beyond" in conclusion
+        # both constrained controllers' stalls and C-EMDM's misses (readings 186, 187: C-IVKC's
+        # alone read as selective), and Task 1's median trade (186)
+        scale1 = record["tasks"]["task1"]["policies"]["scale"]
+        m, e = (scale1["pairs"]["UC"][k][1] for k in ("mean_manipulability", "total_effort"))
+        assert f"Task 1 is ${100 * m:+.0f}$\\% mean $m$ for ${100 * e:+.0f}$\\% effort" in (
+            conclusion
+        )
+        stalls = {
+            c: r["missed"]["count"]
+            for c, r in scale1["controllers"].items()
+            if c.startswith("C-") and r["missed"] and r["missed"]["at_stop"] == r["missed"]["count"]
+        }
+        for c in stalls:
+            assert c in conclusion.split("Under task scaling, ")[1].split(" stall")[0]
+        c2 = record["tasks"]["task2"]["policies"]["scale"]["controllers"]["C-EMDM"]["missed"]
+        assert (f"C-EMDM misses {c2['count']} goals" in conclusion) == bool(c2 and c2["count"])
     # what the dexterity term costs C-EMDM in arrivals (reading 179), said where it costs any
     term = record["tasks"]["task2"]["no_term"]["C-EMDM"]
     said = "without its dexterity term"

@@ -1314,7 +1314,7 @@ def convergence_figure(
     family = {name: f for panel in panels for name, (f, *_rest) in panel.curves.items()}
     dashes = solver_dashes(family)
     size = 3.5 if medium is PAPER else 6
-    height = 1.0 if medium is PAPER else 2.7
+    height = 0.85 if medium is PAPER else 2.7  # (the paper's room: readings 186-187)
     width = medium.column if medium is PAPER else 3.3 * len(panels)
     with _figure(stem, medium, width, height) as fig:
         # a busier panel gets more room (Task 2's nine solvers against Task 1's four)

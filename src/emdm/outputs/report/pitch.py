@@ -443,7 +443,7 @@ class Pitch:
                     self.s.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
                     ": the ",
                     self.s.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
-                    " step misses the goal (named in the middle)",
+                    " step misses the goal (the middle panel's note)",
                     *(
                         (
                             ", a ",

@@ -16,11 +16,11 @@ class Front(Goals):
         t2 = "task2"
         out = sentence(
             # (readability, readings 176-185: whole sentences, one comparison each)
-            "EMDM is a velocity controller for planar arms that solves one quadratic program "
-            "per control step: the tip follows a proportional controller while the joint-speed "
-            "effort is minimised and the growth rate of the manipulability ",
+            "EMDM is a velocity controller that solves one quadratic program per step: the tip "
+            "follows a proportional controller while joint-speed effort is minimised and the "
+            "growth rate of manipulability ",
             M_SYM,
-            " (dexterity) is maximised. We compare it with inverse velocity kinematics control "
+            " (dexterity) maximised. We compare it with inverse velocity kinematics control "
             "(IVKC). On a redundant three-link arm both track the goal equally well, and EMDM ",
             *self.dexterity_gain(),
             ". ",
@@ -35,8 +35,8 @@ class Front(Goals):
                     # scaling' undefined in the abstract)
                     "On a two-link arm, the joint limits block the straight line to the goal. "
                     "A slack on the task velocity lets EMDM leave the line and arrive; IVKC, which "
-                    "we let only slow down along it, comes to rest short of the goal. Given the "
-                    "same unbounded slack, ",
+                    "we let only slow down along it, comes to rest short of the goal. When IVKC "
+                    "gets the same unbounded slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)
@@ -134,9 +134,9 @@ class Front(Goals):
             "KKT-certified active-set method. We compare this controller, EMDM, with IVKC, each "
             "unconstrained (UC-) or with joint limits (C-). We coded both from the brief's "
             "definitions (its code was unavailable)",
-            *self.derivatives_checked(),
-            ". Sections III and IV take the brief's questions in order: each subsection opens "
-            "with its answer, then gives the evidence.",
+            # the derivative check on the page (reading 187: room for the definitions)
+            PageOnly(tuple(self.derivatives_checked())),
+            ". Each subsection of Sections III and IV opens with its answer to the brief.",
         )
         # the animations: named with their stills (Task 1's figure, Task 2's workspace)
         sec.paragraphs.append(intro)
@@ -213,11 +213,22 @@ class Front(Goals):
             page = (
                 PageOnly(tuple(sentence(" (over the random goals: ", *cost, ")"))) if cost else ""
             )
-            p += sentence("We would ", *advice, page, ". ")
-        # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time)
-        p += sentence(
-            "On programs this small, active-set QP solvers beat gradient-free ones. ",
-        )
+            # (its reason is Section III-B's; on the page with it, reading 187's room)
+            why = advice[len(self.weight_advice(why=False)) :]
+            p += sentence(
+                "We would ", *self.weight_advice(why=False), PageOnly(tuple(why)), page, ". "
+            )
+        # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time;
+        # on the page only, the paper's room going to its definitions, reading 187)
+        p += [
+            PageOnly(
+                tuple(
+                    sentence(
+                        "On programs this small, active-set QP solvers beat gradient-free ones. "
+                    )
+                )
+            )
+        ]
         p += sentence(  # what the study does not show (reading 145: no limitations said)
             "The study covers planar arms and kinematics only."
             if GOALS_IN_PAPER

@@ -264,13 +264,15 @@ class Goals(Claims):
         return f".{digits}f"
 
     def goals_in_brief(self) -> Sentence:
-        """The conclusion's sentence on the many goals where the paper has no section of them
+        """The conclusion's sentences on the many goals where the paper has no section of them
         (readings 184, 185: the study was in the data and the pitch, the paper said only "one
-        goal each"): what weakens its answers, with the record's file."""
-        if GOALS_IN_PAPER or not self.has_goals():
+        goal each"): what weakens its answers, with the record's file, told of both constrained
+        controllers (readings 186, 187: C-IVKC's stalls alone read as selective) and with
+        Task 1's median trade beside the single goal's (186)."""
+        if GOALS_IN_PAPER or not self.has_goals() or self.rec.goals is None:
             return []
-        t1 = ("tasks", "task1", "policies", "scale", "controllers", Name.C_IVKC)
-        uc = ("tasks", "task2", "policies", "scale", "controllers", Name.UC_EMDM)
+        rec = self.rec.goals
+        scale = ("tasks", "task1", "policies", "scale")
         out = sentence(
             " On ",
             self.goaln("runs"),
@@ -278,25 +280,75 @@ class Goals(Claims):
             File(MANY_GOALS),
             ")",
         )
-        rec = self.rec.goals
-        c1 = rec.tasks["task1"].policies["scale"].controllers.get(Name.C_IVKC) if rec else None
-        stops = c1 is not None and c1.missed is not None and c1.missed.at_stop == c1.missed.count
-        if stops:
+        said = False
+        if rec.tasks["task1"].policies["scale"].pairs.get("UC") is not None:
             out += sentence(
-                ", ",
-                self.goaln(*t1, "missed", "count"),
-                " Task 1 runs of C-IVKC under task scaling stall with a joint at its stop zone",
+                ", UC-EMDM's median trade against UC-IVKC in Task 1 is ",
+                self.goaln(*scale, "pairs", "UC", "mean_manipulability", 1, fmt="+.0%"),
+                " mean ",
+                M_SYM,
+                " for ",
+                self.goaln(*scale, "pairs", "UC", "total_effort", 1, fmt="+.0%"),
+                " effort",
             )
+            said = True
+        ctrls = rec.tasks["task1"].policies["scale"].controllers
+        stalled = {  # every miss with a joint at its stop zone
+            c: m.count
+            for c in (Name.C_IVKC, Name.C_EMDM)
+            if (r := ctrls.get(c)) is not None
+            and (m := r.missed) is not None
+            and m.count > 0
+            and m.at_stop == m.count
+        }
+        at_stop, counts = list(stalled), set(stalled.values())
+        if at_stop:
+            out += sentence(
+                ". Under task scaling, ",
+                " and ".join(at_stop),
+                " each" if len(at_stop) > 1 and len(counts) == 1 else "",
+                " stall",
+                "s" if len(at_stop) == 1 else "",
+                " on ",
+            )
+            for i, c in enumerate(at_stop if len(counts) > 1 else at_stop[:1]):
+                out += sentence(
+                    " and " if i else "",
+                    self.goaln(*scale, "controllers", c, "missed", "count"),
+                    f" ({c})" if len(counts) > 1 else "",
+                )
+            out += sentence(" Task 1 goals, every time with a joint at its stop zone")
+            said = True
+        t2 = ("tasks", "task2", "policies", "scale", "controllers")
+        c2 = rec.tasks["task2"].policies["scale"].controllers.get(Name.C_EMDM)
         reach = self.beyond_reach()
-        if reach:
-            out += sentence(
-                ", and in Task 2 UC-EMDM misses the ",
-                self.goaln(*uc, "missed", "count"),
-                " goals beyond ",
-                self.goaln(*uc, "missed", "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
-                ": its dexterity term outweighs the slack's pull there",
-            )
-        return out + sentence(".") if stops or reach else []
+        if reach or (c2 is not None and c2.missed is not None and c2.missed.count):
+            out += sentence("; in Task 2 ")
+            if c2 is not None and c2.missed is not None and c2.missed.count:
+                out += sentence(
+                    "C-EMDM misses ",
+                    self.goaln(*t2, Name.C_EMDM, "missed", "count"),
+                    " goals",
+                    ", and " if reach else "",
+                )
+            if reach:
+                out += sentence(
+                    "UC-EMDM misses the ",
+                    self.goaln(*t2, Name.UC_EMDM, "missed", "count"),
+                    " beyond ",
+                    self.goaln(
+                        *t2,
+                        Name.UC_EMDM,
+                        "missed",
+                        "goal_radius",
+                        0,
+                        fmt=self.beyond_fmt(),
+                        unit="m",
+                    ),
+                    ", where its dexterity term outweighs the slack penalty",
+                )
+            said = True
+        return out + sentence(".") if said else []
 
     # ------------------------------------------------------------------ the conclusion's
     def goals_policy(self) -> Sentence:

@@ -28,11 +28,12 @@ SHOWN_ZERO_EXP = -12
 """Table III writes a gap or a bound violation below 10**SHOWN_ZERO_EXP as 0 (its caption says so)."""
 
 
-CONVERGENCE_IN_PAPER = False
+CONVERGENCE_IN_PAPER = True
 """Whether the convergence figure (each solver's error against its evaluations on one program)
 is printed in the paper, Table III's rows carrying its legend. Readings 176 and 177 found it
 repeating Table III's evaluations and gaps; 178-180 asked for it back (the brief asks for the
-convergence speed): it takes the room of Task 1's stills (:data:`.task1.ARMS_IN_PAPER`)."""
+convergence speed), and so did 186 and 187 when it was on the page only: it takes the room of
+Task 1's stills (:data:`.task1.ARMS_IN_PAPER`)."""
 
 
 class Solvers(StoryBase):
@@ -229,15 +230,13 @@ class Solvers(StoryBase):
             sentence(
                 "Convergence on the ",
                 "least dexterous" if hardest else "first",
-                " program, cold (lines as in ",
+                " program, cold: the best error so far against objective evaluations (lines as in ",
                 Ref("tab", "solvers"),
                 *(  # the table's solvers without a curve: they count no objective evaluations
                     # (the QP methods solve the program, they do not sample its objective)
-                    (f"; {', '.join(unplotted)}: no evaluations",)
-                    if 0 < len(unplotted) < len(rows)
-                    else ()
+                    (f"; {', '.join(unplotted)}: none",) if 0 < len(unplotted) < len(rows) else ()
                 ),
-                "; line: best so far, broken: gradient-free; marker: answer returned).",
+                "; marker: answer returned).",
             ),
             paper=CONVERGENCE_IN_PAPER,
         )
@@ -410,10 +409,10 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
-                # (reading 183: six lines of caption; the columns in order)
-                " programs, cold, from Python (*: compiled iterations): median ",
+                # (readings 183, 186: six lines of caption; the columns in order)
+                " programs, cold, from Python (*: compiled). ",
                 Unit("ms"),
-                "; median iterations/evaluations (–: none",
+                ", it./ev.: median time, iterations/evaluations (–: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
                     ("; ", ", ".join(quiet), ": not reported")
                     if (quiet := [k for k, r in rows.items() if not r.median_iterations])
@@ -430,15 +429,15 @@ class Solvers(StoryBase):
                     )
                     else ()
                 ),
-                "); largest gap ",
+                "); gap, viol.: largest ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
                 ", bound violation (0: < ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "; exact: both ",
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
-                "); programs over the ",
+                "); over: programs over the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; arrival, alone in the loop",
+                " period; goal: arrival, alone in the loop",
                 *(
                     (
                         f" ({'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1})",

@@ -7,7 +7,7 @@ from typing import Any, ClassVar, cast
 from ....core.controllers import CONTROLLERS, Name
 from ....core.terms import TermKind
 from ..document import Section, Table
-from ..trace import Eqs, Math, Num, Ref, Sentence, Text, Unit, Upright, sentence
+from ..trace import Eqs, Math, Num, Ref, Sentence, Text, Unit, Upright, render_latex, sentence
 from .base import (
     DT,
     FINER_STEP,
@@ -95,10 +95,10 @@ class Tables(Claims):
             "α*<i>v</i><sub>d</sub>" if scaled else "<i>v</i><sub>d</sub>"
         )
         if slack:
-            task_tex += r",\,\delta\in D"
+            task_tex += r",\delta\in D"
             task_htm += ", δ ∈ <i>D</i>"
         if TermKind.VELOCITY_BOX in kinds or TermKind.DAMPER in kinds:
-            task_tex += r",\,\dot q\in B"
+            task_tex += r",\dot q\in B"
             task_htm += ", <i>q̇</i> ∈ <i>B</i>"
         for kind in kinds:
             if kind in self.ROWS:
@@ -112,8 +112,13 @@ class Tables(Claims):
         table = Table(
             "programs",
             sentence(
-                "Each task's programs (the brief's items; Task 1: three links, Task 2: two), "
-                "as built from each controller's terms (",
+                # the decision variables named (reading 156: only implied)
+                "Each task's programs in ",
+                QDOT,
+                " (and ",
+                Math(r"\delta", "δ"),
+                "), by the brief's item (Task 1: three links, Task 2: two), as built from each "
+                "controller's terms (",
                 Math("B", "<i>B</i>"),
                 ": the speed box (",
                 Eqs(("bounds",)),
@@ -125,16 +130,17 @@ class Tables(Claims):
             ),
             [
                 sentence("task, ctrl."),
-                # the decision variables named (reading 156: only implied)
-                sentence("minimise over ", QDOT, " (and ", Math(r"\delta", "δ"), ")"),
+                sentence("minimise"),
                 sentence("subject to"),
             ],
             align="lll",
             font="scriptsize",
-            colsep=1.5,
+            colsep=0.8,
             placement="b",  # under the formulation's first column, beside what it writes out
         )
-        # the brief's items in its order, each with its pair (no heading rows: two lines saved)
+        # the brief's items in its order, each with its pair (no heading rows: two lines saved);
+        # a program two items share is one row naming both (IVKC's: two more lines)
+        merged: dict[tuple[str, str, str], tuple[list[str], list[Sentence]]] = {}
         for task, item, names in (
             ("task1", "1.1", (Name.UC_IVKC, Name.UC_EMDM)),
             ("task1", "1.2", (Name.C_IVKC, Name.C_EMDM)),
@@ -143,7 +149,10 @@ class Tables(Claims):
         ):
             for name in names:
                 row = self.program_row(task, name)
-                table.rows.append([sentence(f"{item} ", *row[0]), *row[1:]])
+                key = (str(name), render_latex(row[1]), render_latex(row[2]))
+                merged.setdefault(key, ([], row))[0].append(item)
+        for items, row in merged.values():
+            table.rows.append([sentence("/".join(items) + " ", *row[0]), *row[1:]])
         self.tables["programs"] = table
         for s in sections:
             if s.key == "formulation":

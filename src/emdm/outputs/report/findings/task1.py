@@ -482,7 +482,9 @@ class Task1(Claims):
                         )
                     ),
                 )
-            p += sentence(*said, ". ")  # (in the paper again: the many goals went to the page)
+            # on the page (readings 186, 187 asked it cut for the paper's definitions; Table
+            # II keeps both rows, E2b's label says what it changes)
+            p += [PageOnly(tuple(sentence(*said, ". ")))]
             break
         if p:
             sec.paragraphs.append(p)
@@ -607,7 +609,7 @@ class Task1(Claims):
             )
         )
         p = sentence(
-            "Started from the previous step's active set, it takes a median of ",
+            "Warm-started, it takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations_warm", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations_warm", fmt="d"),
@@ -660,8 +662,8 @@ class Task1(Claims):
                     else ()
                 ),
                 # (in words: readings 174-177 found "2 bounds hold it where 1 would" cryptic)
-                f" speed bounds are active where {fixed} would fix it, which can make "
-                "active-set methods cycle; ours uses Bland's rule against this",
+                f" speed bounds are active where {fixed} would determine it, so active-set "
+                "methods can cycle",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
@@ -672,7 +674,7 @@ class Task1(Claims):
             declines = sentence(  # (offline: the loop's fallback never ran, reading 173)
                 ". Of ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " C-EMDM programs re-solved offline, the last fallback, quadprog, declines ",
+                " C-EMDM programs re-solved offline, the last fallback, quadprog, fails on ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:

@@ -97,8 +97,8 @@ class Task2(Claims):
                 self.evv(t, ivkc, "scaling") and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
             )  # the brief's exact program has no solution there: what the policy is for
             answer = sentence(  # one fact per sentence (copy edit after readings 150-153)
-                f"As the brief defines them, only {emdm} has a slack. It leaves the straight line "
-                "and arrives in ",
+                f"In the brief, only {emdm} has a slack. It leaves the straight line and arrives "
+                "in ",
                 self.ttg(t, emdm),
                 f". {ivkc} ",
                 "cannot meet its task from step 0 and must stay on the line"
@@ -265,9 +265,8 @@ class Task2(Claims):
         stall = self.evv(t, ivkc, "stall")
         if stall:
             p = sentence(
-                "Why it stalls: a two-link arm without slack has exactly one command for each "
-                "task velocity, and scaling keeps the velocity's direction, so "
-                f"{ivkc} can only slow down along the line. ",
+                "Why it stalls: without slack, a two-link arm has one command per task velocity, "
+                f"and scaling keeps the velocity's direction, so {ivkc} can only slow down. ",
             )
             sc = self.evv(t, ivkc, "scaling")
             if sc:
@@ -398,12 +397,18 @@ class Task2(Claims):
                             ),
                             " (",
                             run_label("t2-c-emdm-no-manip"),
-                            "); the nominal run averages ",
-                            # over the same time when it runs longer (its whole mean is said
-                            # with its cost below)
-                            *(
-                                self.common_mean("t2-c-emdm-no-manip", lead="")
-                                or (self.mt(t, emdm, "mean_manipulability", ".3f"),)
+                            ")",
+                            # the nominal run over the same time: on the page (room, 187)
+                            PageOnly(
+                                tuple(
+                                    sentence(
+                                        "; the nominal run averages ",
+                                        *(
+                                            self.common_mean("t2-c-emdm-no-manip", lead="")
+                                            or (self.mt(t, emdm, "mean_manipulability", ".3f"),)
+                                        ),
+                                    )
+                                )
                             ),
                             ". On this arm the term does not raise ",
                             M_SYM,
@@ -600,7 +605,7 @@ class Task2(Claims):
         )
         if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
             out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ": the slack's saving. Against this run, the term buys ",
+                ": the slack makes the saving. Against this run, the dexterity term buys ",
                 self.uc_term_gain(),
                 " ",
                 M_SYM,
@@ -670,9 +675,9 @@ class Task2(Claims):
                 self.ev(t, emdm, "solver", "median_iterations_warm", fmt=".4g"),
                 " and at most ",
                 self.ev(t, emdm, "solver", "max_iterations_warm", fmt=".0f"),
-                " iterations (cold: ",
-                Ref("tab", "solvers"),
-                ").",
+                " iterations.",
             )
-        sec.paragraphs.append(p)
+        # on the page: the brief asks Task 1's challenges (Section III-D), not Task 2's; the
+        # paper's room went to its definitions (readings 186, 187)
+        sec.paragraphs.append([PageOnly(tuple(p))])
         return sec
