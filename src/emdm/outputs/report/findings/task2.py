@@ -482,7 +482,11 @@ class Task2(Claims):
             f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                (", also over the first ", self.pairn(t, "C", "common_until_t", ".2f", "s"))
+                (
+                    " (the same over the first ",
+                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
+                    ")",
+                )
                 if same and not reached_i
                 else ()
             ),
