@@ -214,10 +214,9 @@ class Front(Goals):
                 PageOnly(tuple(sentence(" (over the random goals: ", *cost, ")"))) if cost else ""
             )
             # (its reason is Section III-B's; on the page with it, reading 187's room)
-            why = advice[len(self.weight_advice(why=False)) :]
-            p += sentence(
-                "We would ", *self.weight_advice(why=False), PageOnly(tuple(why)), page, ". "
-            )
+            short = self.weight_advice(why=False)
+            why = advice[len(short) :]  # (advice is short followed by its reason)
+            p += sentence("We would ", *short, PageOnly(tuple(why)), page, ". ")
         # (why, in evaluations, is Task 2.1's answer and the abstract's: not said a third time;
         # on the page only, the paper's room going to its definitions, reading 187)
         p += [
