@@ -166,7 +166,7 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
         for name in ("C-IVKC", "C-EMDM"):
             assert 0 < free["runs"][name]["max_abs_slack"] < 0.01 * FREE_SLACK, (key, name)
     assert evidence["t1-uc-no-manip"]["reference"]["max_abs_qd_difference"] < 1e-12
-    # E4 ends sooner than its nominal run: the nominal's mean m over E4's time is recorded
+    # A4 ends sooner than its nominal run: the nominal's mean m over A4's time is recorded
     # (reading 94: each run's own mean covers its own horizon), from the nominal trajectory
     ref = evidence["t2-c-emdm-no-manip"]["reference"]
     e4 = evidence["t2-c-emdm-no-manip"]["runs"]["C-EMDM"]
@@ -200,14 +200,14 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
 
 def test_evidence_json_says_where_every_table_ii_row_is_recorded(report):
     """A reader of the data finds each of Table II's evidence rows (indented under the run each
-    changes) from evidence.json: an entry of its runs, or (E2a, E2b) the weight grid's first run
+    changes) from evidence.json: an entry of its runs, or (A2a, A2b) the weight grid's first run
     that misses the goal and its finer step."""
     root, _ = report
     evidence = json.loads((root / "data" / "evidence.json").read_text())
     index = evidence["table_ii"]
     paper = (root / "paper" / "paper.tex").read_text(encoding="utf-8")
     table = paper[paper.index(r"\label{tab:outcomes}") :].split(r"\end{table}", 1)[0]
-    rows = re.findall(r"^\$\\quad\$(E\d[a-z]?): ", table, flags=re.M)
+    rows = re.findall(r"^\$\\quad\$(A\d[a-z]?): ", table, flags=re.M)
     assert rows and sorted(rows) == sorted(index), (rows, index)
     for label, where in index.items():
         file, what = where.split(": ", 1)
@@ -216,7 +216,7 @@ def test_evidence_json_says_where_every_table_ii_row_is_recorded(report):
             continue
         grid = json.loads((root / "data" / file).read_text())["runs"]
         miss = next(r for r in grid if not r["reached"])
-        assert ("finer_dt" in what) == (label == "E2b") and miss["finer_dt"]["nominal"], label
+        assert ("finer_dt" in what) == (label == "A2b") and miss["finer_dt"]["nominal"], label
 
 
 def test_the_pair_coincidence_of_task1_c_is_detected(report):
@@ -692,13 +692,13 @@ def test_units_stay_lower_case_in_small_caps_captions():
 
 
 def test_run_labels_keep_their_case_in_captions():
-    """Table II's paired runs are E2a and E2b: in a caption their letters stay lower-case, and each
+    """Table II's paired runs are A2a and A2b: in a caption their letters stay lower-case, and each
     label names exactly one run of the table's list."""
     from emdm.outputs.report.findings.base import ABLATIONS, FINER_STEP, GRID_MISS, run_label
     from emdm.outputs.report.trace import Upright, sentence
 
-    assert render_latex(sentence(Upright(run_label(GRID_MISS)))) == r"\textnormal{E2a}"
-    assert run_label(FINER_STEP) == "E2b" and run_label("t1-uc-no-manip") == "E1"
+    assert render_latex(sentence(Upright(run_label(GRID_MISS)))) == r"\textnormal{A2a}"
+    assert run_label(FINER_STEP) == "A2b" and run_label("t1-uc-no-manip") == "A1"
     flat = [k for e in ABLATIONS for k in (e if isinstance(e, tuple) else (e,))]
     labels = [run_label(k) for k in flat]
     assert len(set(labels)) == len(flat)
@@ -1369,7 +1369,7 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
         assert f"slack alone cuts EMDM's effort ({alone:+.0f}%)" in abstract.replace("−", "-")
         assert f"adds {cost:+.0f}% effort for" in abstract and f"for {cost:+.0f}% effort" in share
     assert ("the dexterity term buys" in share) == by_term
-    assert share.startswith("Without the dexterity term (E6), UC-EMDM ")
+    assert share.startswith("Without the dexterity term (A6), UC-EMDM ")
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()

@@ -47,6 +47,18 @@ TIGHT: dict[str, dict[str, Any]] = {
 """Tolerances passed to the iterative backends so that they solve to the precision emdm certifies."""
 
 
+METHODS = {
+    "daqp": "a dual active-set method",
+    "quadprog": "a dual active-set method",
+    "proxqp": "a proximal augmented Lagrangian method",
+    "piqp": "a proximal interior-point method",
+    "clarabel": "an interior-point method",
+    "osqp": "operator splitting",
+    "highs": "an active-set method",
+}
+"""What kind of method each backend is, in plain words (:attr:`SolverSpec.method`)."""
+
+
 MODULES = {
     "daqp": "daqp",
     "quadprog": "quadprog",
@@ -102,5 +114,6 @@ def register_backends() -> None:
                 description=description,
                 extra=None if name in ("daqp", "quadprog") else "solvers",
                 is_available=partial(_installed, name),
+                method=METHODS[name],
             )
         )

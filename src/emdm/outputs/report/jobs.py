@@ -157,7 +157,7 @@ def _events(stage: Path, scenarios: dict[str, Scenario], runs: dict[str, dict[st
 
 
 def _table_ii_index() -> dict[str, str]:
-    """Where each of Table II's rows is recorded: an entry of ``runs`` here, or (E2a, E2b) the
+    """Where each of Table II's rows is recorded: an entry of ``runs`` here, or (A2a, A2b) the
     weight grid of Fig. 2, whose run it is."""
     from .findings.base import ABLATIONS, FINER_STEP, GRID_MISS, run_label
     from .findings.records import GRID_FILE

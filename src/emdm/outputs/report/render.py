@@ -18,9 +18,11 @@ from typing import Any
 import jinja2
 import markupsafe
 
-from ...core.tolerances import KKT_TOL
+from ...core.tolerances import KKT_TOL, STALL_BAND, STALL_TIME
+from ...solvers import registered_solvers
 from .document import Document, roman
 from .findings import Story
+from .findings.base import glossed
 from .pitch import Pitch
 from .trace import (
     Cite,
@@ -77,6 +79,10 @@ def latex_environment() -> jinja2.Environment:
     env.filters["tex"] = _tex
     env.filters["plain"] = _plain
     env.globals["kkt_tol"] = number_latex(format(KKT_TOL, ".0e"))
+    env.globals["stall_band_mm"] = format(STALL_BAND * 1e3, "g")
+    env.globals["stall_time"] = format(STALL_TIME, "g")
+    env.filters["glossed"] = glossed
+    env.filters["method"] = lambda name: registered_solvers()[name].method
     return env
 
 

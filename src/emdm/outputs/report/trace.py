@@ -200,7 +200,7 @@ class Unit(Segment):
 
 @dataclass(frozen=True)
 class Upright(Segment):
-    """Text kept upright and in its own case in IEEE's small-caps captions: a run label, ``E2a``,
+    """Text kept upright and in its own case in IEEE's small-caps captions: a run label, ``A2a``,
     whose ``a`` would otherwise read as a capital."""
 
     text: str

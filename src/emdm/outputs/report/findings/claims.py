@@ -167,7 +167,7 @@ class Claims(StoryBase):
             "task2", Name.C_EMDM, "time_to_goal"
         ):
             return []
-        return sentence(  # (the run's label first: "E4: ..." read as a noun, reading 142's edit)
+        return sentence(  # (the run's label first: "A4: ..." read as a noun, reading 142's edit)
             "without the dexterity term",
             *((" (", run_label(key), ")") if label else ()),
             ", C-EMDM arrives sooner, in ",

@@ -9,7 +9,7 @@ from typing import Any
 from ....core.controllers import Name
 from ..config import MANY_GOALS, PAIRS
 from ..document import Section, Table
-from ..trace import File, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
+from ..trace import Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
 from .base import M_SYM
 from .claims import Claims
 
@@ -266,24 +266,19 @@ class Goals(Claims):
     def goals_in_brief(self) -> Sentence:
         """The conclusion's sentences on the many goals where the paper has no section of them
         (readings 184, 185: the study was in the data and the pitch, the paper said only "one
-        goal each"): what weakens its answers, with the record's file, told of both constrained
-        controllers (readings 186, 187: C-IVKC's stalls alone read as selective) and with
-        Task 1's median trade beside the single goal's (186)."""
+        goal each"): what weakens its answers, with the record's file, and Task 1's median trade
+        beside the single goal's (186); the scaled C- controllers' stalls are Section III-C's,
+        beside the policy they weigh (:meth:`policy_goals`, readings 190, 191)."""
         if GOALS_IN_PAPER or not self.has_goals() or self.rec.goals is None:
             return []
         rec = self.rec.goals
         scale = ("tasks", "task1", "policies", "scale")
-        out = sentence(
-            " On ",
-            self.goaln("runs"),
-            " random start-goal pairs per task (",
-            File(MANY_GOALS),
-            ")",
-        )
+        # (the pairs and their file are Section III-C's, where the policies are weighed)
+        out = sentence(" Over the random pairs")
         said = False
         if rec.tasks["task1"].policies["scale"].pairs.get("UC") is not None:
             out += sentence(
-                ", UC-EMDM's median trade against UC-IVKC in Task 1 is ",
+                ", UC-EMDM's median Task 1 trade is ",
                 self.goaln(*scale, "pairs", "UC", "mean_manipulability", 1, fmt="+.0%"),
                 " mean ",
                 M_SYM,
@@ -291,33 +286,6 @@ class Goals(Claims):
                 self.goaln(*scale, "pairs", "UC", "total_effort", 1, fmt="+.0%"),
                 " effort",
             )
-            said = True
-        ctrls = rec.tasks["task1"].policies["scale"].controllers
-        stalled = {  # every miss with a joint at its stop zone
-            c: m.count
-            for c in (Name.C_IVKC, Name.C_EMDM)
-            if (r := ctrls.get(c)) is not None
-            and (m := r.missed) is not None
-            and m.count > 0
-            and m.at_stop == m.count
-        }
-        at_stop, counts = list(stalled), set(stalled.values())
-        if at_stop:
-            out += sentence(
-                ". Under task scaling, ",
-                " and ".join(at_stop),
-                " each" if len(at_stop) > 1 and len(counts) == 1 else "",
-                " stall",
-                "s" if len(at_stop) == 1 else "",
-                " on ",
-            )
-            for i, c in enumerate(at_stop if len(counts) > 1 else at_stop[:1]):
-                out += sentence(
-                    " and " if i else "",
-                    self.goaln(*scale, "controllers", c, "missed", "count"),
-                    f" ({c})" if len(counts) > 1 else "",
-                )
-            out += sentence(" Task 1 goals, every time with a joint at its stop zone")
             said = True
         t2 = ("tasks", "task2", "policies", "scale", "controllers")
         c2 = rec.tasks["task2"].policies["scale"].controllers.get(Name.C_EMDM)

@@ -16,7 +16,6 @@ from .base import (
     DT,
     StoryBase,
     bare,
-    glossed,
 )
 from .claims import listed
 from .records import LabName, SeedRun, SolverRow
@@ -98,7 +97,7 @@ class Solvers(StoryBase):
                     else ()
                 ),
                 " the gradient-based ",
-                glossed(grad),
+                grad,  # (each solver's method is said once, in Section II)
                 # both counts only while no gradient-free method is as exact
                 f" is as exact as {exact_free[0]} and far faster: it"
                 if exact_free
@@ -124,7 +123,7 @@ class Solvers(StoryBase):
             k = exact_free[0]
             answer += sentence(
                 "Only one gradient-free method is exact: ",
-                glossed(k),
+                k,
                 ". It needs a median ",
                 self.sn(lab, k, "median_evaluations", ".4g"),
                 " evaluations and ",
@@ -139,7 +138,7 @@ class Solvers(StoryBase):
             )
             for i, k in enumerate(exact_free):
                 answer += sentence(
-                    glossed(k),
+                    k,
                     " ",
                     self.sn(lab, k, "median_evaluations", ".4g"),
                     " evaluations and ",

@@ -16,6 +16,7 @@ from .base import (
     QDOT,
     SUM_E,
     W_M,
+    ablation_span,
     bare,
     eq,
     run_label,
@@ -159,7 +160,7 @@ class Tables(Claims):
                 s.tables.append("programs")
 
     def outcome_table(self, sections: list[Section]) -> None:
-        """Table II: every closed-loop run of the study, each evidence run (E1-E6) and free-slack
+        """Table II: every closed-loop run of the study, each evidence run (A1-A6) and free-slack
         run indented under the nominal run it changes in one thing (readings 147-149: a separate
         evidence table repeated the nominal runs and was read twice); the pitch's backup keeps
         the nominal runs and the free-slack rows only (``outcomes-backup``)."""
@@ -182,7 +183,9 @@ class Tables(Claims):
         drifted = [m for m in missed if not self.evv(*m, "stall")]
 
         indented = sentence(
-            " Indented rows vary the nominal run above: E1–E6 test a cause; free slack uses (",
+            " Indented rows vary the nominal run above: ",
+            Upright(ablation_span()),
+            " test a cause; free slack uses (",
             Eqs(("free",)),
             "), not scaling.",
         )
@@ -309,7 +312,7 @@ class Tables(Claims):
         return next((i for i, r in enumerate(runs) if not r.reached), None)
 
     def grid_outcome_rows(self) -> list[list[Sentence]]:
-        """E2a and E2b in Table II's columns: the weight grid's first run that misses the goal,
+        """A2a and A2b in Table II's columns: the weight grid's first run that misses the goal,
         and the same weights at a five times smaller step."""
         i = self.grid_miss()
         if i is None:
@@ -364,8 +367,8 @@ class Tables(Claims):
 
     def grid_rows(self) -> list[list[Sentence]]:
         """The pitch's evidence table's two runs from the weight grid (Section III-B): its first
-        setting that misses the goal, against the nominal run (E2a); the same weights at a five
-        times smaller time step, against the nominal weights at that step (E2b)."""
+        setting that misses the goal, against the nominal run (A2a); the same weights at a five
+        times smaller time step, against the nominal weights at that step (A2b)."""
         i = self.grid_miss()
         if i is None:
             return []
@@ -422,8 +425,8 @@ class Tables(Claims):
         return [*out, [sentence(run_label(FINER_STEP)), sentence("1, ", ctrl), change, *cells]]
 
     def evidence_items(self) -> list[tuple[EvidenceKey, str, Sentence]]:
-        """The evidence runs E1, E3-E6: each one's record, the controller it changes and the
-        change as its row says it (E2a and E2b come from the weight grid)."""
+        """The evidence runs A1, A3-A6: each one's record, the controller it changes and the
+        change as its row says it (A2a and A2b come from the weight grid)."""
         return [
             ("t1-uc-no-manip", Name.UC_EMDM, self.weight_off("t1-uc-no-manip")),
             ("t2-c-ivkc-wide-limits", Name.C_IVKC, self.limits_widened()),

@@ -483,7 +483,7 @@ class Task1(Claims):
                     ),
                 )
             # on the page (readings 186, 187 asked it cut for the paper's definitions; Table
-            # II keeps both rows, E2b's label says what it changes)
+            # II keeps both rows, A2b's label says what it changes)
             p += [PageOnly(tuple(sentence(*said, ". ")))]
             break
         if p:
