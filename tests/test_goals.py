@@ -157,7 +157,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
     from emdm.outputs.report.findings.goals import GOALS_IN_PAPER
 
     assert ("EMDM misses goals near the reach" in conclusion) == GOALS_IN_PAPER
-    assert ("one goal each" in conclusion) != GOALS_IN_PAPER
+    assert "planar arms and kinematics only" in conclusion
     if not GOALS_IN_PAPER:  # what the many goals weaken, said in the paper (readings 184-185)
         assert "Over the random pairs" in conclusion
         assert f"UC-EMDM misses the {uc['missed']['count']} beyond" in conclusion
@@ -183,7 +183,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
                 assert f" {ctrls[c]['arrived']}" in told, (pol, c)
         misses = [rows["scale"][c]["missed"] for c in ("C-IVKC", "C-EMDM")]
         every = all(m and m["count"] and m["at_stop"] == m["count"] for m in misses)
-        assert ("stalls with a joint at its stop zone" in told) == every
+        assert ("stall with a joint at its stop zone" in told) == every
         c2 = record["tasks"]["task2"]["policies"]["scale"]["controllers"]["C-EMDM"]["missed"]
         assert (f"C-EMDM misses {c2['count']} goals" in conclusion) == bool(c2 and c2["count"])
     # what the dexterity term costs C-EMDM in arrivals (reading 179), said where it costs any

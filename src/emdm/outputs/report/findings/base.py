@@ -319,9 +319,19 @@ class StoryBase:
         inside = [s for s in geo.solutions if s.within_limits]
         return bool(inside) and all(s.elbow != geo.start_elbow for s in inside)
 
-    def pct(self, task: str, a: str, b: str, key: MetricKey) -> Num:
+    def goal_pose(self, task: str) -> str:
+        """``the elbow-down goal configuration``: the one goal configuration within the joint
+        limits, named by its elbow (readings 190, 191: "admissible" was undefined); "the
+        admissible goal configuration" where the limits leave more than one or none."""
+        geo = self.rec.geometry.get(task)
+        inside = [s for s in geo.solutions if s.within_limits] if geo is not None else []
+        if len(inside) == 1:
+            return f"the elbow-{inside[0].elbow} goal configuration"
+        return "the admissible goal configuration"
+
+    def pct(self, task: str, a: str, b: str, key: MetricKey, fmt: str = "+.0f") -> Num:
         f = f"data/{task}/metrics.json"
-        return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key))
+        return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key), fmt)
 
     def ttg(self, task: str, ctrl: str) -> Num:
         return self.mt(task, ctrl, "time_to_goal", ".2f", "s")
@@ -462,8 +472,8 @@ class StoryBase:
 
     def policy_goals(self) -> Sentence:
         """`` Over 256 random start-goal pairs, a free slack brings both
-        to 217 goals, scaling to 146: every other scaled run stalls with a joint at its stop
-        zone.``: Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
+        to 217 goals, scaling to 146: the others stall with a joint at its stop zone.``:
+        Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
         told in the conclusion only, the policy's strongest evidence went undiscussed)."""
         rec = self.rec.goals
         task = rec.tasks.get("task1") if rec is not None else None
@@ -511,7 +521,7 @@ class StoryBase:
             )
         missed = [r.missed for r in rows["scale"] if r is not None]
         if all(m is not None and m.count and m.at_stop == m.count for m in missed):
-            out += sentence(": every other scaled run stalls with a joint at its stop zone")
+            out += sentence(": the others stall with a joint at its stop zone")
         return out + sentence(".")
 
     # ------------------------------------------------------------------ Task 1

@@ -228,11 +228,9 @@ class Front(Goals):
                 )
             )
         ]
-        p += sentence(  # what the study does not show (reading 145: no limitations said)
-            "The study covers planar arms and kinematics only."
-            if GOALS_IN_PAPER
-            else "The study covers two planar arms, one goal each, and kinematics only."
-        )
+        # what the study does not show (reading 145: no limitations said); its random goals
+        # are Section III-C's and the sentences after this one
+        p += sentence("The study covers two planar arms and kinematics only.")
         p += self.goals_in_brief()  # (what the page's many goals weaken)
         sec.paragraphs.append(p)
         return sec

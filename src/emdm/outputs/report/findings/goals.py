@@ -313,7 +313,8 @@ class Goals(Claims):
                         fmt=self.beyond_fmt(),
                         unit="m",
                     ),
-                    ", where its dexterity term outweighs the slack penalty",
+                    # (why, on the page: room for Section II's definitions, readings 190-191)
+                    PageOnly((Text(", where its dexterity term outweighs the slack penalty"),)),
                 )
             said = True
         return out + sentence(".") if said else []

@@ -118,16 +118,17 @@ class Tables(Claims):
                 QDOT,
                 " (and ",
                 Math(r"\delta", "δ"),
-                "), by the brief's item (Task 1: three links, Task 2: two), as built from each "
-                "controller's terms (",
+                # (built from each controller's terms, as the docstring says: the caption
+                # gave its line to Section II's definitions, readings 190, 191)
+                "), by the brief's item (Task 1: three links; Task 2: two); ",
                 Math("B", "<i>B</i>"),
                 ": the speed box (",
                 Eqs(("bounds",)),
-                "); ",
+                "), ",
                 Math(r"\alpha^*", "α*"),
                 ": the task scale (",
                 Eqs(("scale",)),
-                ")).",
+                ").",
             ),
             [
                 sentence("task, ctrl."),

@@ -425,10 +425,19 @@ class Task1(Claims):
                         *ks,
                         " every optimum has ",
                         MRATE,
-                        # the largest, rounded (reading 178: "at most -4.8e-5" under it)
-                        " < 0 (the largest is ",
-                        self.frontn("C-EMDM", top, "M_max", ".2e", "m²/s"),
-                        "): late in the run, ",
+                        " < 0",
+                        # the largest, rounded (reading 178: "at most -4.8e-5" under it), on
+                        # the page: room for Section II's definitions (readings 190, 191)
+                        PageOnly(
+                            tuple(
+                                sentence(
+                                    " (the largest is ",
+                                    self.frontn("C-EMDM", top, "M_max", ".2e", "m²/s"),
+                                    ")",
+                                )
+                            )
+                        ),
+                        ": late in the run, ",
                         M_SYM,
                         " falls whatever the weights",
                     )
@@ -683,7 +692,7 @@ class Task1(Claims):
             # missed it while it was on the page only)
             p += declines
         p += sentence(
-            ". Otherwise Task 1 is well conditioned (",
+            ". Otherwise Task 1 is well conditioned (condition number ",
             COND_J,
             " ",
             Math(r"\leq", "≤"),

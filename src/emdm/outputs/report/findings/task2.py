@@ -185,7 +185,8 @@ class Task2(Claims):
                         "Task 2: the straight line to the goal enters the disc unreachable with ",
                         Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
                         " outside its stop zone (hatched); C-IVKC stalls short of it, C-EMDM "
-                        "goes around and flips its elbow into the admissible goal configuration",
+                        "goes around and flips its elbow into ",
+                        self.goal_pose(t),
                         # (Task 2's animations named too, reading 169: only Task 1's were)
                         *(
                             (" (", File("animations/task2/"), ")")
@@ -204,8 +205,11 @@ class Task2(Claims):
                 i, o = inside[0], outside[0]
                 joint = sols[o].outside_joint or 1
                 p += sentence(
-                    "Within the joint limits the goal has one configuration, elbow ",
+                    # both named, then the one within the limits (readings 190, 191: elbow-up and
+                    # elbow-down were undefined)
+                    "Of the goal's two configurations, elbow up and elbow down, only elbow ",
                     sols[i].elbow,
+                    " is within the joint limits",
                     PageOnly(  # the angles on the page: Fig. 4 draws both configurations
                         tuple(
                             sentence(
@@ -219,9 +223,9 @@ class Task2(Claims):
                             )
                         )
                     ),
-                    "; the elbow-",
+                    "; elbow ",
                     sols[o].elbow,
-                    " one needs ",
+                    " needs ",
                     q(joint),
                     PageOnly(
                         tuple(
@@ -339,7 +343,9 @@ class Task2(Claims):
                     " the arm passes through the singular stretched pose (",
                     # (cond J's peak there: Section IV-B's challenge, said once)
                     *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
-                    ") and flips its elbow into the admissible goal configuration.",
+                    ") and flips its elbow into ",
+                    self.goal_pose(t),
+                    ".",
                 )
             sec.paragraphs.append(p)
         # evidence (their numbers are in the evidence table)
@@ -414,8 +420,9 @@ class Task2(Claims):
                             M_SYM,
                             *(
                                 (
-                                    ": every route into the admissible goal configuration "
-                                    "flips the elbow through ",
+                                    ": every route into ",
+                                    self.goal_pose(t),
+                                    " flips the elbow through ",
                                     M_SYM,
                                     " = 0",
                                     *self.flip_delayed(),
