@@ -7,11 +7,11 @@ from typing import Any
 
 from ...core.controllers import Name
 from .document import Document
-from .findings import M_SYM, MRATE, RATIO, Story
-from .findings.base import T_EQ
+from .findings import M_SYM, MRATE, Story
+from .findings.base import T_EQ, glossed
 from .findings.claims import cap, listed
 from .findings.records import EvidenceKey
-from .trace import Data, Sentence, Text, sentence
+from .trace import Data, Sentence, sentence
 
 
 @dataclass
@@ -193,7 +193,7 @@ class Pitch:
                 verdict.append(  # evaluations first: they compare the methods
                     sentence(
                         "Gradient-based ",
-                        grad,
+                        glossed(grad),  # (what each is, for peers: readings 189-191)
                         ": the optimum in ",
                         *self.s.evaluations("task2-lab-C-EMDM", grad),
                         ", ",
@@ -209,7 +209,7 @@ class Pitch:
                         "Only exact gradient-free: "
                         if len(Story.exact(rows, "gradient-free")) == 1
                         else "Fastest exact gradient-free: ",
-                        best_free,
+                        glossed(best_free),
                         ", ",
                         self.s.sn("task2-lab-C-EMDM", best_free, "median_evaluations", ".4g"),
                         " evaluations, ",
@@ -372,22 +372,14 @@ class Pitch:
                 " (IVKC / EMDM)",
             )
         ]
-        if s.evv(t, ivkc, "limits", "max_excess") > 0:
-            out[0] += sentence(
-                ", by leaving the joint limits (UC-IVKC: joint ",
-                s.ev(t, ivkc, "limits", "excess_joint", fmt="d"),
-                " by up to ",
-                s.ev(t, ivkc, "limits", "max_excess", fmt=".2f", unit="rad"),
-                ")",
-            )
+        if s.evv(t, ivkc, "limits", "max_excess") > 0:  # (how far: the paper's, reading 190)
+            out[0] += sentence(", but only by leaving the joint limits")
         out.append(s.uc_slack_saving())
         if s.uc_term_raises_m():  # (the paper's Table II run, said as the talk says it)
             out.append(
-                sentence(
-                    "Without the dexterity term (dotted) it still saves effort, at about IVKC's "
-                    "mean ",
-                    M_SYM,
-                    ": the slack saves the effort, the term adds ",
+                sentence(  # one idea (readings 190, 191: slide 11 read like the paper)
+                    "The slack, not the dexterity term, saves the effort (dotted: no term); "
+                    "the term adds ",
                     s.uc_term_gain(),
                     " to ",
                     M_SYM,
@@ -405,13 +397,12 @@ class Pitch:
             return []
         out = [
             sentence(
-                "More weight on dexterity buys more: at the start ",
+                "More weight on dexterity buys more, each gain dearer than the last: at the start ",
                 MRATE,
                 " from ",
                 self.s.frontn("UC-EMDM", 0, "M_min", ".3g"),
                 " to ",
                 self.s.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-                ", at a steeply rising effort",
             )
         ]
         if self.s.front("UC-EMDM", 0, "zero_E") > 0:
@@ -425,34 +416,6 @@ class Pitch:
                     *self.dearer_later(uc),
                 )
             )
-        runs = self.s.rec.grids.get("UC-EMDM", [])
-        failed = [i for i, r in enumerate(runs) if not r.reached]
-        if failed:
-            i = failed[0]
-            finer = runs[i].finer_dt
-            out.append(
-                sentence(  # the cause as the paper gives it (reading 162: the step, not the
-                    # weights, makes it miss; a finer step arrives)
-                    "At ",
-                    RATIO,
-                    " = ",
-                    self.s.gridn("UC-EMDM", i, "w_manip", fmt=".4g"),
-                    Text("/"),
-                    self.s.gridn("UC-EMDM", i, "w_effort", fmt=".2g"),
-                    " joints reach ",
-                    self.s.gridn("UC-EMDM", i, "max_abs_qd", fmt=".0f", unit="rad/s"),
-                    ": the ",
-                    self.s.scn("task1", "motion", "dt", fmt=".2f", unit="s"),
-                    " step misses the goal (the middle panel's note)",
-                    *(
-                        (
-                            ", a ",
-                            self.s.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s"),
-                            " step arrives (backup table)",
-                        )
-                        if finer and finer.get("reached")
-                        else ()
-                    ),
-                )
-            )
+        # (the ratio whose steps miss the goal, A2a, is the paper's and the backup table's:
+        # one idea per slide, readings 187-191)
         return out
