@@ -742,7 +742,10 @@ def test_the_programs_table_writes_each_tasks_programs_from_the_controllers_term
             constrained = name.startswith("C-")
             slack = is_emdm and not redundant
             assert objective.startswith("wEE" if is_emdm else "E"), (name, objective)
-            assert ("wMJmTq̇" in objective.replace(" ", "")) == is_emdm, (name, objective)
+            assert ("−wMM" in objective.replace(" ", "")) == is_emdm, (
+                name,
+                objective,
+            )  # M: its rate
             assert ("δ" in objective) == slack and ("δ" in constraints) == slack, name
             assert ("∈ B" in constraints) == constrained, (name, constraints)
             assert ("α*" in constraints) == constrained, (name, constraints)

@@ -45,6 +45,8 @@ class Table:
     font: str = "footnotesize"
     colsep: float = 4.0
     """Space either side of a column (pt, LaTeX's ``\\tabcolsep``): less for a wide table."""
+    stretch: float = 1.0
+    """Row height factor (LaTeX's ``\\arraystretch``): more for rows of superscripts."""
     placement: str = "t"
     """Where LaTeX may float it: ``t`` (a column's top) or ``b`` (its bottom: the programs,
     under the formulation that defines them)."""

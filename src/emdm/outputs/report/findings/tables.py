@@ -52,9 +52,9 @@ class Tables(Claims):
 
     # ------------------------------------------------------------------ tables
     OBJECTIVE: ClassVar[dict[TermKind, tuple[str, str]]] = {
-        TermKind.MANIPULABILITY: (
-            r"-w_MJ_m^\top\dot q",
-            " − <i>w</i><sub>M</sub><i>J</i><sub>m</sub><sup>T</sup><i>q̇</i>",
+        TermKind.MANIPULABILITY: (  # M = J_m^T qd, Section II's rate (narrower: 190-193)
+            r"-w_MM",
+            " − <i>w</i><sub>M</sub><i>M</i>",
         ),
         TermKind.SLACK: (r"+\tfrac12w_S\|\delta\|^2", " + ½<i>w</i><sub>S</sub>‖δ‖²"),
         # beyond the brief (zero weight, so absent, in its tasks): named, not written out
@@ -137,7 +137,8 @@ class Tables(Claims):
             ],
             align="lll",
             font="scriptsize",
-            colsep=0.8,
+            colsep=2.5,  # (readings 190-193: the cells touched at 0.8 pt)
+            stretch=1.25,  # the transposes' superscripts clear of the row above
             placement="b",  # under the formulation's first column, beside what it writes out
         )
         # the brief's items in its order, each with its pair (no heading rows: two lines saved);
