@@ -69,6 +69,7 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
         self.programs_table(sections)
         self.evidence_table()
         self.goals_table()
+        self.goals_in_body(sections)
         for sec in sections:
             sec.figures = [k for k in sec.figures if k in self.figures]
         byline = self.d.load(BYLINE) if self.d.exists(BYLINE) else {}

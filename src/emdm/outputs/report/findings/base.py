@@ -22,7 +22,7 @@ from ....core.tolerances import STALL_BAND
 from ....solvers import registered_solvers
 from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
-from ..config import FOURTH_PANEL, MANY_GOALS, PAIRS
+from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
 from ..trace import Data, Eqs, File, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
 from .records import (
@@ -468,61 +468,7 @@ class StoryBase:
             ),
             ".",
         )
-        return p + self.policy_goals()
-
-    def policy_goals(self) -> Sentence:
-        """`` Over 256 random start-goal pairs, a free slack brings both
-        to 217 goals, scaling to 146: the others stall with a joint at its stop zone.``:
-        Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
-        told in the conclusion only, the policy's strongest evidence went undiscussed)."""
-        rec = self.rec.goals
-        task = rec.tasks.get("task1") if rec is not None else None
-        if task is None or not {"scale", "slack"} <= set(task.policies):
-            return []
-        pair = (Name.C_IVKC, Name.C_EMDM)
-        rows = {
-            pol: [task.policies[pol].controllers.get(c) for c in pair] for pol in ("scale", "slack")
-        }
-        if any(r is None for rs in rows.values() for r in rs):
-            return []
-
-        def arrived(pol: str, c: str) -> Num:
-            f = self.d.num(
-                MANY_GOALS, "tasks", "task1", "policies", pol, "controllers", c, "arrived"
-            )
-            return f
-
-        same = all(len({r.arrived for r in rs if r is not None}) == 1 for rs in rows.values())
-        out = sentence(
-            " Over ",
-            self.d.num(MANY_GOALS, "runs"),
-            " random start-goal pairs, a free slack brings ",
-        )
-        if same:
-            out += sentence(
-                "both to ",
-                arrived("slack", pair[0]),
-                " goals, scaling to ",
-                arrived("scale", pair[0]),
-            )
-        else:
-            out += sentence(
-                pair[0],
-                " to ",
-                arrived("slack", pair[0]),
-                " goals and ",
-                pair[1],
-                " to ",
-                arrived("slack", pair[1]),
-                ", scaling to ",
-                arrived("scale", pair[0]),
-                " and ",
-                arrived("scale", pair[1]),
-            )
-        missed = [r.missed for r in rows["scale"] if r is not None]
-        if all(m is not None and m.count and m.at_stop == m.count for m in missed):
-            out += sentence(": the others stall with a joint at its stop zone")
-        return out + sentence(".")
+        return p
 
     # ------------------------------------------------------------------ Task 1
     @staticmethod

@@ -185,7 +185,7 @@ class Front(Goals):
             )
             if self.slack_better_on_all():  # the recommendation first (reading 164 found none)
                 p += sentence(
-                    "Here a free slack beats task scaling: it makes C-EMDM ",
+                    "A free slack beats task scaling: it makes C-EMDM ",
                     listed(gains),
                     " in Task 1",
                     *arrive,
@@ -229,8 +229,7 @@ class Front(Goals):
             )
         ]
         # what the study does not show (reading 145: no limitations said); its random goals
-        # are Section III-C's and the sentences after this one
+        # are told in the body, beside the answers they test (:meth:`goals_in_body`)
         p += sentence("The study covers two planar arms and kinematics only.")
-        p += self.goals_in_brief()  # (what the page's many goals weaken)
         sec.paragraphs.append(p)
         return sec

@@ -231,11 +231,18 @@ class Task1(Claims):
             p = sentence(
                 "In the first ",
                 self.pairn(t, "C", "coincide_until_t", ".2f", "s"),
-                " (",
-                self.pairn(t, "C", "coincide_steps", "d"),
-                " steps, ",
-                self.pairn(t, "C", "coincide_scaled_steps", "d"),
-                " of them scaled) both send the same commands: with joints at their speed bounds, "
+                PageOnly(  # (the counts on the page: room for the random goals, 192-193)
+                    tuple(
+                        sentence(
+                            " (",
+                            self.pairn(t, "C", "coincide_steps", "d"),
+                            " steps, ",
+                            self.pairn(t, "C", "coincide_scaled_steps", "d"),
+                            " of them scaled)",
+                        )
+                    )
+                ),
+                " both send the same commands: with joints at their speed bounds, "
                 "only one command is feasible",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
@@ -652,7 +659,8 @@ class Task1(Claims):
                     (
                         ". Task 1's numerical challenge is its scaled steps. On the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " we re-solved offline, the feasible set is a single command (at most ",
+                        " scaled steps we re-solved offline, the feasible set is a single command "
+                        "(at most ",
                     )
                     if "steps" in vertex
                     else (
