@@ -489,16 +489,10 @@ class Task2(Claims):
             f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                (  # (on the page: room for the random goals, readings 192, 193)
-                    PageOnly(
-                        tuple(
-                            sentence(
-                                " (the same over the first ",
-                                self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                                ")",
-                            )
-                        )
-                    ),
+                (  # (reading 194 missed it when it was on the page only)
+                    " (the same over the first ",
+                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
+                    ")",
                 )
                 if same and not reached_i
                 else ()
