@@ -191,6 +191,12 @@ class Tables(Claims):
             Eqs(("free",)),
             "), not scaling.",
         )
+        if self.grid_miss() is not None:  # (readings 194, 195: their own A2a differed)
+            indented += sentence(
+                " ",
+                Upright(run_label(GRID_MISS)),
+                " diverges: its digits are sensitive to rounding.",
+            )
 
         def caption(evidence: bool) -> Sentence:
             # (the arrival tolerance is the formulation's: "runs end at ||e|| < 1e-3 m")
