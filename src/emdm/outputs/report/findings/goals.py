@@ -56,10 +56,13 @@ class Goals(Claims):
         k = self.weight_row()
         if k is None:
             return []
-        row = ("tasks", "task1", "weights", k)
+        return sentence("a median ", *self.median_trade("tasks", "task1", "weights", k, m="+.1%"))
+
+    def median_trade(self, *row: str | int, m: str = "+.0%") -> Sentence:
+        """``+11% mean m for +57% effort``: a many-goals row's median changes of mean m and of
+        total effort (each record's quartiles, the middle one)."""
         return sentence(
-            "a median ",
-            self.goaln(*row, "mean_manipulability", 1, fmt="+.1%"),
+            self.goaln(*row, "mean_manipulability", 1, fmt=m),
             " mean ",
             M_SYM,
             " for ",
@@ -342,12 +345,8 @@ class Goals(Claims):
             self.goaln("runs"),
             " random start-goal pairs per task (uniform in joint space), UC-EMDM's median trade "
             "against UC-IVKC is ",
-            self.goaln(*scale, "mean_manipulability", 1, fmt="+.0%"),
-            " mean ",
-            M_SYM,
-            " for ",
-            self.goaln(*scale, "total_effort", 1, fmt="+.0%"),
-            " effort.",
+            *self.median_trade(*scale),
+            ".",
         )
 
     def term_reach_cost(self) -> Sentence:
