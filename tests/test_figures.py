@@ -583,7 +583,14 @@ def test_convergence_panels_share_each_solvers_style_and_the_table_is_their_lege
     named = [{ln.get_label() for ln in ax.get_lines()} & {"slsqp", "cobyla"} for ax in fig.axes]
     assert named == [{"slsqp"}, {"slsqp"}, {"cobyla"}]
     assert len({ax.get_ylim() for ax in fig.axes}) == 1
-    assert [t.get_text() for t in fig.axes[2].texts] == ["gradient-free"]
+    assert [ax.get_title() for ax in fig.axes[1:]] == ["gradient-based", "gradient-free"]
+    assert fig.subfigs[1]._suptitle.get_text() == "Task 2, $k=9$"  # two programs: each named
+    # a lone program split by family: its caption names it, the figure titles only the axes
+    with formats((".png",)):
+        pf.convergence_figure(panels[1:], tmp_path / "lone", glyphs=tmp_path / "glyphs")
+    fig = next(f for f in reversed(drawn) if len(f.axes) == 2)
+    assert [ax.get_title() for ax in fig.axes] == ["gradient-based", "gradient-free"]
+    assert all(sub._suptitle is None for sub in fig.subfigs)
     assert pf.ConvergencePanel("t", "x", {"slsqp": task2["slsqp"]}, True).parts() == [
         ("", {"slsqp": task2["slsqp"]})
     ]  # one family only: not split

@@ -222,7 +222,9 @@ class Solvers(StoryBase):
         )
         # each task's hardest program when its lab recorded it, else its first (as jobs draws);
         # the caption names the table's solvers the figure cannot draw
-        hardest = "least dexterous" in self.rec.labs[lab].representative_steps
+        steps = self.rec.labs[lab].representative_steps
+        hardest = "least dexterous" in steps
+        step = steps["least dexterous" if hardest else next(iter(steps))]
         unplotted = [k for k in rows if not self.d.exists(f"paper/{GLYPHS}/{k}.png")]
         conv = self.figure(
             "convergence",
@@ -230,7 +232,10 @@ class Solvers(StoryBase):
             sentence(
                 "Convergence on the ",
                 "least dexterous" if hardest else "first",
-                " program, cold: the best error so far against objective evaluations (lines as in ",
+                # (the figure draws no title over its two axes: the caption names the program)
+                " program, ",
+                Math(f"k={step}", f"<i>k</i> = {step}"),
+                ", cold: the best error so far against objective evaluations (lines as in ",
                 Ref("tab", "solvers"),
                 *(  # the table's solvers without a curve: they count no objective evaluations
                     # (the QP methods solve the program, they do not sample its objective)
