@@ -196,15 +196,16 @@ class Task1(Claims):
             self.mt(t, ivkc, "min_stop_margin", ".3f", "rad"),
             f" ({ivkc}) and ",
             self.mt(t, emdm, "min_stop_margin", ".3f", "rad"),
-            f" ({emdm}). {emdm} ",
-            *self.outcome(t, emdm),
-            f" and {ivkc} ",
-            *(
-                sentence("in ", self.ttg(t, ivkc))
+            f" ({emdm}). ",
+            *(  # the arrival times are Table II's (readings 190-195: prose too dense)
+                sentence("Both reach the goal (", Ref("tab", "outcomes"), "), their tips")
                 if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
-                else self.outcome(t, ivkc)
+                else sentence(
+                    f"{emdm} ", *self.outcome(t, emdm), f" and {ivkc} ", *self.outcome(t, ivkc)
+                )
+                + sentence(", the end effectors")
             ),
-            ", the end effectors at most ",
+            " at most ",
             self.pairn(t, "C", "max_path_gap", ".4f", "m"),
             " apart at equal times",
         )

@@ -116,11 +116,19 @@ class Task2(Claims):
             )
             if both:
                 answer += sentence(
-                    f"both arrive, {ivkc} first (",
-                    self.evid_goal(key, ivkc),
-                    " against ",
-                    self.evid_goal(key, emdm),
-                    ")",
+                    f"both arrive, {ivkc} first",
+                    # the times are Table II's (readings 190-195: prose too dense)
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                " (",
+                                self.evid_goal(key, ivkc),
+                                " against ",
+                                self.evid_goal(key, emdm),
+                                ")",
+                            )
+                        )
+                    ),
                 )
             else:
                 answer += sentence(f"{ivkc} arrives in ", self.evid_goal(key, ivkc))
@@ -387,23 +395,26 @@ class Task2(Claims):
         if e6.get("reached") and reached_e:
             if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
                 higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
-                p += cap(self.emdm_without_term(label=not higher)) + sentence(
+                p += cap(self.emdm_without_term(when=not higher)) + sentence(
                     *(
-                        (  # the run's label after its numbers, the nominal's means said as such
-                            ", with a higher mean ",
+                        (  # its time and mean are Table II's (readings 190-195: too dense)
+                            " and with a higher mean ",
                             M_SYM,
-                            ", ",
-                            self.evidn(
-                                "t2-c-emdm-no-manip",
-                                "runs",
-                                emdm,
-                                "mean_manipulability",
-                                fmt=".3f",
-                                unit="m²",
+                            PageOnly(
+                                tuple(
+                                    sentence(
+                                        ", ",
+                                        self.evidn(
+                                            "t2-c-emdm-no-manip",
+                                            "runs",
+                                            emdm,
+                                            "mean_manipulability",
+                                            fmt=".3f",
+                                            unit="m²",
+                                        ),
+                                    )
+                                )
                             ),
-                            " (",
-                            run_label("t2-c-emdm-no-manip"),
-                            ")",
                             # the nominal run over the same time: on the page (room, 187)
                             PageOnly(
                                 tuple(
@@ -520,12 +531,20 @@ class Task2(Claims):
         if self.has_figure(shown):
             sec.figures.append(shown)
         answer = (
-            sentence(
-                f"Both unconstrained controllers reach the goal ({ivkc} in ",
-                self.ttg(t, ivkc),
-                f", {emdm} in ",
-                self.ttg(t, emdm),
-                "), but only by leaving the joint limits",
+            sentence(  # the times are Table II's (readings 190-195: prose too dense)
+                "Both unconstrained controllers reach the goal",
+                PageOnly(
+                    tuple(
+                        sentence(
+                            f" ({ivkc} in ",
+                            self.ttg(t, ivkc),
+                            f", {emdm} in ",
+                            self.ttg(t, emdm),
+                            ")",
+                        )
+                    )
+                ),
+                ", but only by leaving the joint limits",
             )
             if self.mv(t, ivkc, "reached") and self.mv(t, emdm, "reached")
             else sentence(
@@ -600,23 +619,32 @@ class Task2(Claims):
         if not run.get("reached"):
             return []
         saves = run["total_effort"] < self.mv(t, ivkc, "total_effort")
+        efforts = sentence(
+            " (",
+            self.evidn(key, "runs", emdm, "total_effort", fmt=".2f"),
+            " against ",
+            self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
+            ")",
+        )
+        m_run = self.evidn(key, "runs", emdm, "mean_manipulability", fmt=".3f")
         out = sentence(
             "Without the dexterity term (",
             run_label(key),
             f"), {emdm} ",
             "still" if saves else "no longer",
-            " saves effort (",
-            self.evidn(key, "runs", emdm, "total_effort", fmt=".2f"),
-            " against ",
-            self.mt(t, ivkc, "total_effort", ".2f", "rad²/s"),
-            ") at mean ",
-            M_SYM,
-            " ",
-            self.evidn(key, "runs", emdm, "mean_manipulability", fmt=".3f"),
+            " saves effort",
         )
-        if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's
-            out += sentence(  # the term's share, sized (reading 132: "raises" said how much?)
-                ": the slack makes the saving. Against this run, the dexterity term buys ",
+        if self.uc_term_raises_m():  # its m nearer UC-IVKC's than UC-EMDM's: said so, the
+            # numbers Table II's (readings 190-195: prose too dense)
+            out += sentence(
+                PageOnly(tuple(efforts)),
+                f" at nearly {ivkc}'s mean ",
+                M_SYM,
+                PageOnly(tuple(sentence(", ", m_run))),
+                " (",
+                Ref("tab", "outcomes"),
+                # the term's share, sized (reading 132: "raises" said how much?)
+                "): the slack makes the saving. Against this run, the dexterity term buys ",
                 self.uc_term_gain(),
                 " ",
                 M_SYM,
@@ -625,7 +653,7 @@ class Task2(Claims):
                 " effort.",
             )
         else:
-            out += sentence(".")
+            out += efforts + sentence(" at mean ", M_SYM, " ", m_run, ".")
         return out
 
     def task2_challenges(self, sec: Section) -> Section:
