@@ -132,11 +132,13 @@ class Front(Goals):
             Cite("haviland"),
             ", we solve one strictly convex quadratic program (QP) per step, here by our "
             "KKT-certified active-set method. We compare this controller, EMDM, with IVKC, each "
-            "unconstrained (UC-) or with joint limits (C-). We coded both from the brief's "
-            "definitions (its code was unavailable)",
+            "unconstrained (UC-) or with joint limits (C-). We coded both from the course's "
+            # what "the brief" is, once (reading 195: cited ten times, never summarised)
+            "project brief, which sets the arms, parameters and questions (its skeleton code was "
+            "unavailable)",
             # the derivative check on the page (reading 187: room for the definitions)
             PageOnly(tuple(self.derivatives_checked())),
-            ". Each subsection of Sections III and IV opens with its answer to the brief.",
+            "; each subsection of Sections III and IV opens with its answer.",
         )
         # the animations: named with their stills (Task 1's figure, Task 2's workspace)
         sec.paragraphs.append(intro)

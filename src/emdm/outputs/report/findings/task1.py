@@ -215,9 +215,17 @@ class Task1(Claims):
             answer += sentence(
                 ". Both trail the UC pair: the ",
                 self.scn(t, "arm", "qd_max", 0, fmt="g", unit="rad/s"),
-                " speed limit slows the tip (the task is scaled for the first ",
-                self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
-                ")",
+                " speed limit slows the tip",
+                # (the shared commands' span follows: the scaled one on the page, for room)
+                PageOnly(
+                    tuple(
+                        sentence(
+                            " (the task is scaled for the first ",
+                            self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
+                            ")",
+                        )
+                    )
+                ),
             )
         answer += sentence(".")
         sec.answer = answer
