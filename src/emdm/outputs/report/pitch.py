@@ -7,7 +7,7 @@ from typing import Any
 
 from ...core.controllers import Name
 from .document import Document
-from .findings import M_SYM, MRATE, Story
+from .findings import M_SYM, Story
 from .findings.base import T_EQ, glossed
 from .findings.claims import cap, listed
 from .findings.records import EvidenceKey
@@ -37,21 +37,12 @@ class Pitch:
     def build(self) -> Slides:
         s, out = self.s, Slides()
         t1, t2 = "task1", "task2"
-        out.bullets["objective"] = [
-            sentence(
-                "Move the end effector to a goal, tracking the velocity a proportional "
-                "controller asks for,"
-            ),
-            sentence(  # one bullet: the costs and the bounds are one idea, the program
-                "while spending little joint-speed effort and keeping the arm dexterous; the "
-                "constrained versions also keep within joint-speed limits and slow each joint "
-                "near its position limit",
-            ),
-            sentence("Task 1: redundant three-link arm; Task 2: non-redundant two-link arm"),
-            sentence(
-                "Why: a dexterous arm can still move its tip in every direction, ready for the "
-                "next task; a redundant arm has a joint to spare for that"
-            ),
+        out.bullets["objective"] = [  # short lines for a talk (reading 194: slide 2 read as prose)
+            sentence("Bring the tip to a goal at the velocity a P controller asks for"),
+            sentence("Spend little joint effort and keep the arm dexterous"),
+            sentence("Constrained (C-) versions: keep joint speeds and angles within limits"),
+            sentence("Task 1: three links, one to spare; Task 2: two links, none"),
+            sentence("Why dexterity: the tip can still move in every direction, for the next task"),
         ]
         out.titles["task1"] = self.task1_title()
         out.bullets["task1-stills"] = []
@@ -363,15 +354,7 @@ class Pitch:
         ivkc, emdm = Name.UC_IVKC, Name.UC_EMDM
         if not (s.mv(t, ivkc, "reached") and s.mv(t, emdm, "reached")):
             return []
-        out = [
-            sentence(
-                "Both arrive: ",
-                s.ttg(t, ivkc),
-                " / ",
-                s.ttg(t, emdm),
-                " (IVKC / EMDM)",
-            )
-        ]
+        out = [sentence("Both arrive")]  # (their times: the paper's Table II, reading 194)
         if s.evv(t, ivkc, "limits", "max_excess") > 0:  # (how far: the paper's, reading 190)
             out[0] += sentence(", but only by leaving the joint limits")
         out.append(s.uc_slack_saving())
@@ -397,12 +380,8 @@ class Pitch:
             return []
         out = [
             sentence(
-                "More weight on dexterity buys more, each gain dearer than the last: at the start ",
-                MRATE,
-                " from ",
-                self.s.frontn("UC-EMDM", 0, "M_min", ".3g"),
-                " to ",
-                self.s.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
+                # (the fronts' range is the paper's: one number per bullet, reading 194)
+                "More weight on dexterity buys more, each gain dearer than the last (left)"
             )
         ]
         if self.s.front("UC-EMDM", 0, "zero_E") > 0:

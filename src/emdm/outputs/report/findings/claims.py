@@ -221,12 +221,13 @@ class Claims(StoryBase):
         return sentence(  # the pair's difference is UC-EMDM's, slack and term together
             "UC-EMDM's slack absorbs up to ",
             self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s"),
-            " of the desired velocity; against UC-IVKC, its effort changes by ",
+            # (said alike in the paper and the talk: reading 194 found slide 11's too dense)
+            " of the desired velocity: against UC-IVKC, ",
             self.pct(t, emdm, ivkc, "total_effort"),
-            " and its mean ",
-            M_SYM,
-            " by ",
+            " effort and ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
+            " mean ",
+            M_SYM,
         )
 
     def uc_term_gain(self) -> Num:
