@@ -932,11 +932,11 @@ def test_the_single_point_claim_is_made_only_where_measured(quick_report, tmp_pa
     def said() -> str:
         return " ".join(render_latex(p) for s in document(root).sections for p in s.paragraphs)
 
-    assert "the feasible set is a single command (at most" in said()
+    assert "only one command is feasible (width $\\leq$" in said()
     vertex["max_width"] = 1e-3  # a segment, not a point
     path.write_text(json.dumps(lab), encoding="utf-8")
     assert not Pitch(Data(root), document(root)).build().single_point
-    assert "the feasible set is a single command (at most" not in said()
+    assert "only one command is feasible (width" not in said()
 
 
 def test_task1_slide_title_says_its_idea_only_where_measured(quick_report, tmp_path):
@@ -1329,13 +1329,13 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
         return "".join(p.plain() for p in Story(Data(root)).abstract())
 
     said = abstract()
-    assert "IVKC, which we let only slow down along it, comes to rest short of the goal" in said
+    assert "IVKC may only slow down along the line, so it stops short of the goal" in said
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
     assert ("both arrive, IVKC first" in said) == first
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "gets the same unbounded slack, IVKC arrives." in said and "both arrive" not in said
+    assert "Given the same unbounded slack, IVKC arrives." in said and "both arrive" not in said
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):

@@ -219,6 +219,7 @@ SolverKey = Literal[
     "optimal_claims",
     "reached",
     "time_to_goal",
+    "closed_loop_max_kkt",
     "seeds",
 ]
 """The fields of :class:`SolverRow`."""
@@ -270,6 +271,8 @@ class SolverRow:
     reached: bool | None = None
     """Alone in the closed loop: whether the run reached the goal (absent: not run)."""
     time_to_goal: float | None = None
+    closed_loop_max_kkt: float | None = None
+    """Alone in the closed loop: the largest relative KKT residual of its answers."""
     seeds: list[SeedRun] = field(default_factory=list)
     """A stochastic method's runs over seeds 0, 1, ... (empty for the others)."""
 

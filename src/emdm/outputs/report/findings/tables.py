@@ -195,7 +195,8 @@ class Tables(Claims):
             indented += sentence(
                 " ",
                 Upright(run_label(GRID_MISS)),
-                " diverges: its digits are sensitive to rounding.",
+                # (reading 197: "sensitive to rounding" was cryptic)
+                " diverges, so it is given to 2 digits: its values change with rounding.",
             )
 
         def caption(evidence: bool) -> Sentence:
@@ -408,7 +409,13 @@ class Tables(Claims):
             pair(
                 unreached(False)
                 if stall(metric, runs[i].reached)
-                else sentence(self.gridn(ctrl, i, metric, fmt=plain(fmt, metric))),
+                # a run that blew up: two significant digits, as Table II (reading 198: the
+                # backup slide's 11,749 claimed digits its caption calls unreliable)
+                else sentence(
+                    self.gridn(
+                        ctrl, i, metric, fmt=plain(fmt, metric) if runs[i].reached else ".2g"
+                    )
+                ),
                 nominal
                 if stall(metric, self.mv("task1", ctrl, "reached"))
                 else sentence(self.mt("task1", ctrl, metric, fmt)),

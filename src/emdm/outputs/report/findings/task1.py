@@ -665,22 +665,26 @@ class Task1(Claims):
                 # (the widest, rounded: a bound "<=" would understate it)
                 # on how many scaled steps it was measured (reading 178: the lab's sample)
                 *(
-                    (
-                        ". Task 1's numerical challenge is its scaled steps. On the ",
+                    (  # the sample first (readings 197, 198: 11 beside 41 and 38 confused)
+                        ". Task 1's numerical challenge is its scaled steps. We re-solved ",
+                        self.d.count(lab, "resolved_steps"),
+                        " evenly spaced C-EMDM programs offline; on their ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled steps we re-solved offline, the feasible set is a single command "
-                        "(at most ",
+                        " scaled steps only one command is feasible (width ",
+                        Math(r"\leq", "≤"),
+                        " ",
                     )
                     if "steps" in vertex
                     else (
-                        ". These are Task 1's challenge: only one command is feasible (the set is "
-                        "at most ",
+                        ". These are Task 1's challenge: only one command is feasible (width ",
+                        Math(r"\leq", "≤"),
+                        " ",
                     )
                 ),
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                " wide) and degenerate: ",
+                "). It is degenerate: ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
@@ -688,8 +692,7 @@ class Task1(Claims):
                     else ()
                 ),
                 # (in words: readings 174-177 found "2 bounds hold it where 1 would" cryptic)
-                f" speed bounds are active where {fixed} would determine it, so active-set "
-                "methods can cycle",
+                f" speed bounds are active where {fixed} suffices, so active-set methods can cycle",
             )
         rows = self.solvers("task1-lab-C-EMDM")
         lab1 = self.rec.labs.get("task1-lab-C-EMDM")
@@ -698,10 +701,11 @@ class Task1(Claims):
         if qp and qp.failures:  # the fallback's last resort (reading 142): on the page, as
             # it never ran in the loop (reading 149 asked for the room)
             declines = sentence(  # (offline: the loop's fallback never ran, reading 173)
-                ". Of ",
-                self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
-                " C-EMDM programs re-solved offline, the last fallback, quadprog, fails on ",
+                ". The last fallback, quadprog, fails on ",
                 self.sn("task1-lab-C-EMDM", "quadprog", "failures", "d"),
+                " of the ",
+                self.sn("task1-lab-C-EMDM", "quadprog", "resolved_steps", "d"),
+                " programs",
             )
             if notes.get("quadprog", {}).get("failures_on_scaled_steps") == qp.failures:
                 declines += sentence(", all scaled")
