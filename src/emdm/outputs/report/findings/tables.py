@@ -196,7 +196,7 @@ class Tables(Claims):
                 " ",
                 Upright(run_label(GRID_MISS)),
                 # (reading 197: "sensitive to rounding" was cryptic)
-                " diverges, so it is given to 2 digits: its values change with rounding.",
+                " diverges: its 2 digits change with rounding.",
             )
 
         def caption(evidence: bool) -> Sentence:
