@@ -113,13 +113,14 @@ class Pitch:
             ]
         t2c = [
             sentence("C-IVKC ", *s.outcome(t2, Name.C_IVKC)),
-            sentence(
+            sentence(  # one number each (readings 197, 198: slide 9 carried too much text)
                 "C-EMDM ",
                 *s.outcome(t2, Name.C_EMDM),
-                ", at a mean ",
+                "; mean ",
                 M_SYM,
-                " of ",
-                *s.mean_m_pair(t2),
+                " ",
+                s.pct(t2, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
+                " against C-IVKC",
             ),
         ]
         if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):
@@ -127,11 +128,9 @@ class Pitch:
             stall = s.evv(t2, Name.C_IVKC, "stall")
             t2c[0] = (
                 sentence(
-                    "C-IVKC under task scaling stalls ",
+                    "C-IVKC, slowed along the line (task scaling), stops ",
                     s.ev(t2, Name.C_IVKC, "stall", "error", fmt=".3f", unit="m"),
-                    " from the goal, from ",
-                    s.ev(t2, Name.C_IVKC, "stall", "t", fmt=".2f", unit="s"),
-                    " on",
+                    " short of the goal",
                 )
                 if stall
                 else sentence("C-IVKC under task scaling ", *s.outcome(t2, Name.C_IVKC))
@@ -140,9 +139,8 @@ class Pitch:
         if geo and geo["line_blocked"]:
             t2c.append(
                 sentence(
-                    "Why: the straight line to the goal needs the elbow folded into its stop "
-                    "zone; only the slack lets EMDM leave the line, and it flips the elbow "
-                    "through ",
+                    "Why: the line needs the elbow folded into its stop zone; EMDM's slack lets "
+                    "it detour, flipping the elbow through ",
                     M_SYM,
                     " = 0",
                 )
@@ -213,11 +211,10 @@ class Pitch:
         out.bullets["solvers-verdict"] = (
             [
                 sentence(
-                    "of the brief's two families, gradient-based (",
                     grad_best,
-                    "); best of all an exact QP method (",
+                    ", of the brief's two families; an exact QP method (",
                     best_qp,
-                    ", whose times also gain from compiled code: starred)",
+                    ") beats both (starred: compiled code)",
                 )
             ]
             if best_qp and grad_best
