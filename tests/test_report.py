@@ -648,7 +648,7 @@ def test_the_sweep_levels_off_where_a_smaller_ratio_comes_within_one_percent(
     story = Story(Data(root))
     said = render_latex(story.whole_runs_levelled())
     assert "$w_M$ = 1.5 comes within 1\\% of the nominal" in said  # not 0.5: 5 % below
-    assert "We would lower UC-EMDM's $w_M$ in Task 1 from 5 to 1.5." in conclusion()
+    assert "We would lower UC-EMDM's $w_M$ from 5 to 1.5 for Task 1's goal." in conclusion()
     page = " ".join(render_html(p) for p in Story(Data(root)).conclusion().paragraphs)
     assert re.search(
         r"for <span[^>]*>−20%</span> effort", page

@@ -43,10 +43,12 @@ class Claims(StoryBase):
             # UC-EMDM's: the sweep ran it alone (reading 185: "Task 1's" read as both pairs')
             "lower UC-EMDM's ",
             W_M,
-            " in Task 1 from ",
+            " from ",
             self.gridn("UC-EMDM", n, "w_manip", fmt=".3g"),
             " to ",
             self.gridn("UC-EMDM", k, "w_manip", fmt=".3g"),
+            # for one start and goal, the sweep's (reading 200: advice from one case)
+            " for Task 1's goal",
             *(
                 sentence(
                     ": its mean ",

@@ -367,12 +367,12 @@ class Goals(Claims):
         ]
         if not losers:
             return []
-        out = sentence(" Over the random pairs the dexterity term costs goals")
+        out = sentence(" On the random goals the dexterity term loses goals")
         near = all(
             (e := task.no_term[c]).lost_beyond is not None and e.lost_beyond >= e.lost - e.gained
             for c in losers
         )
-        out += sentence(" near the reach: " if near else ": ")
+        out += sentence(" near full reach: " if near else ": ")
         slack = task.policies.get("slack")
         runs = self.goal("runs")
         for i, c in enumerate(losers):
@@ -380,10 +380,13 @@ class Goals(Claims):
             missed = task.policies["scale"].controllers[c].missed
             if c == Name.UC_EMDM and missed and missed.separated():
                 without = runs - task.no_term[c].arrived
-                out += sentence(
-                    "with it ",
+                out += sentence(  # (readings 199, 200: plainer)
                     c,
-                    " misses every goal beyond ",
+                    " misses all ",
+                    self.goaln(
+                        "tasks", "task2", "policies", "scale", "controllers", c, "missed", "count"
+                    ),
+                    " beyond ",
                     self.goaln(
                         "tasks",
                         "task2",
@@ -398,29 +401,24 @@ class Goals(Claims):
                         unit="m",
                     ),
                     " (",
-                    self.goaln(
-                        "tasks", "task2", "policies", "scale", "controllers", c, "missed", "count"
-                    ),
-                    " of ",
-                    self.goaln("runs"),
-                    "), without it ",
                     "none" if without == 0 else str(without),
+                    " without it)",
                 )
                 continue
             out += sentence(
                 c,
                 " reaches ",
                 self.arrivals("task2", "scale", c),
-                " with it, ",
+                " (",
                 self.goaln("tasks", "task2", "no_term", c, "arrived"),
-                " without",
+                " without it",
             )
             if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
                 out += sentence(
-                    " (C-IVKC, free slack: ",
+                    "; C-IVKC, free slack: ",
                     self.arrivals("task2", "slack", Name.C_IVKC),
-                    ")",
                 )
+            out += sentence(")")
         return out + sentence(".")
 
     # ------------------------------------------------------------------ the conclusion's

@@ -215,8 +215,10 @@ class Tables(Claims):
                 M_SYM,
                 " (",
                 Unit("m²"),
-                ", to arrival or ",
-                self.scn("task1", "motion", "max_time", fmt="g", unit="s"),
+                # what is averaged (reading 199: inferred to reproduce it)
+                # (T, a run's last step, is Section II's: arrival or the time limit)
+                ", over steps 0 to ",
+                Math("T", "<i>T</i>"),
                 "), effort (",
                 Unit("rad²/s"),
                 "), peak speed (",

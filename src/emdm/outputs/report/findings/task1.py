@@ -395,19 +395,20 @@ class Task1(Claims):
                             "at ",
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
-                            " C-EMDM's front is a single point: the speed limits leave one "
-                            "feasible step, the scaled one (",
+                            # (readings 197, 200: plainer, the reason in its own clause)
+                            ", C-EMDM's front is one point: for any weights, the speed limits "
+                            "allow only the scaled step (",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
-                            "), whatever the ratio",
+                            ")",
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            "; with a free slack (",
+                            ". With a free slack (",
                             Eqs(("free",)),
-                            ") it is another single point, ",
+                            ") it is also one point (hollow in ",
                             Ref("fig", "pareto"),
-                            "'s hollow one",
+                            ")",
                         )
             sat = [(i, s) for i, s in enumerate(csteps) if s.saturated_from_ratio is not None]
             if sat:
