@@ -1867,7 +1867,7 @@ class PolicyRun:
 
 POLICY_PANELS = (
     ("time_to_goal", "time to goal (s)", "{:.2f}"),
-    ("total_effort", r"effort $\sum E\Delta t$ (rad$^2$/s)", "{:.2f}"),
+    ("total_effort", r"effort (rad$^2$/s)", "{:.2f}"),  # (a panel's width: no sum)
     ("mean_manipulability", r"mean $m$ (m$^2$)", "{:.3f}"),
     # what slowing keeps, drawn beside what it costs (readings 154, 156: said, not shown)
     ("path_length", "tip path (m)", "{:.2f}"),
@@ -1887,7 +1887,9 @@ def policy_figure(
     the free slack hatched, each bar's value written at its end (take-away 2 had rested on a
     backup table, reading 141). Drawn at the size shown beside the stills."""
     with _figure(stem, medium, width, height) as fig:
-        axes = fig.subplots(len(POLICY_PANELS), 1)
+        # two by two: in one column of four panels the value labels of adjacent bars ran
+        # into each other (reading 199)
+        axes = fig.subplots(2, (len(POLICY_PANELS) + 1) // 2).ravel()[: len(POLICY_PANELS)]
         ys = np.arange(len(runs))[::-1]
         for ax, (key, title, fmt) in zip(axes, POLICY_PANELS, strict=True):
             values = [getattr(r, key) for r in runs]
@@ -1908,7 +1910,7 @@ def policy_figure(
                     linewidth=0.8,
                 )
                 ax.text(v + 0.02 * top, y, fmt.format(v), va="center", fontsize=medium.tiny)
-            ax.set_xlim(0.0, 1.3 * top)
+            ax.set_xlim(0.0, 1.55 * top)  # (room for the longest bar's label)
             ax.set_yticks([])
             ax.set_xticks([])
             ax.set_title(title, fontsize=medium.tiny, pad=2, loc="left")
