@@ -99,10 +99,12 @@ class Front(Goals):
                 grad = LIKE_FOR_LIKE  # (reading 198: slsqp's full program against cma-es's)
             if grad:
                 out += sentence(
-                    "On the same reduced two-link programs, the gradient-based "
+                    # (reading 201: "reduced" and "slsqp-reduced" undefined in the abstract)
+                    "On the two-link programs, posed alike for both, the gradient-based "
                     if same
                     else "On the two-link programs, the gradient-based solver ",
-                    grad,
+                    # (the like-for-like run is slsqp itself, on the reduced program)
+                    LIKE_FOR_LIKE.removesuffix("-reduced") if same else grad,
                     " reaches the exact optimum in a median ",
                     *self.evaluations("task2-lab-C-EMDM", grad),
                 )

@@ -286,8 +286,8 @@ class Goals(Claims):
             by_key["t2-uc"].paragraphs[-1] += cost
 
     def policy_goals(self) -> Sentence:
-        """`` Over the 256 random pairs, a free slack brings both
-        to 217 goals, scaling to 146: the others stall with a joint at its stop zone.``:
+        """`` Of the 256 random pairs, both reach 217 with a free slack but 146 with
+        scaling; the rest stall with a joint in its stop zone.``:
         Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
         told in the conclusion only, the policy's strongest evidence went undiscussed)."""
         rec = self.rec.goals
@@ -302,20 +302,18 @@ class Goals(Claims):
             return []
 
         same = all(len({r.arrived for r in rs if r is not None}) == 1 for rs in rows.values())
-        out = sentence(
-            " Over the ",
-            self.goaln("runs"),
-            " random pairs, a free slack brings ",
-        )
-        if same:
+        out = sentence(" Of the ", self.goaln("runs"), " random pairs, ")
+        if same:  # (reading 202: plainer)
             out += sentence(
-                "both to ",
+                "both reach ",
                 self.arrivals("task1", "slack", pair[0]),
-                " goals, scaling to ",
+                " with a free slack but ",
                 self.arrivals("task1", "scale", pair[0]),
+                " with scaling",
             )
         else:
             out += sentence(
+                "a free slack brings ",
                 pair[0],
                 " to ",
                 self.arrivals("task1", "slack", pair[0]),
@@ -330,11 +328,11 @@ class Goals(Claims):
             )
         missed = [r.missed for r in rows["scale"] if r is not None]
         if all(m is not None and m.count and m.at_stop == m.count for m in missed):
-            out += sentence(": the others stall with a joint at its stop zone")
+            out += sentence("; the rest stall with a joint in its stop zone")
         return out + sentence(".")
 
     def uc_trade_goals(self) -> Sentence:
-        """`` Over 256 random start-goal pairs per task (uniform in joint space), UC-EMDM's
+        """`` Over 256 random start-goal pairs per task (uniform within the joint limits), UC-EMDM's
         median trade against UC-IVKC is +11% mean m for +57% effort.``"""
         rec = self.rec.goals
         if rec is None or rec.tasks["task1"].policies["scale"].pairs.get("UC") is None:
@@ -343,7 +341,9 @@ class Goals(Claims):
         return sentence(
             " Over ",
             self.goaln("runs"),
-            " random start-goal pairs per task (uniform in joint space), UC-EMDM's median trade "
+            # (reading 202: sampled how, against the limits?)
+            " random start-goal pairs per task (uniform within the joint limits), UC-EMDM's "
+            "median trade "
             "against UC-IVKC is ",
             *self.median_trade(*scale),
             ".",
@@ -367,7 +367,7 @@ class Goals(Claims):
         ]
         if not losers:
             return []
-        out = sentence(" On the random goals the dexterity term loses goals")
+        out = sentence(" On the random goals, the dexterity term costs goals")
         near = all(
             (e := task.no_term[c]).lost_beyond is not None and e.lost_beyond >= e.lost - e.gained
             for c in losers

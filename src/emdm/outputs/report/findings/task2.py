@@ -481,17 +481,16 @@ class Task2(Claims):
         p = sentence(  # the cause first, when it is the singular passage (reading 142's edit)
             # (sampled, its least m is near zero, not zero: reading 161)
             *(
-                (
-                    "The passage through ",
+                (  # (reading 201: plainer)
+                    "Crossing ",
                     Math(r"m\approx0", "<i>m</i> ≈ 0"),
-                    f" costs {emdm} dexterity: its",
+                    f" lowers {emdm}'s mean ",
+                    M_SYM,
+                    " to ",
                 )
                 if crosses
-                else (f"{emdm}'s",)
+                else (f"{emdm}'s mean ", M_SYM, " is ")
             ),
-            " mean ",
-            M_SYM,
-            " is ",
             self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
             ", ",
             self.pct(t, emdm, ivkc, "mean_manipulability"),
@@ -500,8 +499,10 @@ class Task2(Claims):
             f" against the stalled {ivkc}'s " if not reached_i else f" against {ivkc}'s ",
             self.mt(t, ivkc, "mean_manipulability", ".3f"),
             *(
-                (  # (reading 194 missed it when it was on the page only)
-                    " (the same over the first ",
+                (  # (reading 194 missed it when it was on the page only; 201: whose)
+                    " (also ",
+                    within[1],
+                    " over its first ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
                     ")",
                 )
