@@ -372,11 +372,11 @@ class Goals(Claims):
             (e := task.no_term[c]).lost_beyond is not None and e.lost_beyond >= e.lost - e.gained
             for c in losers
         )
-        out += sentence(" near full reach: " if near else ": ")
+        out += sentence(" near full reach. " if near else ". ")  # (one sentence each)
         slack = task.policies.get("slack")
         runs = self.goal("runs")
         for i, c in enumerate(losers):
-            out += sentence("; " if i else "")
+            out += sentence(". " if i else "")
             missed = task.policies["scale"].controllers[c].missed
             if c == Name.UC_EMDM and missed and missed.separated():
                 without = runs - task.no_term[c].arrived
@@ -403,6 +403,27 @@ class Goals(Claims):
                     " (",
                     "none" if without == 0 else str(without),
                     " without it)",
+                    # why, in one clause (readings 200, 201: stated without a mechanism; the
+                    # page's Section V derives it)
+                    ": at rest its slack pulls with only ",
+                    Math(
+                        r"w_S\|\delta\|=c_S",
+                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
+                    ),
+                    ", and the term holds the tip ",
+                    *self.goal_range(
+                        "tasks",
+                        "task2",
+                        "policies",
+                        "scale",
+                        "controllers",
+                        c,
+                        "missed",
+                        "final_error",
+                        fmt=".2g",
+                        unit="m",
+                    ),
+                    " short",
                 )
                 continue
             out += sentence(

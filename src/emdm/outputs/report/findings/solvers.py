@@ -8,7 +8,7 @@ import numpy as np
 
 from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED, WHOLE_GENERATIONS
-from ....studies.lab import EXACT, LIKE_FOR_LIKE, SEEDS, exact_answer
+from ....studies.lab import EXACT, LIKE_FOR_LIKE, exact_answer
 from ..config import GLYPHS
 from ..document import Section, Table
 from ..trace import Glyph, Math, PageOnly, Ref, Sentence, Text, Unit, sentence
@@ -462,17 +462,15 @@ class Solvers(StoryBase):
                 # gap in Figs. 5 and 7)
                 "); ",
                 Math(r"|f-f^*|", "|<i>f</i> − <i>f</i>*|"),
-                ", viol.: largest objective gap, bound violation (0: < ",
+                ", viol.: largest gap to the optimum, bound violation (0: < ",
                 Math(f"10^{{{SHOWN_ZERO_EXP}}}", f"10<sup>−{-SHOWN_ZERO_EXP}</sup>"),
                 "; exact: both ",
                 Math(f"\\leq10^{{{EXACT_EXP}}}", f"≤ 10<sup>−{-EXACT_EXP}</sup>"),
-                "); over: programs over the ",
+                "); over: overruns of the ",
                 self.scn("task2", "motion", "dt", fmt=".2f", unit="s"),
-                " period; goal: arrival, alone in the loop",
+                " period; goal: arrival alone in the loop",
                 *(
-                    (
-                        f" ({'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0 of 0–{SEEDS - 1})",
-                    )
+                    (f" ({'seeded' if len(seeded) > 1 else listed(seeded)}: seed 0)",)
                     if (seeded := [k for k in rows if k in SEEDED])
                     else ()
                 ),

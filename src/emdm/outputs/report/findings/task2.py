@@ -333,14 +333,22 @@ class Task2(Claims):
             pins = self.evv(t, emdm, "pinned")
             if pins:
                 p += sentence(  # (two sentences: "it" read as the joint, reading 147's edit)
-                    "From ",
-                    self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
-                    " to ",
-                    self.ev(t, emdm, "pinned", 0, "t_last", fmt=".2f", unit="s"),
-                    ", joint ",
-                    self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
-                    f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound while the arm "
-                    "stretches. ",
+                    # on the page: the paper's room went to why UC-EMDM misses far goals
+                    # (readings 200, 201)
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                "From ",
+                                self.ev(t, emdm, "pinned", 0, "t0", fmt=".2f"),
+                                " to ",
+                                self.ev(t, emdm, "pinned", 0, "t_last", fmt=".2f", unit="s"),
+                                ", joint ",
+                                self.ev(t, emdm, "pinned", 0, "joint", fmt="d"),
+                                f" creeps along its {pins[0]['side']} {pins[0]['kind']} bound "
+                                "while the arm stretches. ",
+                            )
+                        )
+                    )
                 )
             flips = self.evv(t, emdm, "singular", "elbow_flips")
             if flips:
@@ -369,8 +377,8 @@ class Task2(Claims):
                 run_label("t2-c-ivkc-wide-limits"),
                 ", ",
                 Ref("tab", "outcomes"),
-                f"), {ivkc} arrives too, in ",
-                self.evid_goal("t2-c-ivkc-wide-limits", ivkc),
+                f"), {ivkc} arrives too",  # (its time: Table II's)
+                PageOnly(tuple(sentence(", in ", self.evid_goal("t2-c-ivkc-wide-limits", ivkc)))),
                 ": its stall comes from the limits. ",
             )
         elif not reached_i and (e4.get("reached") or e5.get("reached")):
