@@ -350,10 +350,11 @@ class Goals(Claims):
         )
 
     def term_reach_cost(self) -> Sentence:
-        """`` Over the random pairs the dexterity term costs goals near the reach: with it
-        UC-EMDM misses every goal beyond 0.880 m (59 of 256), without it none; C-EMDM reaches
-        161 with it, 215 without (C-IVKC with a free slack: 216).`` Task 2's EMDM controllers
-        whose term loses goals; empty where it loses none."""
+        """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
+        misses all 59 beyond 0.880 m (none without it): at rest its slack pulls with only
+        w_S|delta| = c_S, and the term holds the tip 0.0012 to 0.019 m short. C-EMDM reaches
+        161 (215 without it; C-IVKC, free slack: 216).`` Task 2's EMDM controllers whose term
+        loses goals; empty where it loses none."""
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
         if task is None:
