@@ -381,26 +381,13 @@ class Goals(Claims):
             missed = task.policies["scale"].controllers[c].missed
             if c == Name.UC_EMDM and missed and missed.separated():
                 without = runs - task.no_term[c].arrived
+                where = ("tasks", "task2", "policies", "scale", "controllers", c, "missed")
                 out += sentence(  # (readings 199, 200: plainer)
                     c,
                     " misses all ",
-                    self.goaln(
-                        "tasks", "task2", "policies", "scale", "controllers", c, "missed", "count"
-                    ),
+                    self.goaln(*where, "count"),
                     " beyond ",
-                    self.goaln(
-                        "tasks",
-                        "task2",
-                        "policies",
-                        "scale",
-                        "controllers",
-                        c,
-                        "missed",
-                        "goal_radius",
-                        0,
-                        fmt=self.beyond_fmt(),
-                        unit="m",
-                    ),
+                    self.goaln(*where, "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
                     " (",
                     "none" if without == 0 else str(without),
                     " without it)",
@@ -412,18 +399,7 @@ class Goals(Claims):
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
                     ", and the term holds the tip ",
-                    *self.goal_range(
-                        "tasks",
-                        "task2",
-                        "policies",
-                        "scale",
-                        "controllers",
-                        c,
-                        "missed",
-                        "final_error",
-                        fmt=".2g",
-                        unit="m",
-                    ),
+                    *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
                     " short",
                 )
                 continue
