@@ -173,10 +173,16 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         scale1 = record["tasks"]["task1"]["policies"]["scale"]
         m, e = (scale1["pairs"]["UC"][k][1] for k in ("mean_manipulability", "total_effort"))
         assert (
-            f"Over {runs} random start-goal pairs per task (uniform within the joint limits)"
+            f"Over {runs} random start-goal pairs per task, drawn uniformly within the joint limits"
             in body["t1-uc"]
         )
-        assert f"is ${100 * m:+.0f}$\\% mean $m$ for ${100 * e:+.0f}$\\% effort" in body["t1-uc"]
+        # both rise: said as "more"; otherwise signed
+        trade = (
+            f"is {100 * m:.0f}\\% more mean $m$ for {100 * e:.0f}\\% more effort"
+            if m > 0 and e > 0
+            else f"is ${100 * m:+.0f}$\\% mean $m$ for ${100 * e:+.0f}$\\% effort"
+        )
+        assert trade in body["t1-uc"]
         # Task 1.2: the scaled C- controllers' stalls beside the policy they weigh (190, 191)
         told = render_latex(story.policy_goals())
         assert told and told in body["t1-c"]
@@ -190,7 +196,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
                 assert f" {ctrls[c]['arrived']}" in told, (pol, c)
         misses = [rows["scale"][c]["missed"] for c in ("C-IVKC", "C-EMDM")]
         every = all(m and m["count"] and m["at_stop"] == m["count"] for m in misses)
-        assert ("stall with a joint in its stop zone" in told) == every
+        assert ("stall with a joint stopped by its damper" in told) == every
         # Task 2.2: the goals the dexterity term costs, both EMDM controllers (192, 193)
         cost = render_latex(story.term_reach_cost())
         assert cost and cost in body["t2-uc"]

@@ -422,6 +422,14 @@ class Data:
         src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
         return Num(text, src, fmt, "pct")
 
+    def cut(self, a: tuple[str | int, ...], b: tuple[str | int, ...], fmt: str = ".0f") -> Num:
+        """``100 (1 - a / b)``: how much less ``a`` is than ``b``, in percent (``cuts ... by 35%``
+        where :meth:`pct` would write ``-35%``)."""
+        va, vb = self.value(str(a[0]), *a[1:]), self.value(str(b[0]), *b[1:])
+        text = format(100.0 * (1.0 - va / vb), fmt) + "%"
+        src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
+        return Num(text, src, fmt, "cut")
+
 
 SCALE = {"ms": 1e3, "us": 1e6}
 """The operations that write a value in seconds in another unit, and their factor."""
@@ -458,6 +466,9 @@ def expected_text(root: Path, src: str, fmt: str, op: str | None) -> str:
     if op == "pct":
         a, b = (value(r) for r in refs)
         return format(100.0 * (a / b - 1.0), fmt) + "%"
+    if op == "cut":
+        a, b = (value(r) for r in refs)
+        return format(100.0 * (1.0 - a / b), fmt) + "%"
     if op == "len":
         return str(len(value(refs[0])))
     if op in SCALE:

@@ -232,7 +232,7 @@ class Claims(StoryBase):
             M_SYM,
         )
 
-    def uc_term_gain(self) -> Num:
+    def uc_term_gain(self, fmt: str = "+.0f") -> Num:
         """``+1%``: Task 2.2's UC-EMDM mean m against its run without the dexterity term, the
         term's share of its gain in m (the abstract's and Section IV-C's number)."""
         emdm = Name.UC_EMDM
@@ -246,6 +246,7 @@ class Claims(StoryBase):
                 emdm,
                 "mean_manipulability",
             ),
+            fmt,
         )
 
     def _no_term(self, key: str) -> tuple[str, ...]:
@@ -253,19 +254,21 @@ class Claims(StoryBase):
         return ("data/evidence.json", "runs", "t2-uc-emdm-no-manip", "runs", Name.UC_EMDM, key)
 
     def uc_slack_alone(self) -> Num:
-        """``-35%``: Task 2.2's effort without the dexterity term against UC-IVKC's, what the
-        slack alone saves (reading 144: the -21 % is slack and term together)."""
-        return self.d.pct(
+        """``35%``: how much less effort Task 2.2's UC-EMDM spends without the dexterity term
+        than UC-IVKC, what the slack alone saves (reading 144: the -21 % is slack and term
+        together)."""
+        return self.d.cut(
             self._no_term("total_effort"),
             ("data/task2/metrics.json", "controllers", Name.UC_IVKC, "total_effort"),
         )
 
-    def uc_term_cost(self) -> Num:
+    def uc_term_cost(self, fmt: str = "+.0f") -> Num:
         """``+21%``: what Task 2.2's dexterity term costs in effort (UC-EMDM against its run
         without the term), the price of its ``uc_term_gain`` in m."""
         return self.d.pct(
             ("data/task2/metrics.json", "controllers", Name.UC_EMDM, "total_effort"),
             self._no_term("total_effort"),
+            fmt,
         )
 
     def uc_term_raises_m(self) -> bool:

@@ -17,12 +17,13 @@ class Front(Goals):
         t2 = "task2"
         out = sentence(
             # (readability, readings 176-185: whole sentences, one comparison each)
-            "EMDM is a velocity controller that solves one quadratic program per step: the tip "
-            "follows a proportional controller while joint-speed effort is minimised and the "
-            "growth rate of manipulability ",
+            # (a plain-language edit: one idea per sentence, every term glossed)
+            "EMDM, a velocity controller, solves one quadratic program per step: it makes the "
+            "tip follow a proportional controller, minimises joint-speed effort and maximises "
+            "the growth rate of manipulability ",
             M_SYM,
-            " (dexterity) maximised. We compare it with inverse velocity kinematics control "
-            "(IVKC). On a redundant three-link arm both track the goal equally well, and EMDM ",
+            " (dexterity). We compare it with inverse velocity kinematics control (IVKC). On a "
+            "redundant three-link arm, both track the goal equally well. EMDM ",
             *self.dexterity_gain(),
             ". ",
         )
@@ -36,9 +37,9 @@ class Front(Goals):
                     # scaling' undefined in the abstract)
                     "On a two-link arm, the joint limits block the straight line to the goal. "
                     # (readings 197, 198: plainer; 'IVKC gets the same' was wrong, both change)
-                    "A slack on the task velocity lets EMDM leave the line and arrive; IVKC may "
-                    "only slow down along the line, so it stops short of the goal. Given the same "
-                    "unbounded slack, ",
+                    "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
+                    "arrive. IVKC can only slow down along the line and stops short. Given the "
+                    "same unbounded slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)
@@ -67,13 +68,27 @@ class Front(Goals):
                 # pair's -21 % effort is the slack's -35 % less what the term spends)
                 *(
                     (
-                        "Without limits, the slack alone cuts EMDM's effort (",
+                        "Without limits, the slack alone cuts EMDM's effort by ",
                         self.uc_slack_alone(),
-                        "), and the dexterity term adds ",
-                        self.uc_term_cost(),
-                        " effort for ",
-                        self.uc_term_gain(),
-                        " mean ",
+                        " against IVKC. The dexterity term adds ",
+                        *(
+                            (
+                                self.uc_term_cost(".0f"),
+                                " effort for ",
+                                self.uc_term_gain(".0f"),
+                                " more mean ",
+                            )
+                            if all(
+                                n.text.startswith("+")
+                                for n in (self.uc_term_gain(), self.uc_term_cost())
+                            )
+                            else (
+                                self.uc_term_cost(),
+                                " effort for ",
+                                self.uc_term_gain(),
+                                " mean ",
+                            )
+                        ),
                         M_SYM,
                         ". ",
                     )
@@ -124,31 +139,31 @@ class Front(Goals):
         sec = Section("intro", "Introduction")
         intro = sentence(
             "A planar arm must bring its tip to a goal with little joint-velocity effort "
-            "while staying dexterous (a large manipulability ",
+            "while staying dexterous (large manipulability ",
             M_SYM,
             Cite("yoshikawa"),
             "). Resolved-rate control",
             Cite("whitney"),
-            " follows the goal through the Jacobian's pseudoinverse (IVKC); on a redundant arm a "
-            "gradient step in its null space can also raise ",
+            " (IVKC) follows the goal through the Jacobian's pseudoinverse. On a redundant arm, "
+            "a gradient step in its null space can also raise ",
             M_SYM,
             Cite("liegeois"),
-            ", and later controllers keep joint limits as hard constraints",
+            ". Later controllers keep joint limits as hard constraints",
             Cite("flacco"),
             ",",
             Cite("haviland"),
-            ". A non-redundant arm can only trade tracking for dexterity through a "
-            "task slack. As in",
+            ". A non-redundant arm can only trade tracking for dexterity through a slack, an "
+            "allowed tip-velocity error. Like",
             Cite("haviland"),
-            ", we solve one strictly convex quadratic program (QP) per step, here by our "
-            "KKT-certified active-set method. We compare this controller, EMDM, with IVKC, each "
-            "unconstrained (UC-) or with joint limits (C-). We coded both from the course's "
+            ", our controller, EMDM, solves one strictly convex quadratic program (QP) per step, "
+            "with our certified active-set method. We compare it with IVKC, each unconstrained "
+            "(UC-) or with joint limits (C-). We coded both from the course's "
             # what "the brief" is, once (reading 195: cited ten times, never summarised)
             "project brief, which sets the arms, parameters and questions (its skeleton code was "
             "unavailable)",
             # the derivative check on the page (reading 187: room for the definitions)
             PageOnly(tuple(self.derivatives_checked())),
-            "; each subsection of Sections III and IV opens with its answer.",
+            ". Each subsection of Sections III and IV opens with its answer.",
         )
         # the animations: named with their stills (Task 1's figure, Task 2's workspace)
         sec.paragraphs.append(intro)

@@ -60,13 +60,18 @@ class Goals(Claims):
 
     def median_trade(self, *row: str | int, m: str = "+.0%") -> Sentence:
         """``+11% mean m for +57% effort``: a many-goals row's median changes of mean m and of
-        total effort (each record's quartiles, the middle one)."""
+        total effort (each record's quartiles, the middle one); ``11% more mean m for 57% more
+        effort`` where both rise."""
+        rise = all(self.goal(*row, k, 1) > 0 for k in ("mean_manipulability", "total_effort"))
+        more = " more" if rise else ""
         return sentence(
-            self.goaln(*row, "mean_manipulability", 1, fmt=m),
+            self.goaln(*row, "mean_manipulability", 1, fmt=m.lstrip("+") if rise else m),
+            more,
             " mean ",
             M_SYM,
             " for ",
-            self.goaln(*row, "total_effort", 1, fmt="+.0%"),
+            self.goaln(*row, "total_effort", 1, fmt=".0%" if rise else "+.0%"),
+            more,
             " effort",
         )
 
@@ -287,7 +292,7 @@ class Goals(Claims):
 
     def policy_goals(self) -> Sentence:
         """`` Of the 256 random pairs, both reach 217 with a free slack but 146 with
-        scaling; the rest stall with a joint in its stop zone.``:
+        scaling; the rest stall with a joint stopped by its damper.``:
         Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
         told in the conclusion only, the policy's strongest evidence went undiscussed)."""
         rec = self.rec.goals
@@ -328,12 +333,14 @@ class Goals(Claims):
             )
         missed = [r.missed for r in rows["scale"] if r is not None]
         if all(m is not None and m.count and m.at_stop == m.count for m in missed):
-            out += sentence("; the rest stall with a joint in its stop zone")
+            # (at the stop distance, where the damper allows no speed towards the limit)
+            out += sentence("; the rest stall with a joint stopped by its damper")
         return out + sentence(".")
 
     def uc_trade_goals(self) -> Sentence:
-        """`` Over 256 random start-goal pairs per task (uniform within the joint limits), UC-EMDM's
-        median trade against UC-IVKC is +11% mean m for +57% effort.``"""
+        """`` Over 256 random start-goal pairs per task, drawn uniformly within the joint
+        limits, UC-EMDM's median trade against UC-IVKC is 11% more mean m for 57% more
+        effort.``"""
         rec = self.rec.goals
         if rec is None or rec.tasks["task1"].policies["scale"].pairs.get("UC") is None:
             return []
@@ -342,9 +349,8 @@ class Goals(Claims):
             " Over ",
             self.goaln("runs"),
             # (reading 202: sampled how, against the limits?)
-            " random start-goal pairs per task (uniform within the joint limits), UC-EMDM's "
-            "median trade "
-            "against UC-IVKC is ",
+            " random start-goal pairs per task, drawn uniformly within the joint limits, "
+            "UC-EMDM's median trade against UC-IVKC is ",
             *self.median_trade(*scale),
             ".",
         )

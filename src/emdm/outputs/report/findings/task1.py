@@ -64,17 +64,31 @@ class Task1(Claims):
             ".1e" if self.pair(t, "UC", "max_path_gap") < 1e-3 else ".4f",
             "m",
         )
+        rises = all(
+            self.mv(t, emdm, k) > self.mv(t, ivkc, k)
+            for k in ("mean_manipulability", "total_effort")
+        )
         # the result first, then how closely the two track
         answer = sentence(  # the trade last, where it gets the stress (a copy editor's order)
-            f"{emdm} tracks the goal as {ivkc} does but raises the mean manipulability by ",
-            self.pct(t, emdm, ivkc, "mean_manipulability"),
-            ", from ",
-            self.mt(t, ivkc, "mean_manipulability", ".3f"),
-            " to ",
-            self.mt(t, emdm, "mean_manipulability", ".3f", "m²"),
-            ", for ",
-            self.pct(t, emdm, ivkc, "total_effort"),
-            " effort. ",
+            # (the means themselves are Table II's: a plain-language edit)
+            f"{emdm} tracks as well as {ivkc} ",
+            *(
+                (
+                    "but raises the mean manipulability by ",
+                    self.pct(t, emdm, ivkc, "mean_manipulability", fmt=".0f"),
+                    " for ",
+                    self.pct(t, emdm, ivkc, "total_effort", fmt=".0f"),
+                    " more effort. ",
+                )
+                if rises
+                else (
+                    "and changes the mean manipulability by ",
+                    self.pct(t, emdm, ivkc, "mean_manipulability"),
+                    " and its effort by ",
+                    self.pct(t, emdm, ivkc, "total_effort"),
+                    ". ",
+                )
+            ),
         )
         # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
         # paths when drawn (reading 146: (c) shows the distance to the goal, not the gap)
@@ -83,13 +97,13 @@ class Task1(Claims):
             "t1-arms", "figures/task1-arms", self.arms_caption(), paper=ARMS_IN_PAPER
         )
         if same_time and self.mv(t, emdm, "reached"):
-            answer += sentence("Both reach it in ", self.ttg(t, emdm), *where)
+            answer += sentence("Both reach the goal at the same time", *where)
         else:
             answer += sentence(
                 f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc), *where
             )
         answer += sentence(
-            "; at each step their tips are at most ",
+            ", their tips never more than ",
             gap,
             " apart",
             *(
@@ -127,7 +141,7 @@ class Task1(Claims):
                 )
             ),
             # why (reading 183: say why null-space motion raises m)
-            "Without bounds, EMDM's program has a closed-form solution, ",
+            "Without bounds, EMDM's program has the closed-form solution ",
             Math(
                 r"\dot q=J^+v_d+\tfrac{w_M}{w_E}(I-J^+J)J_m",
                 "<i>q̇</i> = <i>J</i><sup>+</sup><i>v</i><sub>d</sub> + (<i>w</i><sub>M</sub>/"
@@ -135,34 +149,32 @@ class Task1(Claims):
             ),
             ": IVKC's command plus the manipulability gradient projected into ",
             Math("J", "<i>J</i>"),
-            "'s null space, a motion that raises ",
+            "'s null space. That motion raises ",
             M_SYM,
             " without moving the tip. With ",
             W_M,
-            " = 0, ",
+            " = 0 (",
+            run_label("t1-uc-no-manip"),
+            "), ",
         )
         ref = self.evid("t1-uc-no-manip", "reference")
         if ref["max_abs_qd_difference"] == 0.0 and ref["same_steps"]:
             p += sentence(
-                f"{emdm} reproduces {ivkc} command for command (",
-                run_label("t1-uc-no-manip"),
-                "). ",
+                f"{emdm} reproduces {ivkc} command for command. ",
             )
         else:  # what the bound means: the two are one controller up to rounding
             p += sentence(
-                "the two commands agree to rounding error (within ",
+                "the two commands agree to within ",
                 self.evidn(
                     "t1-uc-no-manip", "reference", "max_abs_qd_difference", fmt=".1e", unit="rad/s"
                 ),
-                ", ",
-                run_label("t1-uc-no-manip"),
-                "). ",
+                ", rounding error. ",
             )
         p += sentence("Neither controller sees the limits: ")
         for name in (ivkc, emdm):
             if self.evv(t, name, "limits", "max_excess") > 0:
                 p += sentence(
-                    f"{name} leaves joint ",
+                    f"{name} overshoots joint ",
                     self.ev(t, name, "limits", "excess_joint", fmt="d"),
                     "'s range by ",
                     self.ev(t, name, "limits", "max_excess", fmt=".3f", unit="rad"),
