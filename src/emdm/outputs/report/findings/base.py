@@ -443,16 +443,14 @@ class StoryBase:
                 sentence(" and a lower mean ", M_SYM),
             ),
         }
-        p = sentence(
-            "Scaling has a price: with a free slack instead (",
-            Ref("tab", "outcomes"),
-            "), C-EMDM ",
-        )
+        p = sentence("Scaling has a price: with a free slack instead, C-EMDM ")
         for metric, better in self._policy_terms():
             p += words[metric][0 if better else 1]
         p += sentence(
-            "; scaling only keeps its path straighter (",
-            self.mt("task1", emdm, "path_length", ".2f"),
+            " (",
+            Ref("tab", "outcomes"),
+            "). Scaling only keeps its path straighter (",
+            self.mt("task1", emdm, "path_length", ".2f", "m"),
             " against ",
             self.evidn(e2, "runs", emdm, "path_length", fmt=".2f", unit="m"),
             ")",
