@@ -189,12 +189,12 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     # runs
     assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
     assert re.search(
-        r"under our task scaling it stalls, from .{0,400}? from the goal .{0,400}?\. Given the "
+        r"Under our task scaling, it stalls .{0,400}? from the goal from .{0,400}?\. Given the "
         r"same free slack, both arrive, C-IVKC first",
         text,
     ), "the stall told before the free-slack runs"
     scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
-    assert ("C-IVKC cannot meet its task from step 0" in text) == scaled_at_start
+    assert ("C-IVKC cannot meet its task constraint from step 0" in text) == scaled_at_start
     assert "evidence" in text.lower()
 
 
@@ -1376,7 +1376,9 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
         alone = 100 * (run["total_effort"] / effort_ivkc - 1)
         cost = 100 * (effort_emdm / run["total_effort"] - 1)
         assert f"slack alone cuts EMDM's effort by {-alone:.0f}% against IVKC" in abstract
-        assert f"adds {cost:.0f}% effort for" in abstract and f"for {cost:+.0f}% effort" in share
+        assert (
+            f"adds {cost:.0f}% effort for" in abstract and f"for {cost:.0f}% more effort" in share
+        )
     assert ("the dexterity term buys" in share) == by_term
     assert share.startswith("Without the dexterity term (A6), UC-EMDM ")
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's

@@ -357,9 +357,10 @@ class Goals(Claims):
 
     def term_reach_cost(self) -> Sentence:
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
-        misses all 59 beyond 0.880 m (none without it): at rest its slack pulls with only
-        w_S|delta| = c_S, and the term holds the tip 0.0012 to 0.019 m short. C-EMDM reaches
-        161 (215 without it; C-IVKC, free slack: 216).`` Task 2's EMDM controllers whose term
+        misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
+        its slack pulls with only w_S|delta| = c_S, and the term holds the tip 0.0012 to 0.019 m
+        short. C-EMDM reaches 161, 215 without the term; C-IVKC with a free slack reaches
+        216.`` Task 2's EMDM controllers whose term
         loses goals; empty where it loses none."""
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
@@ -392,14 +393,14 @@ class Goals(Claims):
                     c,
                     " misses all ",
                     self.goaln(*where, "count"),
-                    " beyond ",
+                    " goals farther than ",
                     self.goaln(*where, "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
-                    " (",
+                    " from the base (",
                     "none" if without == 0 else str(without),
-                    " without it)",
-                    # why, in one clause (readings 200, 201: stated without a mechanism; the
+                    " without the term)",
+                    # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
-                    ": at rest its slack pulls with only ",
+                    ". At rest, its slack pulls with only ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
@@ -413,16 +414,15 @@ class Goals(Claims):
                 c,
                 " reaches ",
                 self.arrivals("task2", "scale", c),
-                " (",
+                ", ",
                 self.goaln("tasks", "task2", "no_term", c, "arrived"),
-                " without it",
+                " without the term",
             )
             if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
                 out += sentence(
-                    "; C-IVKC, free slack: ",
+                    "; C-IVKC with a free slack reaches ",
                     self.arrivals("task2", "slack", Name.C_IVKC),
                 )
-            out += sentence(")")
         return out + sentence(".")
 
     # ------------------------------------------------------------------ the conclusion's

@@ -96,15 +96,23 @@ class Solvers(StoryBase):
                     and self.d.exists("paper/figures/convergence.png")  # (registered below)
                     else ()
                 ),
-                " the gradient-based ",
+                ", the gradient-based ",
                 grad,  # (each solver's method is said once, in Section II)
                 # both counts only while no gradient-free method is as exact
-                f" is as exact as {exact_free[0]} and far faster: it"
+                f" is as exact as {exact_free[0]} and far faster. It"
                 if exact_free
-                else " wins on both counts: it",
-                " reaches the optimum (largest ",
-                Math(r"|f-f^*|={}", "|<i>f</i> − <i>f</i>*| = "),
-                self.sn(lab, grad, "max_abs_gap", ".1e"),
+                else " wins on both counts. It",
+                " reaches the optimum",
+                # (its largest gap is Table III's: on the page, a plain-language edit)
+                PageOnly(
+                    tuple(
+                        sentence(
+                            " (largest ",
+                            Math(r"|f-f^*|={}", "|<i>f</i> − <i>f</i>*| = "),
+                            self.sn(lab, grad, "max_abs_gap", ".1e"),
+                        )
+                    )
+                ),
                 *(  # re-solved offline; in the loop its own iterates (reading 197: "exact"
                     # rested on the re-solves alone)
                     (  # (on the page: the paper's room, this stop)
@@ -123,7 +131,8 @@ class Solvers(StoryBase):
                     if rows[grad].closed_loop_max_kkt is not None
                     else ()
                 ),
-                ") after a median ",
+                PageOnly(tuple(sentence(")"))),
+                " after a median of ",
                 *self.evaluations(lab, grad),
                 PageOnly(  # (Table IV's row gives them: room for Task 1's stills)
                     tuple(
@@ -145,22 +154,21 @@ class Solvers(StoryBase):
             answer += sentence(
                 "Only one gradient-free method is exact: ",
                 k,
-                ". It needs a median ",
+                ". On the reduced program, it needs a median of ",
                 self.sn(lab, k, "median_evaluations", ".4g"),
-                " evaluations and ",
-                self.sn(lab, k, "median_time", unit="ms"),
-                " on the reduced program",
+                " evaluations",
+                PageOnly(tuple(sentence(" and ", self.sn(lab, k, "median_time", unit="ms")))),
                 *(  # like for like, in the paper (reading 198: slsqp's full program
                     # against cma-es's reduced one)
                     (
-                        f" ({LIKE_FOR_LIKE}: ",
+                        ", against ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        ")",
+                        f" for {LIKE_FOR_LIKE}",
                     )
                     if twin_exact
                     else ()
                 ),
-                " and, run from Python, ",
+                ". Run from Python, it ",
             ) + self.overruns(lab, exact_free, rows, named=False)
         elif exact_free:
             answer += sentence(
@@ -191,20 +199,32 @@ class Solvers(StoryBase):
                 gaps = [abs(rows[k].max_abs_gap) for k in inexact_free]
                 lo = min(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
                 hi = max(inexact_free, key=lambda k: abs(rows[k].max_abs_gap))
-                answer += (
-                    sentence(
-                        ". The others miss the optimum by ",
-                        self.sn(lab, lo, "max_abs_gap", ".2g"),
-                        " (",
-                        lo,
-                        ") to ",
-                        self.sn(lab, hi, "max_abs_gap", ".2g"),
-                        " (",
-                        hi,
-                        ")",
-                    )
-                    if max(gaps) > min(gaps)
-                    else sentence(". The others are inexact")
+                answer += sentence(
+                    ". The other gradient-free methods miss the optimum (",
+                    Ref("tab", "solvers"),
+                    # (their range is Table III's: on the page, a plain-language edit)
+                    *(
+                        (
+                            PageOnly(
+                                tuple(
+                                    sentence(
+                                        ": by ",
+                                        self.sn(lab, lo, "max_abs_gap", ".2g"),
+                                        " (",
+                                        lo,
+                                        ") to ",
+                                        self.sn(lab, hi, "max_abs_gap", ".2g"),
+                                        " (",
+                                        hi,
+                                        ")",
+                                    )
+                                )
+                            ),
+                        )
+                        if max(gaps) > min(gaps)
+                        else ()
+                    ),
+                    ")",
                 )
                 # the budget's stops on the page (reading 168: an aside; the paper's room)
                 answer += sentence(PageOnly(tuple(self.budget_stops(lab, free, rows))))

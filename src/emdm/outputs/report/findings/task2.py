@@ -37,7 +37,7 @@ class Task2(Claims):
         if e6["t"] >= mine["t"]:
             return ()
         return (
-            ", and the term delays that crossing from ",
+            ". The term delays that crossing from ",
             self.evidn(key, "runs", emdm, "events", "singular", "t", fmt=".2f"),
             " to ",
             self.ev("task2", emdm, "singular", "t", fmt=".2f", unit="s"),
@@ -101,16 +101,16 @@ class Task2(Claims):
                 "in ",
                 self.ttg(t, emdm),
                 f". {ivkc} ",
-                "cannot meet its task from step 0 and must stay on the line"
+                "cannot meet its task constraint from step 0 on and must stay on the line"
                 if infeasible
                 else "cannot leave the line",
                 # where and when it stalls, then the like-for-like runs (readability: the
                 # stall was told after the free-slack runs, in a sentence of its own)
-                "; under our task scaling it stalls, from ",
-                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
-                " on, ",
+                ". Under our task scaling, it stalls ",
                 self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
-                f" (±{STALL_BAND * 1e3:g} mm) from the goal (",
+                " from the goal from ",
+                self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
+                " on (",
                 *figs,
                 "). Given the same free slack, ",
             )
@@ -215,7 +215,7 @@ class Task2(Claims):
                 p += sentence(
                     # both named, then the one within the limits (readings 190, 191: elbow-up and
                     # elbow-down were undefined)
-                    "Of the goal's two configurations, elbow up and elbow down, only elbow ",
+                    "Of the goal's two configurations, only elbow ",
                     sols[i].elbow,
                     " is within the joint limits",
                     PageOnly(  # the angles on the page: Fig. 4 draws both configurations
@@ -251,10 +251,12 @@ class Task2(Claims):
             if geo.line_blocked:
                 p += sentence(
                     "With ",
+                    Math("q_2", "<i>q</i><sub>2</sub>"),
+                    " outside its stop zone (",
                     Math(r"|q_2|\leq", "|<i>q</i><sub>2</sub>| ≤ "),
                     " ",
                     self.geon(t, "max_fold", fmt=".3f", unit="rad"),
-                    ", outside its stop zone, the end effector cannot come within ",
+                    "), the tip cannot come within ",
                     self.geon(t, "inner_reach", fmt=".3f", unit="m"),
                     " of the base. Yet the straight line",
                     PageOnly(  # (Fig. 4 draws it)
@@ -266,7 +268,7 @@ class Task2(Claims):
                             )
                         )
                     ),
-                    " enters this disc ",
+                    " enters this blocked disc ",
                     self.geon(t, "line_enters_at", fmt=".3f", unit="m"),
                     " after the start (",
                     Ref("fig", "workspace"),
@@ -277,8 +279,8 @@ class Task2(Claims):
         stall = self.evv(t, ivkc, "stall")
         if stall:
             p = sentence(
-                "Why it stalls: without slack, a two-link arm has one command per task velocity, "
-                f"and scaling keeps the velocity's direction, so {ivkc} can only slow down. ",
+                f"{ivkc} stalls because, without a slack, a two-link arm has one command per task "
+                f"velocity. Scaling keeps the velocity's direction, so {ivkc} can only slow down. ",
             )
             sc = self.evv(t, ivkc, "scaling")
             if sc:
@@ -301,32 +303,32 @@ class Task2(Claims):
             pins = self.evv(t, ivkc, "pinned")
             if pins:
                 p += sentence(
-                    ", joint ",
+                    ". Joint ",
                     self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
-                    f" at its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                    f" sits at its {pins[0]['side']} {pins[0]['kind']} bound from ",
                     self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
                     " on",
                 )
             if not pins or pins[0]["joint"] != self.evv(t, ivkc, "stall", "joint"):
                 p += sentence(  # (a joint already named as pinned needs no second mention)
-                    ", joint ",
+                    ". Joint ",
                     self.ev(t, ivkc, "stall", "joint", fmt="d"),
-                    " at its stop zone",
+                    " is at its stop zone",
                 )
             p += sentence(".")
             sec.paragraphs.append(p)
         if reached_e:
             p = sentence(
-                "The slack (up to ",
+                "The slack, up to ",
                 *eq(DELTA, self.ev(t, emdm, "slack", "max", fmt=".2f", unit="m/s")),
-                ") lets ",
+                ", lets ",
                 emdm,
-                " leave the line: its ",
+                " leave the line. Its ",
                 self.ev(t, emdm, "path_length", fmt=".2f", unit="m"),
                 " path, ",
                 self.ev(t, emdm, "detour", fmt=".0%"),
                 # why longer (a copy editor's "so what"): around the disc it cannot enter
-                " longer, detours around the blocked disc. "
+                " longer than the line, detours around the blocked disc. "
                 if geo is not None and geo.line_blocked
                 else " longer than the line. ",
             )
@@ -356,7 +358,7 @@ class Task2(Claims):
                     "At ",
                     T_EQ,
                     self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
-                    " the arm passes through the singular stretched pose (",
+                    ", the arm passes through the singular stretched pose (",
                     # (cond J's peak there: Section IV-B's challenge, said once)
                     *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
                     ") and flips its elbow into ",
@@ -435,7 +437,7 @@ class Task2(Claims):
                                     )
                                 )
                             ),
-                            ". On this arm the term does not raise ",
+                            ". On this arm, the term does not raise ",
                             M_SYM,
                             *(
                                 (
@@ -486,6 +488,30 @@ class Task2(Claims):
         whole = [self.mt(t, c, "mean_manipulability", ".3f") for c in (emdm, ivkc)]
         same = [n.text for n in within] == [n.text for n in whole]
         crosses = reached_e and not reached_i and bool(self.evv(t, emdm, "singular", "near"))
+        lower = self.mv(t, emdm, "mean_manipulability") < self.mv(t, ivkc, "mean_manipulability")
+        if crosses and same and not reached_i and lower:  # (a plain-language edit: the means
+            # are Table II's; the common window says the stall's tail does not change its mean)
+            f = f"data/{t}/metrics.json"
+            sec.paragraphs.append(
+                sentence(
+                    "Crossing ",
+                    Math(r"m\approx0", "<i>m</i> ≈ 0"),
+                    f" leaves {emdm}'s mean ",
+                    M_SYM,
+                    " ",
+                    self.d.cut(
+                        (f, "controllers", emdm, "mean_manipulability"),
+                        (f, "controllers", ivkc, "mean_manipulability"),
+                    ),
+                    f" below the stalled {ivkc}'s (",
+                    Ref("tab", "outcomes"),
+                    f"). Over {emdm}'s ",
+                    self.pairn(t, "C", "common_until_t", ".2f", "s"),
+                    f" alone, {ivkc}'s mean is the same.",
+                )
+            )
+            sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
+            return sec
         p = sentence(  # the cause first, when it is the singular passage (reading 142's edit)
             # (sampled, its least m is near zero, not zero: reading 161)
             *(
@@ -541,7 +567,7 @@ class Task2(Claims):
             sec.figures.append(shown)
         answer = (
             sentence(  # the times are Table II's (readings 190-195: prose too dense)
-                "Both unconstrained controllers reach the goal",
+                "Both UC controllers reach the goal",
                 PageOnly(
                     tuple(
                         sentence(
@@ -654,12 +680,27 @@ class Task2(Claims):
                 Ref("tab", "outcomes"),
                 # the term's share, sized (reading 132: "raises" said how much?)
                 "): the slack makes the saving. Against this run, the dexterity term buys ",
-                self.uc_term_gain(),
-                " ",
-                M_SYM,
-                " for ",
-                self.uc_term_cost(),
-                " effort.",
+                *(
+                    (
+                        self.uc_term_gain(".0f"),
+                        " more mean ",
+                        M_SYM,
+                        " for ",
+                        self.uc_term_cost(".0f"),
+                        " more effort.",
+                    )
+                    if all(
+                        n.text.startswith("+") for n in (self.uc_term_gain(), self.uc_term_cost())
+                    )
+                    else (
+                        self.uc_term_gain(),
+                        " mean ",
+                        M_SYM,
+                        " for ",
+                        self.uc_term_cost(),
+                        " effort.",
+                    )
+                ),
             )
         else:
             out += efforts + sentence(" at mean ", M_SYM, " ", m_run, ".")
