@@ -359,13 +359,8 @@ class Pitch:
             out.append(
                 sentence(  # one idea (readings 190, 191: slide 11 read like the paper)
                     "The slack, not the dexterity term, saves the effort (dotted: no term); "
-                    "the term adds ",
-                    s.uc_term_gain(),
-                    " to ",
-                    M_SYM,
-                    " for ",
-                    s.uc_term_cost(),
-                    " effort",
+                    "the term buys ",
+                    *s.uc_term_trade(),
                 )
             )
         return out

@@ -269,6 +269,22 @@ class Claims(StoryBase):
             fmt,
         )
 
+    def uc_term_trade(self) -> Sentence:
+        """``1% more mean m for 21% more effort``: what Task 2.2's dexterity term buys and what
+        it costs (UC-EMDM against its run without the term), unsigned where both rise; said
+        alike by the abstract, Section IV-C and the talk."""
+        gain, cost = self.uc_term_gain(), self.uc_term_cost()
+        if gain.text.startswith("+") and cost.text.startswith("+"):
+            return sentence(
+                self.uc_term_gain(".0f"),
+                " more mean ",
+                M_SYM,
+                " for ",
+                self.uc_term_cost(".0f"),
+                " more effort",
+            )
+        return sentence(gain, " mean ", M_SYM, " for ", cost, " effort")
+
     def _no_term(self, key: str) -> tuple[str, ...]:
         """Where Task 2.2's UC-EMDM run without the dexterity term keeps outcome ``key``."""
         return ("data/evidence.json", "runs", "t2-uc-emdm-no-manip", "runs", Name.UC_EMDM, key)

@@ -63,46 +63,26 @@ class Front(Goals):
         uc = (Name.UC_EMDM, Name.UC_IVKC)
         if all(self.mv(t2, c, "reached") for c in uc):  # Task 2.2, in the same figures as the body
             by_term = self.uc_term_raises_m()  # (an evidence run: whose gain is which)
-            out += sentence(
-                # each cause's share from the run without the term (readings 134, 144: the
-                # pair's -21 % effort is the slack's -35 % less what the term spends)
-                *(
-                    (
-                        "Without limits, the slack alone cuts EMDM's effort by ",
-                        self.uc_slack_alone(),
-                        " against IVKC. The dexterity term adds ",
-                        *(
-                            (
-                                self.uc_term_cost(".0f"),
-                                " effort for ",
-                                self.uc_term_gain(".0f"),
-                                " more mean ",
-                            )
-                            if all(
-                                n.text.startswith("+")
-                                for n in (self.uc_term_gain(), self.uc_term_cost())
-                            )
-                            else (
-                                self.uc_term_cost(),
-                                " effort for ",
-                                self.uc_term_gain(),
-                                " mean ",
-                            )
-                        ),
-                        M_SYM,
-                        ". ",
-                    )
-                    if by_term
-                    else (
-                        "Without limits, EMDM gives ",
-                        self.pct(t2, *uc, "total_effort"),
-                        " effort and ",
-                        self.pct(t2, *uc, "mean_manipulability"),
-                        " mean ",
-                        M_SYM,
-                        ". ",
-                    )
-                ),
+            # each cause's share from the run without the term (readings 134, 144: the pair's
+            # -21 % effort is the slack's -35 % less what the term spends)
+            out += (
+                sentence(
+                    "Without limits, the slack alone cuts EMDM's effort by ",
+                    self.uc_slack_alone(),
+                    " against IVKC. The dexterity term buys ",
+                )
+                + self.uc_term_trade()
+                + sentence(". ")
+                if by_term
+                else sentence(
+                    "Without limits, EMDM gives ",
+                    self.pct(t2, *uc, "total_effort"),
+                    " effort and ",
+                    self.pct(t2, *uc, "mean_manipulability"),
+                    " mean ",
+                    M_SYM,
+                    ". ",
+                )
             )
         rows = self.solvers("task2-lab-C-EMDM")
         if rows:

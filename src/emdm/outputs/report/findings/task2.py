@@ -680,27 +680,8 @@ class Task2(Claims):
                 Ref("tab", "outcomes"),
                 # the term's share, sized (reading 132: "raises" said how much?)
                 "): the slack makes the saving. Against this run, the dexterity term buys ",
-                *(
-                    (
-                        self.uc_term_gain(".0f"),
-                        " more mean ",
-                        M_SYM,
-                        " for ",
-                        self.uc_term_cost(".0f"),
-                        " more effort.",
-                    )
-                    if all(
-                        n.text.startswith("+") for n in (self.uc_term_gain(), self.uc_term_cost())
-                    )
-                    else (
-                        self.uc_term_gain(),
-                        " mean ",
-                        M_SYM,
-                        " for ",
-                        self.uc_term_cost(),
-                        " effort.",
-                    )
-                ),
+                *self.uc_term_trade(),
+                ".",
             )
         else:
             out += efforts + sentence(" at mean ", M_SYM, " ", m_run, ".")
