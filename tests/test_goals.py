@@ -206,7 +206,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         assert ("(none without the term)" in cost) == (no_term["UC-EMDM"]["arrived"] == runs)
         if no_term["C-EMDM"]["lost"]:
             c = scale2["C-EMDM"]["arrived"], no_term["C-EMDM"]["arrived"]
-            assert f"C-EMDM reaches {c[0]}, {c[1]} without the term" in cost
+            assert f"C-EMDM reaches {c[0]} of the {runs} goals ({c[1]} without the term)" in cost
     # what the dexterity term costs C-EMDM in arrivals (reading 179), said where it costs any
     term = record["tasks"]["task2"]["no_term"]["C-EMDM"]
     said = "without its dexterity term"

@@ -358,9 +358,9 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
         misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
-        its slack pulls with only w_S|delta| = c_S, and the term holds the tip 0.0012 to 0.019 m
-        short. C-EMDM reaches 161, 215 without the term; C-IVKC with a free slack reaches
-        216.`` Task 2's EMDM controllers whose term
+        the slack's pull w_S|delta| is only c_S, so the dexterity term stops the tip 0.0012 to
+        0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the term); C-IVKC with a
+        free slack reaches 216.`` Task 2's EMDM controllers whose term
         loses goals; empty where it loses none."""
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
@@ -375,12 +375,15 @@ class Goals(Claims):
         ]
         if not losers:
             return []
-        out = sentence(" On the random goals, the dexterity term costs goals")
         near = all(
             (e := task.no_term[c]).lost_beyond is not None and e.lost_beyond >= e.lost - e.gained
             for c in losers
         )
-        out += sentence(" near full reach. " if near else ". ")  # (one sentence each)
+        out = sentence(  # (one sentence each)
+            " Near full reach, the term costs random goals. "
+            if near
+            else " The term costs random goals. "
+        )
         slack = task.policies.get("slack")
         runs = self.goal("runs")
         for i, c in enumerate(losers):
@@ -400,12 +403,14 @@ class Goals(Claims):
                     " without the term)",
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
-                    ". At rest, its slack pulls with only ",
+                    ". At rest, the slack's pull ",
                     Math(
-                        r"w_S\|\delta\|=c_S",
-                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
+                        r"w_S\|\delta\|",
+                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖",
                     ),
-                    ", and the term holds the tip ",
+                    " is only ",
+                    Math("c_S", "<i>c</i><sub>S</sub>"),
+                    ", so the dexterity term stops the tip ",
                     *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
                     " short",
                 )
@@ -414,9 +419,11 @@ class Goals(Claims):
                 c,
                 " reaches ",
                 self.arrivals("task2", "scale", c),
-                ", ",
+                " of the ",
+                self.goaln("runs"),
+                " goals (",
                 self.goaln("tasks", "task2", "no_term", c, "arrived"),
-                " without the term",
+                " without the term)",
             )
             if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
                 out += sentence(

@@ -241,9 +241,9 @@ class Task1(Claims):
         times = [self.mv(t, c, "time_to_goal") for c in (*PAIRS["UC"], *PAIRS["C"])]
         if scaled and None not in times and min(times[2:]) > max(times[:2]):
             answer += sentence(
-                ". Both are slower than the UC pair because the ",
+                ". The ",
                 self.scn(t, "arm", "qd_max", 0, fmt="g", unit="rad/s"),
-                " speed limit slows the tip",
+                " speed limit makes both slower than the UC pair",
                 # (the shared commands' span follows: the scaled one on the page, for room)
                 PageOnly(
                     tuple(
@@ -412,7 +412,7 @@ class Task1(Claims):
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
                 "), where the minimal effort is only ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
-                ", it costs up to ",
+                ", it costs ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), ".0f"),
                 " more",
             )
@@ -706,11 +706,11 @@ class Task1(Claims):
                 # on how many scaled steps it was measured (reading 178: the lab's sample)
                 *(
                     (  # the sample first (readings 197, 198: 11 beside 41 and 38 confused)
-                        " Task 1's numerical challenge is its scaled steps. We re-solved ",
+                        " Task 1's numerical challenge is its scaled steps. Of ",
                         self.d.count(lab, "resolved_steps"),
-                        " evenly spaced C-EMDM programs offline. On their ",
+                        " evenly spaced C-EMDM programs re-solved offline, the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled steps, only one command is feasible (feasible-set width ",
+                        " scaled ones allow only one command (feasible-set width ",
                         Math(r"\leq", "≤"),
                         " ",
                     )

@@ -492,8 +492,11 @@ class Task2(Claims):
         if crosses and same and not reached_i and lower:  # (a plain-language edit: the means
             # are Table II's; the common window says the stall's tail does not change its mean)
             f = f"data/{t}/metrics.json"
-            sec.paragraphs.append(
-                sentence(
+            # (it goes on the evidence runs' paragraph, whose A4 tells the crossing: a line
+            # saved for the abstract's like-for-like count)
+            sec.paragraphs[-1] += sentence(
+                " " if sec.paragraphs[-1] else "",
+                *sentence(
                     "Crossing ",
                     Math(r"m\approx0", "<i>m</i> ≈ 0"),
                     f" leaves {emdm}'s mean ",
@@ -508,7 +511,7 @@ class Task2(Claims):
                     f"). Over {emdm}'s ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
                     f" alone, {ivkc}'s mean is the same.",
-                )
+                ),
             )
             sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
             return sec
