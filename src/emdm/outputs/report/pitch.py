@@ -318,14 +318,14 @@ class Pitch:
         if i is None:
             return ()
         return (  # said as a time of the run: the bars' axis
-            ", up to ",
-            self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E")),
-            " later (",
+            "; near the goal (",
             T_EQ,
             self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
             # the percentage's base said (reading 146: a bar without it overstates the cost), its
             # value left to the paper (reading 151: the slide was overloaded)
-            "), of a near-zero effort",
+            "), where that effort is almost zero, ",
+            self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), fmt=".0f"),
+            " more",
         )
 
     def policy(self) -> list[Sentence]:
@@ -378,12 +378,12 @@ class Pitch:
         ]
         if self.s.front("UC-EMDM", 0, "zero_E") > 0:
             out.append(
-                sentence(
-                    "Nominal ratio: ",
+                sentence(  # (reading 204: "+346% of a near-zero effort" confused; in words)
+                    "The nominal weights cost ",
                     self.d.pct(
-                        (uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt="+.1f"
+                        (uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt=".1f"
                     ),
-                    " effort at the start",
+                    " more effort than the cheapest command at the start",
                     *self.dearer_later(uc),
                 )
             )

@@ -168,7 +168,7 @@ class Tables(Claims):
         the nominal runs and the free-slack rows only (``outcomes-backup``)."""
         header = [
             sentence("run"),
-            sentence("goal"),
+            sentence("arrival"),  # (reading 204: "goal" read as a place, not a time)
             sentence("mean ", M_SYM),
             sentence(SUM_E),
             sentence("max ", Math(r"|\dot q|", "|<i>q̇</i>|")),
@@ -196,14 +196,14 @@ class Tables(Claims):
                 " ",
                 Upright(run_label(GRID_MISS)),
                 # (reading 197: "sensitive to rounding" was cryptic)
-                " diverges: its 2 digits change with rounding.",
+                " diverges, so its digits depend on rounding.",
             )
 
         def caption(evidence: bool) -> Sentence:
             # (the arrival tolerance is the formulation's: "runs end at ||e|| < 1e-3 m")
             return sentence(
                 "Closed-loop runs" if evidence else "Outcomes",
-                ": time to goal (",
+                ": arrival time (",
                 Unit("s"),
                 # (a stall is defined with the task scale, Section II, and again here: a reader
                 # of the table alone met it undefined, reading 162)
