@@ -289,15 +289,6 @@ class Claims(StoryBase):
         """Where Task 2.2's UC-EMDM run without the dexterity term keeps outcome ``key``."""
         return ("data/evidence.json", "runs", "t2-uc-emdm-no-manip", "runs", Name.UC_EMDM, key)
 
-    def uc_slack_alone(self) -> Num:
-        """``35%``: how much less effort Task 2.2's UC-EMDM spends without the dexterity term
-        than UC-IVKC, what the slack alone saves (reading 144: the -21 % is slack and term
-        together)."""
-        return self.d.cut(
-            self._no_term("total_effort"),
-            ("data/task2/metrics.json", "controllers", Name.UC_IVKC, "total_effort"),
-        )
-
     def uc_term_cost(self, fmt: str = "+.0f") -> Num:
         """``+21%``: what Task 2.2's dexterity term costs in effort (UC-EMDM against its run
         without the term), the price of its ``uc_term_gain`` in m."""
