@@ -8,6 +8,7 @@ and put it into their own sentence, so its words and numbers cannot drift apart 
 from __future__ import annotations
 
 from ....core.controllers import Name
+from ..config import PAIRS
 from ..trace import Num, PageOnly, Ref, Sentence, Text, sentence
 from .base import M_SYM, W_M, StoryBase, run_label
 from .records import GRID_FILE, EvidenceKey, MetricKey
@@ -145,6 +146,27 @@ class Claims(StoryBase):
             " for ",
             self.pct(t1, *pairs[1], keys[1], fmt=".0f"),
             " more with them",
+        )
+
+    def pair_trade(self, task: str, group: str) -> Sentence:
+        """What a task's EMDM buys over its IVKC (group ``UC`` or ``C``): ``raises the mean
+        manipulability by 17% for 25% more effort`` where both rise, else each change signed
+        (Sections III-A and III-C: the means themselves are Table II's)."""
+        ivkc, emdm = PAIRS[group]
+        keys: tuple[MetricKey, MetricKey] = ("mean_manipulability", "total_effort")
+        if all(self.mv(task, emdm, k) > self.mv(task, ivkc, k) for k in keys):
+            return sentence(
+                "raises the mean manipulability by ",
+                self.pct(task, emdm, ivkc, keys[0], fmt=".0f"),
+                " for ",
+                self.pct(task, emdm, ivkc, keys[1], fmt=".0f"),
+                " more effort",
+            )
+        return sentence(
+            "changes the mean manipulability by ",
+            self.pct(task, emdm, ivkc, keys[0]),
+            " and the effort by ",
+            self.pct(task, emdm, ivkc, keys[1]),
         )
 
     def mean_m_pair(self, task: str) -> Sentence:
