@@ -1335,7 +1335,10 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
-    assert "Given the same unbounded slack, IVKC arrives." in said and "both arrive" not in said
+    assert (
+        "On that arm, given the same unbounded slack, IVKC arrives." in said
+        and "both arrive" not in said
+    )
 
 
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):

@@ -39,8 +39,8 @@ class Front(Goals):
                     "On a two-link arm, the joint limits block the straight line to the goal. "
                     # (readings 197, 198: plainer; 'IVKC gets the same' was wrong, both change)
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
-                    "arrive. IVKC can only slow down along the line and stops short. Given the "
-                    "same unbounded slack, ",
+                    "arrive. IVKC can only slow down along the line and stops short. On that arm, "
+                    "given the same unbounded slack, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)
@@ -114,7 +114,7 @@ class Front(Goals):
                         free,
                         " needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        ".",
+                        " evaluations.",
                     )
                 else:
                     out += sentence("; every gradient-free method is inexact.")

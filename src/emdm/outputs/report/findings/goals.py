@@ -380,9 +380,10 @@ class Goals(Claims):
             for c in losers
         )
         out = sentence(  # (one sentence each)
-            " Near full reach, the term costs random goals. "
+            # (reading 205: "the term costs random goals" was cryptic)
+            " Near full reach, the dexterity term makes EMDM miss random goals. "
             if near
-            else " The term costs random goals. "
+            else " The dexterity term makes EMDM miss random goals. "
         )
         slack = task.policies.get("slack")
         runs = self.goal("runs")

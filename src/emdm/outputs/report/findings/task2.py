@@ -510,7 +510,11 @@ class Task2(Claims):
                     Ref("tab", "outcomes"),
                     f"). Over {emdm}'s ",
                     self.pairn(t, "C", "common_until_t", ".2f", "s"),
-                    f" alone, {ivkc}'s mean is the same.",
+                    f" alone, {ivkc}'s mean ",
+                    M_SYM,
+                    " is still ",
+                    within[1],
+                    ".",
                 ),
             )
             sec.figures.append(self.figure("t2-c", "figures/task2-C", self.pair_caption(t, "C")))
