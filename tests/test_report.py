@@ -189,8 +189,8 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     # runs
     assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
     assert re.search(
-        r"Under our task scaling, it stalls .{0,400}? from the goal from .{0,400}?\. Given the "
-        r"same free slack, both arrive, C-IVKC first",
+        r"Under our task scaling, it stalls .{0,400}? from the goal from .{0,400}?\. Given a "
+        r"free slack each, both arrive, C-IVKC first",
         text,
     ), "the stall told before the free-slack runs"
     scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
@@ -1336,7 +1336,7 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
     assert (
-        "On that arm, given the same unbounded slack, IVKC arrives." in said
+        "On that arm, given an unbounded slack each, IVKC arrives." in said
         and "both arrive" not in said
     )
 

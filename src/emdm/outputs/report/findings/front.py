@@ -40,7 +40,8 @@ class Front(Goals):
                     # (readings 197, 198: plainer; 'IVKC gets the same' was wrong, both change)
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
                     "arrive. IVKC can only slow down along the line and stops short. On that arm, "
-                    "given the same unbounded slack, ",
+                    # (reading 208: not "the same": each with its own weight)
+                    "given an unbounded slack each, ",
                     "both arrive" if both else "IVKC arrives",
                     ", IVKC first" if both and self.ivkc_first_with_slack() else "",
                     *(  # what EMDM's detour costs (reading 166: the abstract left it out)

@@ -112,7 +112,7 @@ class Task2(Claims):
                 self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
                 " on (",
                 *figs,
-                "). Given the same free slack, ",
+                "). Given a free slack each, ",
             )
             if both:
                 answer += sentence(
