@@ -107,7 +107,7 @@ class Front(Goals):
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
                         " and ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
-                        " on the reduced program the gradient-free methods search)",
+                        " on the smaller program given to the gradient-free methods)",
                     )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)

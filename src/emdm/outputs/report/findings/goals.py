@@ -358,7 +358,7 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
         misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
-        the slack's pull w_S|delta| is only c_S, so the dexterity term stops the tip 0.0012 to
+        the slack pulls with only w_S|delta| = c_S, so the dexterity term holds the tip 0.0012 to
         0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the term); C-IVKC with a
         free slack reaches 216.`` Task 2's EMDM controllers whose term
         loses goals; empty where it loses none."""
@@ -404,14 +404,12 @@ class Goals(Claims):
                     " without the term)",
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
-                    ". At rest, the slack's pull ",
+                    ". At rest, the slack pulls with only ",
                     Math(
-                        r"w_S\|\delta\|",
-                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖",
+                        r"w_S\|\delta\|=c_S",
+                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    " is only ",
-                    Math("c_S", "<i>c</i><sub>S</sub>"),
-                    ", so the dexterity term stops the tip ",
+                    ", so the dexterity term holds the tip ",
                     *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
                     " short",
                 )
