@@ -415,20 +415,22 @@ class Data:
         """How many entries the list at ``file#path`` has."""
         return traced(self.value(file, *path), file, path, "d", op="len")
 
+    def _ratio(self, a: tuple[str | int, ...], b: tuple[str | int, ...]) -> tuple[float, str]:
+        """``a / b`` read from the files, and the two operands' trace (``FILE#PATH|FILE#PATH``)."""
+        va, vb = self.value(str(a[0]), *a[1:]), self.value(str(b[0]), *b[1:])
+        src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
+        return va / vb, src
+
     def pct(self, a: tuple[str | int, ...], b: tuple[str | int, ...], fmt: str = "+.0f") -> Num:
         """``100 (a / b - 1)`` as a signed percentage, tracing both operands."""
-        va, vb = self.value(str(a[0]), *a[1:]), self.value(str(b[0]), *b[1:])
-        text = format(100.0 * (va / vb - 1.0), fmt) + "%"
-        src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
-        return Num(text, src, fmt, "pct")
+        ratio, src = self._ratio(a, b)
+        return Num(format(100.0 * (ratio - 1.0), fmt) + "%", src, fmt, "pct")
 
     def cut(self, a: tuple[str | int, ...], b: tuple[str | int, ...], fmt: str = ".0f") -> Num:
         """``100 (1 - a / b)``: how much less ``a`` is than ``b``, in percent (``cuts ... by 35%``
         where :meth:`pct` would write ``-35%``)."""
-        va, vb = self.value(str(a[0]), *a[1:]), self.value(str(b[0]), *b[1:])
-        text = format(100.0 * (1.0 - va / vb), fmt) + "%"
-        src = f"{a[0]}#{'/'.join(map(str, a[1:]))}|{b[0]}#{'/'.join(map(str, b[1:]))}"
-        return Num(text, src, fmt, "cut")
+        ratio, src = self._ratio(a, b)
+        return Num(format(100.0 * (1.0 - ratio), fmt) + "%", src, fmt, "cut")
 
 
 SCALE = {"ms": 1e3, "us": 1e6}

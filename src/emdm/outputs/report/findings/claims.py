@@ -148,13 +148,20 @@ class Claims(StoryBase):
             " more with them",
         )
 
+    def pair_rises(self, task: str, group: str) -> bool:
+        """Whether a task's EMDM has both more mean manipulability and more effort than its
+        IVKC (group ``UC`` or ``C``): what :meth:`pair_trade` says as a trade."""
+        ivkc, emdm = PAIRS[group]
+        keys: tuple[MetricKey, MetricKey] = ("mean_manipulability", "total_effort")
+        return all(self.mv(task, emdm, k) > self.mv(task, ivkc, k) for k in keys)
+
     def pair_trade(self, task: str, group: str) -> Sentence:
         """What a task's EMDM buys over its IVKC (group ``UC`` or ``C``): ``raises the mean
         manipulability by 17% for 25% more effort`` where both rise, else each change signed
         (Sections III-A and III-C: the means themselves are Table II's)."""
         ivkc, emdm = PAIRS[group]
         keys: tuple[MetricKey, MetricKey] = ("mean_manipulability", "total_effort")
-        if all(self.mv(task, emdm, k) > self.mv(task, ivkc, k) for k in keys):
+        if self.pair_rises(task, group):
             return sentence(
                 "raises the mean manipulability by ",
                 self.pct(task, emdm, ivkc, keys[0], fmt=".0f"),

@@ -65,11 +65,10 @@ class Task1(Claims):
             "m",
         )
         # the result first, then how closely the two track
-        trade = self.pair_trade(t, "UC")
         answer = sentence(  # the trade last, where it gets the stress (a copy editor's order)
             f"{emdm} tracks as well as {ivkc} ",
-            "but " if "".join(x.plain() for x in trade).startswith("raises") else "and ",
-            *trade,
+            "but " if self.pair_rises(t, "UC") else "and ",
+            *self.pair_trade(t, "UC"),
             ". ",
         )
         # the figure where it shows what is said: the arrivals in (c), the tips' gap in (d)'s
