@@ -1331,13 +1331,12 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     said = abstract()
     assert "IVKC can only slow down along the line and stops short." in said
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
-    assert ("both arrive, IVKC first" in said) == first
+    assert ("both arrive; IVKC arrives sooner" in said) == first
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
     assert (
-        "On that arm, given an unbounded slack each, IVKC arrives." in said
-        and "both arrive" not in said
+        "There, with an unbounded slack each, IVKC arrives." in said and "both arrive" not in said
     )
 
 

@@ -824,7 +824,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=integer(0),
         default=100,
         metavar="N",
-        help="re-solve N evenly spaced steps (0: every step; default 100)",
+        help="re-solve N evenly spaced steps and the representative ones (0: every step; default 100)",
     )
     lab.add_argument(
         "--repeats",

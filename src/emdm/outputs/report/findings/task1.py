@@ -671,7 +671,8 @@ class Task1(Claims):
                     (  # the sample first (readings 197, 198: 11 beside 41 and 38 confused)
                         " Task 1's numerical challenge is its scaled steps. Of ",
                         self.d.count(lab, "resolved_steps"),
-                        " evenly spaced C-EMDM programs re-solved offline, the ",
+                        # (not "evenly spaced", reading 209: step 1 is added to them)
+                        " C-EMDM programs re-solved offline, the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
                         " scaled ones allow only one command (feasible-set width ",
                         Math(r"\leq", "≤"),
