@@ -210,6 +210,44 @@ class Claims(StoryBase):
             return False
         return not e.get("reached") or i["time_to_goal"] < e["time_to_goal"]
 
+    def slack_race(self, ivkc: str, emdm: str, times: bool = False) -> Sentence:
+        """``both arrive; C-IVKC arrives sooner and with a higher mean m``: Task 2's constrained
+        pair given a free slack each (the controllers named ``ivkc`` and ``emdm``: the abstract
+        says IVKC and EMDM). Who arrives, who first, whose mean m is higher (readings 209, 210:
+        one clause each); ``times``: the arrival times after "sooner", on the page only."""
+        key: EvidenceKey = "t2-c-slack-policy"
+        runs = {c: self.evid(key, "runs", c) for c in (Name.C_IVKC, Name.C_EMDM)}
+        named = {Name.C_IVKC: ivkc, Name.C_EMDM: emdm}
+        if not runs[Name.C_IVKC].get("reached"):
+            return []
+        if not runs[Name.C_EMDM].get("reached"):
+            return sentence(
+                f"{ivkc} arrives", *((" in ", self.evid_goal(key, Name.C_IVKC)) if times else ())
+            )
+        first = Name.C_IVKC if self.ivkc_first_with_slack() else Name.C_EMDM
+        other = Name.C_EMDM if first == Name.C_IVKC else Name.C_IVKC
+        told = sentence(f"both arrive; {named[first]} arrives sooner")
+        if times:
+            told += sentence(
+                PageOnly(
+                    tuple(
+                        sentence(
+                            " (",
+                            self.evid_goal(key, first),
+                            " against ",
+                            self.evid_goal(key, other),
+                            ")",
+                        )
+                    )
+                )
+            )
+        m = {c: r.get("mean_manipulability", 0.0) for c, r in runs.items()}
+        if m[first] > m[other]:
+            told += sentence(" and with a higher mean ", M_SYM)
+        elif m[other] > m[first]:
+            told += sentence(f", {named[other]} with a higher mean ", M_SYM)
+        return told
+
     def emdm_without_term(self, label: bool = True, when: bool = True) -> Sentence:
         """Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner); its
         arrival time on the page only unless ``when`` (the paper's is Table II's)."""

@@ -32,33 +32,6 @@ class Front(Goals):
             # the body has the times; the abstract says who arrives and in which order
             # the brief's pair, its stall named as our policy's, then the like-for-like runs
             if self.ivkc_with_slack():
-                both = self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get("reached")
-                # what EMDM's detour costs (reading 166: the abstract left it out)
-                lead = [
-                    s
-                    for s, ahead in (
-                        ("sooner", self.ivkc_first_with_slack()),
-                        (
-                            "with a higher mean ",
-                            self.evid("t2-c-slack-policy", "runs", Name.C_IVKC).get(
-                                "mean_manipulability", 0.0
-                            )
-                            > self.evid("t2-c-slack-policy", "runs", Name.C_EMDM).get(
-                                "mean_manipulability", 0.0
-                            ),
-                        ),
-                    )
-                    if both and ahead
-                ]
-                ivkc_lead: Sentence = (
-                    sentence(
-                        "; IVKC arrives ",
-                        " and ".join(lead),
-                        *((M_SYM,) if lead[-1].startswith("with") else ()),
-                    )
-                    if lead
-                    else []
-                )
                 out += sentence(
                     # (in words, not the body's terms: reading 170 met 'stall' and 'task
                     # scaling' undefined in the abstract)
@@ -68,8 +41,7 @@ class Front(Goals):
                     "arrive. IVKC can only slow down along the line and stops short. There, "
                     # (reading 208: not "the same": each with its own weight; 209, 210: plainer)
                     "with an unbounded slack each, ",
-                    "both arrive" if both else "IVKC arrives",
-                    *ivkc_lead,
+                    *self.slack_race("IVKC", "EMDM"),
                     ". ",
                 )
             else:

@@ -92,7 +92,6 @@ class Task2(Claims):
         if both_first:  # the brief's pair first, its stall named as our policy's, then the
             # like-for-like run in the same answer (readings 150-151 asked the latter first,
             # 152-153 the former: the pair as the brief defines it is the question)
-            both = bool(self.evid(key, "runs", emdm).get("reached"))
             infeasible = bool(
                 self.evv(t, ivkc, "scaling") and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
             )  # the brief's exact program has no solution there: what the policy is for
@@ -114,27 +113,7 @@ class Task2(Claims):
                 *figs,
                 "). Given a free slack each, ",
             )
-            if both:
-                answer += sentence(
-                    f"both arrive, {ivkc} first",
-                    # the times are Table II's (readings 190-195: prose too dense)
-                    PageOnly(
-                        tuple(
-                            sentence(
-                                " (",
-                                self.evid_goal(key, ivkc),
-                                " against ",
-                                self.evid_goal(key, emdm),
-                                ")",
-                            )
-                        )
-                    ),
-                )
-            else:
-                answer += sentence(f"{ivkc} arrives in ", self.evid_goal(key, ivkc))
-            m4 = self.evid(key, "runs", ivkc, "mean_manipulability")
-            if m4 > self.evid(key, "runs", emdm, "mean_manipulability"):  # in full
-                answer += sentence(" and with a higher mean ", M_SYM)
+            answer += self.slack_race(ivkc, emdm, times=True)
             answer += sentence(" (", Ref("tab", "outcomes"), ")")
         elif stalled:
             # the contrast first (who can leave the line), then where the other stops
