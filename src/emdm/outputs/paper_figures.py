@@ -407,7 +407,7 @@ def pair_figure(
             ax.set_title(letter, loc="left", fontsize=medium.small, fontweight="bold", pad=2)
         handles: list[Artist] = [Line2D([], [], **st) for _, st in drawn]
         if spans:
-            handles.append(_scaled_patch(r"both task-scaled ($\alpha<1$)"))
+            handles.append(_scaled_patch(r"both task-scaled ($\alpha^*<1$)"))
         fig.legend(
             handles=handles,
             loc="outside upper center",

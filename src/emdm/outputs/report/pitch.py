@@ -9,9 +9,9 @@ from ...core.controllers import Name
 from .document import Document
 from .findings import M_SYM, Story
 from .findings.base import T_EQ, glossed
-from .findings.claims import cap, listed
+from .findings.claims import listed
 from .findings.records import EvidenceKey
-from .trace import Data, Sentence, sentence
+from .trace import Data, Sentence, cap, sentence
 
 
 @dataclass

@@ -370,6 +370,14 @@ def sentence(*parts: Segment | str) -> Sentence:
     return [Text(p) if isinstance(p, str) else p for p in parts]
 
 
+def cap(parts: Sentence) -> Sentence:
+    """The claim at the start of a sentence: its first letter a capital."""
+    if not parts or not isinstance(parts[0], Text):
+        return parts
+    first = parts[0].text
+    return [Text(first[:1].upper() + first[1:]), *parts[1:]]
+
+
 def render_html(parts: Sequence[Segment]) -> str:
     return "".join(p.html() for p in parts)
 

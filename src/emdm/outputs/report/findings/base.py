@@ -24,7 +24,7 @@ from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
-from ..trace import Data, Eqs, File, Math, Num, PageOnly, Ref, Sentence, Text, sentence, traced
+from ..trace import Data, Eqs, File, Math, Num, PageOnly, Ref, Sentence, Text, cap, sentence, traced
 from .records import (
     GRID_FILE,
     EventKey,
@@ -51,7 +51,9 @@ GAP_FLOOR_MATH = Math(rf"10^{{{GAP_FLOOR_EXP}}}", f"10<sup>−{-GAP_FLOOR_EXP}</
 """Its axis' floor, as they write it."""
 
 # ---------------------------------------------------------------------------- inline math
-ALPHA = Math(r"\alpha", "α")
+ALPHA = Math(r"\alpha^*", "α*")
+"""The task scale of (2), α* wherever a value is given (editor after readings 209, 210: α and
+α* were one thing under two names)."""
 W_M = Math("w_M", "<i>w</i><sub>M</sub>")
 W_E = Math("w_E", "<i>w</i><sub>E</sub>")
 W_S = Math(r"w_S=c_S/\|e\|", "<i>w</i><sub>S</sub>&nbsp;=&nbsp;<i>c</i><sub>S</sub>/‖<i>e</i>‖")
@@ -544,18 +546,22 @@ class StoryBase:
         else:
             out += sentence(", as in ", Ref("fig", "t1-uc"))
         if (task, group) == ("task2", "C"):  # pair_figure(..., gap=True): the fourth panel
-            out += sentence(
-                " with (d) the tracking gap ",
-                GAP_MATH,
-                " (slack or scaled-off ",
-                Math(r"(1-\alpha)\|v_d\|", "(1 − α)‖<i>v</i><sub>d</sub>‖"),
-                "; log, floored at ",
-                GAP_FLOOR_MATH,
-                ")" if FOURTH_PANEL["task1"] == "path" else "), joints in (e), (f)",
-            )
+            # one short sentence per part, no nested parentheses (editor after readings 209, 210)
             key = "t2-c-slack-policy"  # its like-for-like run, dotted (reading 169)
             if key in self.rec.evidence and self.evid(key, "runs", ivkc).get("reached"):
                 out += sentence(f"; dotted: {ivkc} with a free slack (", Eqs(("free",)), ")")
+            out += sentence(
+                ". Panel (d): the tracking gap ",
+                GAP_MATH,
+                ", the slack or the scaled-off ",
+                Math(r"(1-\alpha^*)\|v_d\|", "(1 − α*)‖<i>v</i><sub>d</sub>‖"),
+                "; log, floored at ",
+                GAP_FLOOR_MATH,
+                "" if FOURTH_PANEL["task1"] == "path" else ". Joints: (e), (f)",
+            )
+            for note in notes:
+                out += sentence(". ") + cap(note)
+            return out + sentence(".")
         for note in notes:
             out += sentence("; ") + note
         return out + sentence(".")

@@ -9,20 +9,12 @@ from __future__ import annotations
 
 from ....core.controllers import Name
 from ..config import PAIRS
-from ..trace import Num, PageOnly, Ref, Sentence, Text, sentence
+from ..trace import Num, PageOnly, Ref, Sentence, sentence
 from .base import M_SYM, W_M, StoryBase, run_label
 from .records import GRID_FILE, EvidenceKey, MetricKey
 
 LEVEL = 0.01
 """Where the whole-run sweep's mean m has levelled off: within 1 % of the nominal run's."""
-
-
-def cap(parts: Sentence) -> Sentence:
-    """The claim at the start of a sentence: its first letter a capital."""
-    if not parts or not isinstance(parts[0], Text):
-        return parts
-    first = parts[0].text
-    return [Text(first[:1].upper() + first[1:]), *parts[1:]]
 
 
 def listed(words: list[str]) -> str:

@@ -19,7 +19,8 @@ class Front(Goals):
         out = sentence(
             # (readability, readings 176-185: whole sentences, one comparison each)
             # (a plain-language edit: one idea per sentence, every term glossed)
-            "EMDM, a velocity controller, solves a quadratic program at each step: it makes the "
+            # (209, 210: split)
+            "The velocity controller EMDM solves a quadratic program per step. It makes the "
             "tip follow a proportional controller, minimises joint-speed effort and maximises "
             "the growth rate of manipulability ",
             M_SYM,
@@ -84,24 +85,24 @@ class Front(Goals):
                 # count read as the full program's; 209, 210: both counts in one sentence was
                 # the abstract's hardest; the full program's are the body's)
                 like = same and twin is not None and twin.median_gradients
-                out += sentence(
-                    "On the two-link programs, ",
-                    "in the smaller form given to the gradient-free methods, " if like else "",
-                    "the gradient-based ",
+                out += sentence(  # (editor after 209, 210: the subject first)
+                    "On the two-link programs, the gradient-based ",
                     grad,
                     " reaches the exact optimum in a median ",
                     *self.evaluations(lab, LIKE_FOR_LIKE if like else grad),
                 )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)
-                        "; the gradient-free ",
+                        ". The gradient-free ",
                         free,
                         " needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        ".",
+                        ". Both solve the reduced program, in joint velocities alone."
+                        if like
+                        else ".",
                     )
                 else:
-                    out += sentence("; every gradient-free method is inexact.")
+                    out += sentence(". Every gradient-free method is inexact.")
         return out
 
     def introduction(self) -> Section:
@@ -125,8 +126,9 @@ class Front(Goals):
             "allowed tip-velocity error. Like",
             Cite("haviland"),
             ", our controller, EMDM, solves one strictly convex quadratic program (QP) per step, "
-            "with our certified active-set method. We compare it with IVKC, each unconstrained "
-            "(UC-) or with joint limits (C-). We coded both from the course's "
+            # ("certified" is Section II's term, editor after 209, 210)
+            "with our active-set method, which checks each answer's optimality. We compare it "
+            "with IVKC, each unconstrained (UC-) or with joint limits (C-). We coded both from the course's "
             # what "the brief" is, once (reading 195: cited ten times, never summarised)
             "project brief, which sets the arms, parameters and questions (its skeleton code was "
             "unavailable)",
@@ -180,25 +182,26 @@ class Front(Goals):
         gains = self.slack_gains()
         if gains:
             arrive = (
-                sentence(" and lets C-IVKC arrive in Task 2", *self.goals_policy())
+                sentence("It lets C-IVKC arrive in Task 2", *self.goals_policy(), ". ")
                 if self.ivkc_with_slack()
                 else []
             )
             if self.slack_better_on_all():  # the recommendation first (reading 164 found none)
                 p += sentence(
-                    "A free slack beats task scaling: it makes C-EMDM ",
+                    # (one claim per sentence, editor after readings 209, 210)
+                    "A free slack beats task scaling. It makes C-EMDM ",
                     listed(gains),
-                    " in Task 1",
+                    " in Task 1. ",
                     *arrive,
-                    ", while scaling only keeps the tip's path straighter. ",
+                    "Scaling only keeps the tip's path straighter. ",
                 )
             else:
                 p += sentence(
                     "In Task 1, scaling keeps the tip's path straighter, but a free slack makes "
                     "C-EMDM ",
                     listed(gains),
-                    *(sentence(",", *arrive) if arrive else []),
                     ". ",  # (Table II's free-slack rows, cited where the runs are told)
+                    *arrive,
                 )
         advice = self.weight_advice()  # the weights' recommendation, from the whole-run sweep
         cost = self.weight_cost()  # ... and over the many goals (reading 178: one run's)

@@ -358,10 +358,10 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
         misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
-        the slack's pull is only w_S|delta| = c_S, which the dexterity term outweighs: it stops the
-        tip 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the term); C-IVKC with a
-        free slack reaches 216.`` Task 2's EMDM controllers whose term
-        loses goals; empty where it loses none."""
+        the slack penalty's gradient is only w_S|delta| = c_S. The dexterity term outweighs it: the
+        tip stops 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the
+        term); C-IVKC with a free slack reaches 216.`` Task 2's EMDM controllers whose term loses
+        goals; empty where it loses none."""
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
         if task is None:
@@ -405,12 +405,12 @@ class Goals(Claims):
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
                     # (209, 210: plainer)
-                    ". At rest, the slack's pull is only ",
+                    ". At rest, the slack penalty's gradient is only ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    ", which the dexterity term outweighs: it stops the tip ",
+                    ". The dexterity term outweighs it: the tip stops ",
                     *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
                     " short",
                 )

@@ -10,6 +10,7 @@ from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
 from ..trace import Eqs, File, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
+from ..trace import cap as capitalised
 from .base import (
     ALPHA,
     ARMS_IN_PAPER,
@@ -23,12 +24,12 @@ from .base import (
     MRATE,
     RATIO,
     SCALED_LAB,
+    VD,
     W_M,
     eq,
     run_label,
 )
 from .claims import LEVEL, Claims
-from .claims import cap as capitalised
 from .records import GRID_FILE
 
 KKT_EXP = round(math.log10(KKT_TOL))
@@ -324,31 +325,30 @@ class Task1(Claims):
             )
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
-        answer = sentence(  # (no topic sentence: "the fronts show what the weights buy" said
-            # nothing the numbers do not, a copy editor found)
-            "At ",
-            K_EQ,
-            "0 (",
+        answer = sentence(  # the finding, then its evidence (editor after readings 209, 210);
+            # what the fronts say (reading 183: never interpreted): the weighted sum's optima
+            # lie on the convex hull of the attainable (M, E) set
+            "Every front in ",
             Ref("fig", "pareto"),
-            "), we raise ",
+            " is convex: each gain in ",
+            MRATE,
+            " costs more effort than the last. At ",
+            K_EQ,
+            "0, raising ",
             RATIO,
             " from 0 to ",
             self.d.num(PARETO_RECORD, "ratios", -1, fmt=".0e"),
-            ". UC-EMDM's optimal ",
+            " lifts UC-EMDM's optimal ",
             MRATE,
-            " grows from ",
+            " from ",
             self.frontn("UC-EMDM", 0, "M_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-            ", and its effort from ",
+            ". Its effort rises from ",
             self.frontn("UC-EMDM", 0, "E_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
-            # what the fronts say (reading 183: never interpreted); the weighted sum's optima
-            # lie on the convex hull of the attainable (M, E) set
-            ". Every front is convex: each gain in ",
-            MRATE,
-            " costs more effort than the last. ",
+            ". ",
         )
         answer += sentence("The nominal ratio costs ")
         e0 = self.front("UC-EMDM", 0, "zero_E")
@@ -397,17 +397,20 @@ class Task1(Claims):
                             K_EQ,
                             self.frontn("C-EMDM", i, "k", "d"),
                             # (readings 197, 200: plainer, the reason in its own clause)
-                            ", C-EMDM's front is one point: whatever the weights, the speed limits "
-                            "allow only the scaled step (",
+                            # (editor after 209, 210: Section II's plain words, not "the
+                            # scaled step")
+                            ", C-EMDM's front is one point. Whatever the weights, the speed "
+                            "limits allow one command, delivering only ",
                             *eq(ALPHA, self.frontn("C-EMDM", i, "alpha", ".2f")),
-                            ")",
+                            " of ",
+                            VD,
                         )
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            ". With a free slack (",
+                            ". A free slack (",
                             Eqs(("free",)),
-                            "), it is also one point (hollow in ",
+                            ") also gives one point (hollow in ",
                             Ref("fig", "pareto"),
                             ")",
                         )
@@ -636,19 +639,22 @@ class Task1(Claims):
             )
         )
         p = sentence(
-            "Warm-started, it takes a median of ",
+            "Warm-started, the solver takes a median of ",
             self.ev(t, Name.C_EMDM, "solver", "median_iterations_warm", fmt=".4g"),
             " and at most ",
             self.ev(t, Name.C_EMDM, "solver", "max_iterations_warm", fmt="d"),
-            " iterations per step",
+            " iterations per step.",
         )
         lab = SCALED_LAB
         ch: dict[str, Any] = {}
         if self.d.exists(lab):
             ch = self.d.value(lab, "challenges", "solvers")
+        vertex = self.single_point_vertex()
+        sampled = vertex is not None and "steps" in vertex
         if "median_iterations_scaled" in ch.get("active-set", {}):
+            # (editor after readings 209, 210: the paradox flagged, then explained)
             p += sentence(
-                ", ",
+                " Scaled steps take ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -657,10 +663,10 @@ class Task1(Claims):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
-                " on scaled steps",
+                ", yet are Task 1's numerical challenge." if sampled else ".",
             )
-        p += sentence(".")
-        vertex = self.single_point_vertex()
+        elif sampled:
+            p += sentence(" Task 1's numerical challenge is its scaled steps.")
         if vertex:  # measured: one point, and how degenerate
             low, high = vertex["active"]
             fixed = vertex["unknowns"] - vertex["task_rows"]  # the bounds a vertex needs
@@ -669,7 +675,7 @@ class Task1(Claims):
                 # on how many scaled steps it was measured (reading 178: the lab's sample)
                 *(
                     (  # the sample first (readings 197, 198: 11 beside 41 and 38 confused)
-                        " Task 1's numerical challenge is its scaled steps. Of ",
+                        " Of ",
                         self.d.count(lab, "resolved_steps"),
                         # (not "evenly spaced", reading 209: step 1 is added to them)
                         " C-EMDM programs re-solved offline, the ",

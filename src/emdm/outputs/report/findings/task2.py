@@ -6,7 +6,7 @@ from ....core.controllers import Name
 from ....core.tolerances import STALL_BAND
 from ..config import PAIRS
 from ..document import Section
-from ..trace import File, Math, Num, PageOnly, Ref, Segment, Sentence, sentence, traced
+from ..trace import File, Math, Num, PageOnly, Ref, Segment, Sentence, cap, sentence, traced
 from .base import (
     ALPHA,
     COND_J,
@@ -18,7 +18,7 @@ from .base import (
     q,
     run_label,
 )
-from .claims import Claims, cap
+from .claims import Claims
 from .records import EvidenceKey
 
 
@@ -384,6 +384,8 @@ class Task2(Claims):
         if e6.get("reached") and reached_e:
             if e6["time_to_goal"] < self.mv(t, emdm, "time_to_goal"):
                 higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
+                if higher:  # the finding, then its run (editor after readings 209, 210)
+                    p += sentence("On this arm, the dexterity term does not raise ", M_SYM, ". ")
                 p += cap(self.emdm_without_term(when=not higher)) + sentence(
                     *(
                         (  # its time and mean are Table II's (readings 190-195: too dense)
@@ -416,11 +418,9 @@ class Task2(Claims):
                                     )
                                 )
                             ),
-                            ". On this arm, the term does not raise ",
-                            M_SYM,
                             *(
                                 (
-                                    ": every route into ",
+                                    ". Every route into ",
                                     self.goal_pose(t),
                                     " flips the elbow through ",
                                     M_SYM,
@@ -652,7 +652,10 @@ class Task2(Claims):
             ")",
         )
         m_run = self.evidn(key, "runs", emdm, "mean_manipulability", fmt=".3f")
+        slacks = saves and self.uc_term_raises_m()  # the slack's saving, not the term's
         out = sentence(
+            # the finding first, then its run (editor after readings 209, 210)
+            "The saving comes from the slack. " if slacks else "",
             "Without the dexterity term (",
             run_label(key),
             f"), {emdm} ",
@@ -669,7 +672,9 @@ class Task2(Claims):
                 " (",
                 Ref("tab", "outcomes"),
                 # the term's share, sized (reading 132: "raises" said how much?)
-                "): the slack makes the saving. Against this run, the dexterity term buys ",
+                "). Against ",
+                run_label(key),
+                ", the dexterity term buys ",
                 *self.uc_term_trade(),
                 ".",
             )
