@@ -137,6 +137,8 @@ class Task1(Claims):
             W_M,
             " = 0 (",
             run_label("t1-uc-no-manip"),
+            ", ",  # the first ablation named: where its row is (editor after 209, 210)
+            Ref("tab", "outcomes"),
             "), ",
         )
         ref = self.evid("t1-uc-no-manip", "reference")
