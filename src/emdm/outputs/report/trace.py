@@ -89,6 +89,7 @@ def latex_escape(text: str) -> str:
                 "}": r"\}",
                 "~": r"\textasciitilde{}",
                 "^": r"\textasciicircum{}",
+                "\u2011": r"\mbox{-}",  # a hyphen no line breaks at: "(UC-)" in one piece
                 "–": "--",
                 "—": "---",
                 "<": r"\textless{}",

@@ -88,18 +88,24 @@ class Front(Goals):
                 out += sentence(  # (editor after 209, 210: the subject first)
                     "On the two-link programs, the gradient-based ",
                     grad,
-                    " reaches the exact optimum in a median ",
-                    *self.evaluations(lab, LIKE_FOR_LIKE if like else grad),
+                    " reaches the exact optimum in a median of ",
+                    *self.evaluations(lab, grad),
                 )
+                if like:  # like for like in its own sentence (211, 212: the reduced
+                    # program's count read as the full program's when it stood alone)
+                    out += sentence(
+                        ". Given the gradient-free methods' smaller program, it needs ",
+                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
+                        " and ",
+                        self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
+                    )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)
-                        ". The gradient-free ",
+                        "; the gradient-free " if like else ". The gradient-free ",
                         free,
                         " needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        ". Both solve the reduced program, in joint velocities alone."
-                        if like
-                        else ".",
+                        ".",
                     )
                 else:
                     out += sentence(". Every gradient-free method is inexact.")
@@ -128,7 +134,9 @@ class Front(Goals):
             ", our controller, EMDM, solves one strictly convex quadratic program (QP) per step, "
             # ("certified" is Section II's term, editor after 209, 210)
             "with our active-set method, which checks each answer's optimality. We compare it "
-            "with IVKC, each unconstrained (UC-) or with joint limits (C-). We coded both from the course's "
+            # (non-breaking hyphens, reading 211: "(UC-" split over a line)
+            "with IVKC, each unconstrained (UC\u2011) or with joint limits (C\u2011). We coded "
+            "both from the course's "
             # what "the brief" is, once (reading 195: cited ten times, never summarised)
             "project brief, which sets the arms, parameters and questions (its skeleton code was "
             "unavailable)",

@@ -132,14 +132,16 @@ class Solvers(StoryBase):
                     else ()
                 ),
                 PageOnly(tuple(sentence(")"))),
+                # its iterations too: Table III's "it./ev." column (reading 211: the table
+                # gave 5/6, the text 6 and 5 gradient evaluations)
                 " after a median of ",
+                self.sn(lab, grad, "median_iterations", ".4g"),
+                " iterations, with ",
                 *self.evaluations(lab, grad),
                 PageOnly(  # (Table IV's row gives them: room for Task 1's stills)
                     tuple(
                         sentence(
-                            " (",
-                            self.sn(lab, grad, "median_iterations", ".4g"),
-                            " iterations with the exact gradient, ",
+                            " (the exact gradient, ",
                             self.sn(lab, grad, "median_time", unit="ms"),
                             ")",
                         )

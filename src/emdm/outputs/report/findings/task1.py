@@ -656,7 +656,7 @@ class Task1(Claims):
         if "median_iterations_scaled" in ch.get("active-set", {}):
             # (editor after readings 209, 210: the paradox flagged, then explained)
             p += sentence(
-                " Scaled steps take ",
+                " Scaled steps need ",
                 self.d.num(
                     lab,
                     "challenges",
@@ -665,7 +665,9 @@ class Task1(Claims):
                     "median_iterations_scaled",
                     fmt=".0f",
                 ),
-                ", yet are Task 1's numerical challenge." if sampled else ".",
+                " iterations, yet they are Task 1's numerical challenge."
+                if sampled
+                else " iterations.",
             )
         elif sampled:
             p += sentence(" Task 1's numerical challenge is its scaled steps.")
