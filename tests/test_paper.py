@@ -65,6 +65,15 @@ def test_the_paper_is_at_most_four_letter_pages(quick_report):
         assert f"\\section{{{section}}}" in tex
 
 
+def test_the_formulations_run_in_headings_each_open_a_paragraph(quick_report):
+    """Section II's run-in headings start paragraphs of their own: a template's closing tag
+    before the blank line ate the break once, and "Infeasible steps" ran on after the stop zone's
+    sentence."""
+    tex = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    for heading in ("Programs.", "Infeasible steps: a departure from the brief.", "Solvers."):
+        assert f"\n\n\\emph{{{heading}}}" in tex, heading
+
+
 def test_the_pitch_is_16_9_with_8_to_13_slides_and_backups(quick_report):
     """A 10-minute talk: at most 13 frames before the backups, the title's included (Task 1's
     policy has a slide of its own since readings 152-153 found it a second idea beside the
