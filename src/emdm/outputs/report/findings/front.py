@@ -94,7 +94,10 @@ class Front(Goals):
                 if like:  # like for like in its own sentence (211, 212: the reduced
                     # program's count read as the full program's when it stood alone)
                     out += sentence(
-                        ". Given the gradient-free methods' smaller program, it needs ",
+                        # (213: "it" read as unclear)
+                        ". Given the gradient-free methods' smaller program, ",
+                        grad,
+                        " needs ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
                         " and ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
