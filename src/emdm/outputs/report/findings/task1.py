@@ -559,7 +559,7 @@ class Task1(Claims):
                 self.gridn("UC-EMDM", knee[1], "total_effort", fmt=".3g"),
                 " instead of ",
                 self.gridn("UC-EMDM", n, "total_effort", fmt=".3g", unit="rad²/s"),
-                " of effort",
+                " of total effort",  # (reading 209: E is effort too)
                 PageOnly(  # (reading 178 found it cryptic at the paper's length; room)
                     tuple(
                         sentence(
@@ -569,7 +569,7 @@ class Task1(Claims):
                             M_SYM,
                             " for up to ",
                             self.gridn("UC-EMDM", dearest, "total_effort", fmt=".3g"),
-                            " of effort",
+                            " of total effort",
                         )
                     )
                 ),
