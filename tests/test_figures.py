@@ -494,9 +494,10 @@ def test_the_stills_date_a_stall_as_the_record_does(tmp_path, drawn):
 
 def test_speed_strips_far_beyond_the_limit_are_cut(tmp_path, drawn):
     """A joint whose speed goes far beyond its limit has its strip cut at FAR_BEYOND times the
-    limit, on a plain linear axis (readings found a log band beyond it hard to read; the peak
-    speeds are Table I's, no longer written beside the strip: readings 138-140 found those
-    labels cryptic); a strip within it spans every run."""
+    limit, on a plain linear axis (readings found a log band beyond it hard to read), with the
+    peak the cut hides written inside the strip at the cut edge, "peak 8.73" (readings 138-140
+    found bare numbers beside the strip cryptic; 209, 212, 214 could not see the violations); a
+    strip within it spans every run and has nothing written."""
     from emdm.outputs import paper_figures as pf
 
     sc = emdm.load_scenario("task1", {"motion.max_time": 2.0})
@@ -511,12 +512,23 @@ def test_speed_strips_far_beyond_the_limit_are_cut(tmp_path, drawn):
         assert ax.get_yscale() == "linear", j
         lo, hi = ax.get_ylim()
         limit = sc.arm.qd_max[j]
+        written = [t.get_text() for t in ax.texts]
         if far:  # cut at FAR_BEYOND, the limits inside the view
             assert -pf.FAR_BEYOND * limit <= lo < -limit and limit < hi <= pf.FAR_BEYOND * limit
             assert max(hi, -lo) == pytest.approx(pf.FAR_BEYOND * limit)
+            beyond = [
+                v
+                for v in (max(r.qd[:, j].max() for r in runs), min(r.qd[:, j].min() for r in runs))
+                if abs(v) > pf.FAR_BEYOND * limit
+            ]
+            expected = [
+                f"peak {float(f'{v:.3g}'):g}".replace("-", "\N{MINUS SIGN}") for v in beyond
+            ]
+            assert sorted(written) == sorted(expected), j
         else:
             assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
-        assert not ax.artists  # nothing written beside the strip
+            assert written == [], j
+        assert not ax.artists  # nothing drawn beside the strip
     assert any(  # the case this guards: a strip cut
         max(np.abs(r.qd[:, j]).max() for r in runs) > max(np.abs(ax.get_ylim()))
         for j, ax in enumerate(strips)

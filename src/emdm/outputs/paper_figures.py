@@ -371,6 +371,21 @@ def pair_figure(
                 for start, stop in ((limit, hi_view), (lo_view, -limit)):
                     if stop > start:
                         qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
+                # the peak the cut hides, written at the cut edge's right end, where the runs
+                # have settled (readings 209, 212, 214: the limit violations could not be seen)
+                for peak, side in ((high, "top"), (low, "bottom")):
+                    if abs(peak) > FAR_BEYOND * limit:
+                        qd_axes[j].text(
+                            0.99,
+                            0.96 if side == "top" else 0.04,
+                            f"peak {_plain(float(f'{peak:.3g}'))}",
+                            transform=qd_axes[j].transAxes,
+                            ha="right",
+                            va=side,
+                            fontsize=medium.tiny - 1,
+                            bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.3},
+                            zorder=5,
+                        )
             bottom = min(float(lo[j]), min(float(r.q[:, j].min()) for r in every))
             top_q = max(float(hi[j]), max(float(r.q[:, j].max()) for r in every))
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame

@@ -494,12 +494,8 @@ class StoryBase:
             f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
             "velocities, limits dotted"
         )
-        if far:  # the peak speeds: the outcome table's column
-            out += sentence(
-                f" (shaded beyond, cut at {FAR_BEYOND:g}×; peaks in ",
-                Ref("tab", "outcomes"),
-                ")",
-            )
+        if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
+            out += sentence(f" (shaded beyond, cut at {FAR_BEYOND:g}× with each peak written)")
         return out
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:
