@@ -516,15 +516,20 @@ def test_speed_strips_far_beyond_the_limit_are_cut(tmp_path, drawn):
         if far:  # cut at FAR_BEYOND, the limits inside the view
             assert -pf.FAR_BEYOND * limit <= lo < -limit and limit < hi <= pf.FAR_BEYOND * limit
             assert max(hi, -lo) == pytest.approx(pf.FAR_BEYOND * limit)
-            beyond = [
-                v
-                for v in (max(r.qd[:, j].max() for r in runs), min(r.qd[:, j].min() for r in runs))
+            # each peak in the colour of the run it is (reading 216: the labels mixed them)
+            highs = [(float(r.qd[:, j].max()), r) for r in runs]
+            lows = [(float(r.qd[:, j].min()), r) for r in runs]
+            ends = [max(highs, key=lambda e: e[0]), min(lows, key=lambda e: e[0])]
+            expected = sorted(
+                (
+                    f"peak {float(f'{v:.3g}'):g}".replace("-", "\N{MINUS SIGN}"),
+                    pf._style(r, pf.PAPER)["color"],
+                )
+                for v, r in ends
                 if abs(v) > pf.FAR_BEYOND * limit
-            ]
-            expected = [
-                f"peak {float(f'{v:.3g}'):g}".replace("-", "\N{MINUS SIGN}") for v in beyond
-            ]
-            assert sorted(written) == sorted(expected), j
+            )
+            assert expected, j
+            assert sorted((t.get_text(), t.get_color()) for t in ax.texts) == expected, j
         else:
             assert all(lo <= r.qd[:, j].min() and r.qd[:, j].max() <= hi for r in runs), j
             assert written == [], j

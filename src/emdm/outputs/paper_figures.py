@@ -373,12 +373,18 @@ def pair_figure(
                         qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
                 # the peak the cut hides, written at the cut edge's right end, where the runs
                 # have settled (readings 209, 212, 214: the limit violations could not be seen)
-                for peak, side in ((high, "top"), (low, "bottom")):
+                # in the colour of the run it is (reading 216: the labels mixed controllers)
+                for side, pick in (("top", max), ("bottom", min)):
+                    peak, st = pick(
+                        ((float(pick(r.qd[:, j])) if r.steps else 0.0, st) for r, st in drawn),
+                        key=lambda pair: pair[0],
+                    )
                     if abs(peak) > FAR_BEYOND * limit:
                         qd_axes[j].text(
                             0.99,
                             0.96 if side == "top" else 0.04,
                             f"peak {_plain(float(f'{peak:.3g}'))}",
+                            color=st["color"],
                             transform=qd_axes[j].transAxes,
                             ha="right",
                             va=side,

@@ -495,7 +495,9 @@ class StoryBase:
             "velocities, limits dotted"
         )
         if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
-            out += sentence(f" (shaded beyond, cut at {FAR_BEYOND:g}× with each peak written)")
+            out += sentence(
+                f" (shaded beyond, cut at {FAR_BEYOND:g}× with each peak written in its run's colour)"
+            )
         return out
 
     def far_beyond(self, task: str, controllers: Sequence[str]) -> bool:

@@ -332,7 +332,12 @@ class Task1(Claims):
             # lie on the convex hull of the attainable (M, E) set
             "Every front in ",
             Ref("fig", "pareto"),
-            " is convex: each gain in ",
+            # (a consequence, not a finding, reading 215: E convex, M linear in q-dot)
+            " is convex, as ",
+            E_SYM,
+            " is convex and ",
+            MRATE,
+            " linear: each gain in ",
             MRATE,
             " costs more effort than the last. At ",
             K_EQ,
