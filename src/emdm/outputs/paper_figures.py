@@ -751,7 +751,7 @@ def _front_axes(
     _value_axis(ax, E)
     note = ""
     if info["degenerate"]:
-        note = "one point\n" + rf"($\alpha={info['alpha']:.2f}$)"
+        note = "one point\n" + rf"($\alpha^*={info['alpha']:.2f}$)"
         if slack:  # the hollow points beside it are another program's: say whose
             note += "\nhollow: free slack"
     elif info["saturated_from_ratio"] is not None:

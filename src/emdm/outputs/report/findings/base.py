@@ -496,7 +496,8 @@ class StoryBase:
         )
         if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
             out += sentence(
-                f" (shaded beyond, cut at {FAR_BEYOND:g}× with each peak written in its run's colour)"
+                f" (shaded beyond, cut at {FAR_BEYOND:g}×, the largest peak past a cut written in its "
+                "run's colour)"
             )
         return out
 
