@@ -558,9 +558,10 @@ class StoryBase:
                 GAP_FLOOR_MATH,
                 "" if FOURTH_PANEL["task1"] == "path" else ". Joints: (e), (f)",
             )
-            for note in notes:
-                out += sentence(". ") + cap(note)
-            return out + sentence(".")
+            # its notes as sentences too, after the panel's
+            notes = [sentence(". ") + cap(note) for note in notes]
+        else:
+            notes = [sentence("; ") + note for note in notes]
         for note in notes:
-            out += sentence("; ") + note
+            out += note
         return out + sentence(".")
