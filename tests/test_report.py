@@ -765,7 +765,7 @@ def test_references_are_numbered_alike_in_the_paper_and_the_page():
 
 
 def test_a_scaled_steps_front_is_also_drawn_under_the_free_slack(report):
-    """C-EMDM's first front is one point (a scaled step): the same state under the free slack (6)
+    """C-EMDM's first front is one point (a scaled step): the same state under the free slack
     is solved for every ratio too, at full task scale, and how many optima it has is recorded."""
     root, _ = report
     data = json.loads((root / "data" / "task1-pareto-C-EMDM" / "pareto.json").read_text())

@@ -198,7 +198,7 @@ class Evidence:
 
 
 FREE_SLACK = 1e3
-"""m/s: the slack bound of a "free" slack, the program (6) of the slack rows. Scenarios take
+"""m/s: the slack bound of a "free" slack, the program (3) with alpha* = 1 of the slack rows. Scenarios take
 finite bounds only; a test checks that no evidence run comes near it."""
 
 _FREE = {"slack.min": [-FREE_SLACK] * 2, "slack.max": [FREE_SLACK] * 2}

@@ -298,7 +298,7 @@ class Glyph(Segment):
         return ""
 
 
-EQUATIONS = ("bounds", "scale", "free")
+EQUATIONS = ("bounds", "scale", "qp")
 """The formulation's displayed equations in their order (``\\label{eq:KEY}`` in
 ``templates/formulation.tex.j2``, numbered alike in ``formulation.html.j2``)."""
 

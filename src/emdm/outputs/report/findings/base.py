@@ -24,7 +24,7 @@ from ....studies.lab import LIKE_FOR_LIKE, exact_answer
 from ...paper_figures import EFFORT_FLOOR, FAR_BEYOND, GAP_FLOOR
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Figure, Table
-from ..trace import Data, Eqs, File, Math, Num, PageOnly, Ref, Sentence, Text, cap, sentence, traced
+from ..trace import Data, File, Math, Num, PageOnly, Ref, Sentence, Text, cap, sentence, traced
 from .records import (
     GRID_FILE,
     EventKey,
@@ -548,7 +548,7 @@ class StoryBase:
             # one short sentence per part, no nested parentheses (editor after readings 209, 210)
             key = "t2-c-slack-policy"  # its like-for-like run, dotted (reading 169)
             if key in self.rec.evidence and self.evid(key, "runs", ivkc).get("reached"):
-                out += sentence(f"; dotted: {ivkc} with a free slack (", Eqs(("free",)), ")")
+                out += sentence(f"; dotted: {ivkc} with a free slack")
             out += sentence(
                 ". Panel (d): the tracking gap ",
                 GAP_MATH,

@@ -363,7 +363,7 @@ class FrontStep:
     nominal_M_share: float | None
     nominal_E_log_pct: float | None
     slack_distinct: int | None = None
-    """At a task-scaled step: how many optima its front has under the free slack (6)."""
+    """At a task-scaled step: how many optima its front has under the free slack (3 with alpha* = 1)."""
 
 
 GridKey = Literal[

@@ -109,7 +109,10 @@ class Tables(Claims):
 
     def programs_table(self, sections: list[Section]) -> None:
         """Each task's programs written out (readings 140, 141: the reader had to assemble them
-        from the general forms and Table I's equation numbers), from the controllers' terms."""
+        from the general forms and Table I's equation numbers), from the controllers' terms. On
+        the page only: the paper displays the one program (3) they all instantiate and says in
+        a sentence which terms each drops (reading 220: no displayed QP; its four lines fit where
+        this table's twelve did)."""
         table = Table(
             "programs",
             sentence(
@@ -139,7 +142,7 @@ class Tables(Claims):
             font="scriptsize",
             colsep=2.5,  # (readings 190-193: the cells touched at 0.8 pt)
             stretch=1.25,  # the transposes' superscripts clear of the row above
-            placement="b",  # under the formulation's first column, beside what it writes out
+            html_only=True,
         )
         # the brief's items in its order, each with its pair (no heading rows: two lines saved);
         # a program two items share is one row naming both (IVKC's: two more lines)
@@ -187,9 +190,13 @@ class Tables(Claims):
         indented = sentence(
             " Indented rows vary the nominal run above: ",
             Upright(ablation_span()),
-            " test a cause; free slack uses (",
-            Eqs(("free",)),
-            "), not scaling.",
+            " test a cause; free slack: (",
+            Eqs(("qp",)),
+            ") with ",
+            Math(r"\alpha^*=1", "α* = 1"),
+            ", ",
+            Math(r"D=\mathbb{R}^2", "<i>D</i> = ℝ²"),
+            ", not scaling.",
         )
         if self.grid_miss() is not None:  # (readings 194, 195: their own A2a differed)
             indented += sentence(

@@ -9,7 +9,7 @@ from ....core.controllers import Name
 from ....core.tolerances import KKT_TOL
 from ..config import FOURTH_PANEL, PAIRS
 from ..document import Section
-from ..trace import Eqs, File, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
+from ..trace import File, Math, PageOnly, Ref, Segment, Sentence, Text, sentence
 from ..trace import cap as capitalised
 from .base import (
     ALPHA,
@@ -322,9 +322,7 @@ class Task1(Claims):
         cap += sentence(PageOnly(tuple(self.ratios_swept())))  # the sweeps: on the page
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
-            cap += sentence(
-                "; hollow: a scaled step's optimum under the free slack (", Eqs(("free",)), ")"
-            )
+            cap += sentence("; hollow: a scaled step's optimum under the free slack")
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(  # the finding, then its evidence (editor after readings 209, 210);
@@ -415,9 +413,7 @@ class Task1(Claims):
                     )
                     if info.slack_distinct == 1:  # not the policy's doing: the bounds'
                         clauses[-1] += sentence(
-                            ". A free slack (",
-                            Eqs(("free",)),
-                            ") also gives one point (hollow in ",
+                            ". A free slack also gives one point (hollow in ",
                             Ref("fig", "pareto"),
                             ")",
                         )
