@@ -336,7 +336,7 @@ def test_solvers_command_rejects_unknown_solver(tmp_path, capsys):
 def test_a_sample_of_steps_keeps_the_least_dexterous_one():
     """An even spacing of Task 2's 329 steps would miss its singular passage; the lab's sample
     always holds it, with the first, the first scaled and the last step."""
-    from emdm.studies.lab import representative_steps, sample_steps
+    from emdm.studies.lab import representative_steps, sample_made_of, sample_steps
 
     run = emdm.simulate(emdm.load_scenario("task2"), "C-EMDM")
     worst = int(np.argmin(run.m[: run.steps]))
@@ -345,6 +345,13 @@ def test_a_sample_of_steps_keeps_the_least_dexterous_one():
     chosen = sample_steps(run, 40)
     assert worst in chosen and set(representative_steps(run).values()) <= set(chosen)
     assert sample_steps(run, None) == list(range(run.steps))
+    # read back from the record: 40 evenly spaced steps plus the ones the spacing missed
+    reps = list(representative_steps(run).values())
+    assert sample_made_of(chosen, reps, run.steps) == (40, sorted(set(chosen) - even))
+    assert worst in sample_made_of(chosen, reps, run.steps)[1]
+    assert sample_made_of(list(range(run.steps)), reps, run.steps) == (run.steps, [])
+    with pytest.raises(ValueError, match="not an even sample"):
+        sample_made_of([*chosen[:-2], chosen[-1]], reps, run.steps)
 
 
 def test_the_lab_record_is_the_typed_record_the_report_reads(small_lab, tmp_path):

@@ -210,6 +210,9 @@ def time_end(runs: Sequence[Run]) -> float | None:
     return end if max(float(r.t[k]) for r, k in stalls if k is not None) <= end else None
 
 
+BEYOND = "#E8E8E8"
+"""The grey of what lies beyond a joint's position or speed limits in the pair figures' strips."""
+
 FAR_BEYOND = 1.5
 """A joint whose speeds go beyond this multiple of its limit has its speed strip cut there (a
 plain linear axis; :func:`pair_figure`): a spike of a step or two does not squash the motion
@@ -232,6 +235,15 @@ def _damper_zones(ax: Any, lo: float, hi: float, influence: float, stop: float) 
         (lo, lo + stop, 0.55),
     ):
         ax.axhspan(a, b, color="#D55E00", alpha=shade, linewidth=0, zorder=0)
+
+
+def _beyond(ax: Any, lo: float, hi: float) -> None:
+    """Shade grey what lies beyond a joint's limits ``lo``, ``hi`` in the strip ``ax`` (after
+    its view is set)."""
+    bottom, top = ax.get_ylim()
+    for start, stop in ((hi, top), (bottom, lo)):
+        if stop > start:
+            ax.axhspan(start, stop, color=BEYOND, linewidth=0, zorder=0)
 
 
 def tracking_gap(run: Run) -> np.ndarray:
@@ -367,10 +379,8 @@ def pair_figure(
                 lo_view = max(lo_view, -FAR_BEYOND * limit)
                 hi_view = min(hi_view, FAR_BEYOND * limit)
             qd_axes[j].set_ylim(lo_view, hi_view)
+            _beyond(qd_axes[j], -limit, limit)
             if far:
-                for start, stop in ((limit, hi_view), (lo_view, -limit)):
-                    if stop > start:
-                        qd_axes[j].axhspan(start, stop, color="#E8E8E8", linewidth=0, zorder=0)
                 # the peak the cut hides, written at the cut edge's right end, where the runs
                 # have settled (readings 209, 212, 214: the limit violations could not be seen)
                 # in the colour of the run it is (reading 216: the labels mixed controllers)
@@ -397,6 +407,9 @@ def pair_figure(
             margin = 0.12 * (top_q - bottom)  # the limit lines stay clear of the frame
             qspan = [bottom - margin, top_q + margin]
             ax.set_ylim(*qspan)
+            # beyond the limits grey, as in the speed strips (reading 220: UC-EMDM's q1, 0.71 rad
+            # past its limit in Task 2, did not read as a violation)
+            _beyond(ax, float(lo[j]), float(hi[j]))
             # two ticks per strip (three collide at this height): the position limits and the
             # velocity limits
             q_tick = float(max(abs(lo[j]), abs(hi[j])))

@@ -272,9 +272,28 @@ def sample_steps(run: Run, sample: int | None) -> list[int]:
     steps = list(range(run.steps))
     if sample is None or sample >= len(steps):
         return steps
-    chosen = {round(i) for i in np.linspace(0, run.steps - 1, sample)}
+    chosen = even_steps(run.steps, sample)
     chosen |= set(representative_steps(run).values())  # the least dexterous one among them
     return sorted(chosen)
+
+
+def even_steps(steps: int, sample: int) -> set[int]:
+    """``sample`` evenly spaced steps of a run of ``steps``, its first and last among them."""
+    return {round(i) for i in np.linspace(0, steps - 1, sample)}
+
+
+def sample_made_of(
+    resolved: list[int], representative: list[int], steps: int
+) -> tuple[int, list[int]]:
+    """How a lab's ``resolved`` steps were chosen from a run of ``steps``: the number of evenly
+    spaced ones and the ``representative`` steps added to them (:func:`sample_steps`, read back
+    from a record); ``(len(resolved), [])`` when every step was re-solved."""
+    have = set(resolved)
+    for count in range(len(have), 0, -1):
+        grid = even_steps(steps, count)
+        if grid <= have and grid | set(representative) == have:
+            return count, sorted(have - grid)
+    raise ValueError("the resolved steps are not an even sample plus representative steps")
 
 
 def worker_pool(workers: int) -> ProcessPoolExecutor:

@@ -491,13 +491,15 @@ class StoryBase:
         if path:
             out += sentence("(d) tip paths (dotted: the straight line), ")
         out += sentence(
-            f"{joints[0]} joint positions, limits and damper zones (shaded), {joints[1]} joint "
-            "velocities, limits dotted"
+            f"{joints[0]} joint positions, limits and damper zones (orange), {joints[1]} joint "
+            # grey beyond both kinds of limit (reading 220: a position past its limit did not
+            # read as a violation)
+            "velocities, limits dotted; grey: beyond a limit"
         )
         if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
             out += sentence(
-                f" (shaded beyond, cut at {FAR_BEYOND:g}×, the largest peak past a cut written in its "
-                "run's colour)"
+                f"; speeds cut at {FAR_BEYOND:g}×, the largest peak past a cut written in its "
+                "run's colour"
             )
         return out
 

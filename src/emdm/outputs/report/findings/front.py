@@ -41,7 +41,7 @@ class Front(Goals):
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
                     "arrive. IVKC can only slow down along the line and stops short. There, "
                     # (reading 208: not "the same": each with its own weight; 209, 210: plainer)
-                    "with an unbounded slack each, ",
+                    "given an unbounded slack each, ",
                     *self.slack_race("IVKC", "EMDM"),
                     ". ",
                 )
@@ -95,18 +95,20 @@ class Front(Goals):
                     # program's count read as the full program's when it stood alone)
                     out += sentence(
                         # (213: "it" read as unclear)
-                        ". Given the gradient-free methods' smaller program, ",
+                        # (219, 220: the counts named, "the gradient-free" said once)
+                        ". On the gradient-free methods' smaller program, ",
                         grad,
                         " needs ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        " and ",
+                        " objective and ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
+                        " gradient evaluations",
                     )
                 if free:
                     out += sentence(  # (the body says whether it is the only exact one)
-                        "; the gradient-free " if like else ". The gradient-free ",
+                        "; " if like else ". The gradient-free ",
                         free,
-                        " needs ",
+                        ", " if like else " needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
                         ".",
                     )

@@ -358,7 +358,7 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
         misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
-        the slack penalty's gradient is only w_S|delta| = c_S. The dexterity term outweighs it: the
+        delta = v_d and the slack's pull is only w_S|delta| = c_S. The dexterity term outweighs it: the
         tip stops 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the
         term); C-IVKC with a free slack reaches 216.`` Task 2's EMDM controllers whose term loses
         goals; empty where it loses none."""
@@ -405,7 +405,10 @@ class Goals(Claims):
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
                     # (209, 210: plainer)
-                    ". At rest, the slack penalty's gradient is only ",
+                    # (219: plainer, the slack named)
+                    ". At rest, ",
+                    Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"),
+                    " and the slack's pull is only ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",

@@ -8,12 +8,13 @@ import numpy as np
 
 from ....solvers.base import Family
 from ....solvers.nlp import PENALISED, SEEDED, WHOLE_GENERATIONS
-from ....studies.lab import EXACT, LIKE_FOR_LIKE, exact_answer
+from ....studies.lab import EXACT, LIKE_FOR_LIKE, exact_answer, sample_made_of
 from ..config import GLYPHS
 from ..document import Section, Table
 from ..trace import Glyph, Math, PageOnly, Ref, Sentence, Text, Unit, sentence
 from .base import (
     DT,
+    K_EQ,
     StoryBase,
     bare,
 )
@@ -453,6 +454,26 @@ class Solvers(StoryBase):
                 )
         return out
 
+    def sample_told(self, lab: LabName) -> Sentence:
+        """`` (evenly spaced, plus the least dexterous, k = 223)``: how ``lab`` chose the programs
+        it re-solved (reading 219: not said), read back from its record; empty when it re-solved
+        every step."""
+        rec = self.rec.labs[lab]
+        resolved, reps = rec.resolved_steps, rec.representative_steps
+        steps = resolved[-1] + 1  # the last step is always re-solved
+        if len(resolved) == steps:
+            return []
+        _, added = sample_made_of(resolved, list(reps.values()), steps)
+        out = sentence(" (evenly spaced")
+        for k in added:
+            name = next(n for n, v in reps.items() if v == k)
+            out += sentence(
+                f", plus the {name}, ",
+                K_EQ,
+                self.d.num(f"data/{lab}/solvers.json", "representative_steps", name, fmt="d"),
+            )
+        return out + sentence(")")
+
     def solver_table(self, lab: LabName, rows: dict[str, SolverRow]) -> None:
         f = f"data/{lab}/solvers.json"
         table = Table(
@@ -462,8 +483,10 @@ class Solvers(StoryBase):
                 self.d.count(f, "resolved_steps"),
                 " of Task 2 C-EMDM's ",
                 self.mt("task2", "C-EMDM", "steps", "d"),
+                " programs",
+                *self.sample_told(lab),
                 # (readings 183, 186: six lines of caption; the columns in order)
-                " programs, cold, from Python (*: compiled). ",
+                ", cold, from Python (*: compiled). ",
                 Unit("ms"),
                 ", it./ev.: median time, iterations/evaluations (–: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
