@@ -711,11 +711,12 @@ def test_run_labels_keep_their_case_in_captions():
         run_label("no-such-run")
 
 
-def test_the_programs_table_writes_each_tasks_programs_from_the_controllers_terms(report):
-    """Table I writes out each task's programs (readings 140, 141: the reader had to assemble
-    them from general forms): from each controller's terms on the task's arm, the slack only on
-    the non-redundant arm's EMDM, the box and the task scale only in the C- programs. The
-    formulation's displays are numbered alike in the paper (its labels' order) and the page."""
+def test_the_terms_table_sets_each_controllers_terms_in_the_one_program(report):
+    """Table I gives each controller's terms in program (3) (readings 221, 222: one displayed
+    program left the reader to rebuild each controller's): from each controller's terms on each
+    task's arm, the slack only on the non-redundant arm's EMDM, the box and the task scale only
+    in the C- programs, the weights the scenario's. The formulation's displays are numbered
+    alike in the paper (its labels' order) and the page."""
     from emdm.outputs.report.trace import EQUATIONS
 
     folder = Path(emdm.outputs.report.__file__).parent / "templates"
@@ -725,29 +726,21 @@ def test_the_programs_table_writes_each_tasks_programs_from_the_controllers_term
     assert re.findall(r'<div class="eq">\((\d)\)', html) == [
         str(i + 1) for i in range(len(EQUATIONS))
     ]
-    _, page = report
-    tasks: list[dict[str, list[str]]] = [{}, {}]
-    items = []
-    for row in page.tables["tab-programs"][1:]:
-        shared, name = row[0].split(" ")  # a program two items share is one row: "1.1/2.2"
-        for item in shared.split("/"):
-            items.append(item)
-            tasks[int(item[0]) - 1][name] = row[1:]
-    assert sorted(items) == ["1.1", "1.1", "1.2", "1.2", "2.1", "2.1", "2.2", "2.2"]
-    assert [sorted(t) for t in tasks] == [sorted(["UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM"])] * 2
-    for redundant, programs in zip((True, False), tasks, strict=True):
-        for name, (objective, constraints) in programs.items():
-            is_emdm = "EMDM" in name
-            constrained = name.startswith("C-")
-            slack = is_emdm and not redundant
-            assert objective.startswith("wEE" if is_emdm else "E"), (name, objective)
-            assert ("−wMM" in objective.replace(" ", "")) == is_emdm, (
-                name,
-                objective,
-            )  # M: its rate
-            assert ("δ" in objective) == slack and ("δ" in constraints) == slack, name
-            assert ("∈ B" in constraints) == constrained, (name, constraints)
-            assert ("α*" in constraints) == constrained, (name, constraints)
+    root, page = report
+    weights = json.loads((root / "data/task1/metrics.json").read_text())["scenario"]["weights"]
+    rows = {row[0]: row[1:] for row in page.tables["tab-programs"][1:]}
+    assert list(rows) == ["UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM", "free slack"]
+    for name, (w_e, w_m, slack, box) in rows.items():
+        if name == "free slack":
+            assert (w_e, w_m, slack, box) == ("same", "same", "ℝ²", "(1), 1")
+            continue
+        is_emdm = "EMDM" in name
+        assert (w_e, w_m) == (
+            (f"{weights['effort']:g}", f"{weights['manipulability']:g}") if is_emdm else ("1", "0")
+        ), name
+        # the slack only on the non-redundant arm's EMDM: the cell names both tasks
+        assert slack == ("T1: {0}; T2: [δmin, δmax]" if is_emdm else "{0}"), (name, slack)
+        assert box == ("(1), (2)" if name.startswith("C-") else "none, 1"), (name, box)
 
 
 def test_references_are_numbered_alike_in_the_paper_and_the_page():

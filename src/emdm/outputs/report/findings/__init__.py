@@ -66,7 +66,7 @@ class Story(Front, Task1, Task2, Solvers, Beyond, Tables):
         ]
         sections = [s for s in maybe if s is not None]
         self.outcome_table(sections)
-        self.programs_table(sections)
+        self.terms_table(sections)
         self.evidence_table()
         self.goals_table()
         self.goals_in_body(sections)

@@ -85,35 +85,40 @@ class Front(Goals):
                 # count read as the full program's; 209, 210: both counts in one sentence was
                 # the abstract's hardest; the full program's are the body's)
                 like = same and twin is not None and twin.median_gradients
-                out += sentence(  # (editor after 209, 210: the subject first)
-                    "On the two-link programs, the gradient-based ",
-                    grad,
-                    " reaches the exact optimum in a median of ",
-                    *self.evaluations(lab, grad),
-                )
-                if like:  # like for like in its own sentence (211, 212: the reduced
-                    # program's count read as the full program's when it stood alone)
+                if (
+                    like and free
+                ):  # one sentence, like for like, the program named (221: the abstract
+                    # ended on a run of counts; 211, 212: a lone reduced count read as the full
+                    # program's, so "reduced" is said; the full program's counts are the body's)
                     out += sentence(
-                        # (213: "it" read as unclear)
-                        # (219, 220: the counts named, "the gradient-free" said once)
-                        ". On the gradient-free methods' smaller program, ",
+                        "On the same reduced two-link programs, the gradient-based ",
                         grad,
-                        " needs ",
-                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        " objective and ",
-                        self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
-                        " gradient evaluations",
-                    )
-                if free:
-                    out += sentence(  # (the body says whether it is the only exact one)
-                        "; " if like else ". The gradient-free ",
+                        " needs a median of ",
+                        *self.evaluations(lab, LIKE_FOR_LIKE),
+                        ", the gradient-free ",
                         free,
-                        ", " if like else " needs ",
+                        " ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        ".",
+                        "; both are exact.",
                     )
                 else:
-                    out += sentence(". Every gradient-free method is inexact.")
+                    out += sentence(  # (editor after 209, 210: the subject first)
+                        "On the two-link programs, the gradient-based ",
+                        grad,
+                        " reaches the exact optimum in a median of ",
+                        *self.evaluations(lab, grad),
+                        *(
+                            (
+                                ". The gradient-free ",
+                                free,
+                                " needs ",
+                                self.sn(lab, free, "median_evaluations", ".4g"),
+                                ".",
+                            )
+                            if free
+                            else (". Every gradient-free method is inexact.",)
+                        ),
+                    )
         return out
 
     def introduction(self) -> Section:

@@ -6,6 +6,7 @@ from typing import Any, ClassVar, cast
 
 from ....core.controllers import CONTROLLERS, Name
 from ....core.terms import TermKind
+from ..config import SLACK_POLICIES
 from ..document import Section, Table
 from ..trace import Eqs, Math, Num, Ref, Sentence, Text, Unit, Upright, render_latex, sentence
 from .base import (
@@ -13,7 +14,6 @@ from .base import (
     FINER_STEP,
     GRID_MISS,
     M_SYM,
-    QDOT,
     SUM_E,
     W_M,
     ablation_span,
@@ -51,114 +51,97 @@ class Tables(Claims):
     """Table I's outcome columns after the time to goal, with their formats."""
 
     # ------------------------------------------------------------------ tables
-    OBJECTIVE: ClassVar[dict[TermKind, tuple[str, str]]] = {
-        TermKind.MANIPULABILITY: (  # M = J_m^T qd, Section II's rate (narrower: 190-193)
-            r"-w_MM",
-            " − <i>w</i><sub>M</sub><i>M</i>",
-        ),
-        TermKind.SLACK: (r"+\tfrac12w_S\|\delta\|^2", " + ½<i>w</i><sub>S</sub>‖δ‖²"),
-        # beyond the brief (zero weight, so absent, in its tasks): named, not written out
-        TermKind.CENTRING: (r"+\text{centring}", " + centring"),
-        TermKind.CLEARANCE: (r"+\text{clearance}", " + clearance"),
-    }
-    """The objective's parts after the effort, per term (LaTeX, HTML), in the terms' order."""
+    BRIEF_TERMS: ClassVar[frozenset[TermKind]] = frozenset(
+        {
+            TermKind.TASK,
+            TermKind.EFFORT,
+            TermKind.MANIPULABILITY,
+            TermKind.SLACK,
+            TermKind.VELOCITY_BOX,
+            TermKind.DAMPER,
+        }
+    )
+    """The terms program (3) writes; any other a controller takes is named after it."""
 
-    ROWS: ClassVar[dict[TermKind, tuple[str, str]]] = {
-        TermKind.PLANE: (r",\ \text{planes}", ", planes"),
-        TermKind.OBSTACLE: (r",\ \text{obstacles}", ", obstacles"),
-    }
-    """Constraint rows beyond the brief's (absent in its tasks), named after the box."""
-
-    def program_row(self, task: str, name: str) -> list[Sentence]:
-        """One row of the programs table: what ``name``'s program on ``task`` minimises and
-        subject to what, read from the controller's terms as the code builds them on the task's
-        arm (:meth:`~emdm.core.controllers.Controller.program_data`): a term the arm does not
-        take (the slack of a redundant arm) or of zero weight is not in it."""
+    def term_cells(self, task: str, name: str) -> list[Sentence]:
+        """What ``name``'s program on ``task`` sets in (3): w_E, w_M, the slack set D, and the
+        box B with the task scale alpha*, read from the controller's terms as the code builds
+        them on the task's arm (:meth:`~emdm.core.controllers.Controller.program_data`): a term
+        the arm does not take (the slack of a redundant arm) or of zero weight is not in it.
+        The controller's name first, with any term beyond (3)'s."""
         sc = self.rec.scenarios[task]
         ctrl = CONTROLLERS[name]
         kinds = [list(TermKind)[int(c)] for c in ctrl.program_data(sc).codes]
         effort = next(t for t in ctrl.terms if t.kind is TermKind.EFFORT)
-        tex, htm = (
-            (r"w_EE", "<i>w</i><sub>E</sub><i>E</i>")
-            if isinstance(effort.weight, str)
-            else ("E", "<i>E</i>")
-        )
-        for kind in kinds:
-            if kind in self.OBJECTIVE:
-                tex += self.OBJECTIVE[kind][0]
-                htm += self.OBJECTIVE[kind][1]
-        slack = TermKind.SLACK in kinds
-        scaled = ctrl.constrained and sc.controller.on_infeasible == "scale"
-        task_tex = (r"J\dot q+\delta=" if slack else r"J\dot q=") + (
-            r"\alpha^*v_d" if scaled else "v_d"
-        )
-        task_htm = ("<i>Jq̇</i> + δ = " if slack else "<i>Jq̇</i> = ") + (
-            "α*<i>v</i><sub>d</sub>" if scaled else "<i>v</i><sub>d</sub>"
-        )
-        if slack:
-            task_tex += r",\delta\in D"
-            task_htm += ", δ ∈ <i>D</i>"
-        if TermKind.VELOCITY_BOX in kinds or TermKind.DAMPER in kinds:
-            task_tex += r",\dot q\in B"
-            task_htm += ", <i>q̇</i> ∈ <i>B</i>"
-        for kind in kinds:
-            if kind in self.ROWS:
-                task_tex += self.ROWS[kind][0]
-                task_htm += self.ROWS[kind][1]
-        return [sentence(name), sentence(Math(tex, htm)), sentence(Math(task_tex, task_htm))]
+        manip = next((t for t in ctrl.terms if t.kind is TermKind.MANIPULABILITY), None)
 
-    def programs_table(self, sections: list[Section]) -> None:
-        """Each task's programs written out (readings 140, 141: the reader had to assemble them
-        from the general forms and Table I's equation numbers), from the controllers' terms. On
-        the page only: the paper displays the one program (3) they all instantiate and says in
-        a sentence which terms each drops (reading 220: no displayed QP; its four lines fit where
-        this table's twelve did)."""
+        def weight(w: str | float) -> Sentence:
+            return sentence(
+                self.scn(task, "weights", w, fmt="g") if isinstance(w, str) else f"{w:g}"
+            )
+
+        others = [k for k in kinds if k not in self.BRIEF_TERMS]
+        scaled = ctrl.constrained and sc.controller.on_infeasible == "scale"
+        boxed = TermKind.VELOCITY_BOX in kinds or TermKind.DAMPER in kinds
+        return [
+            sentence(name, "".join(f" + {k.value}" for k in others)),
+            weight(effort.weight),
+            weight(manip.weight)
+            if manip is not None and TermKind.MANIPULABILITY in kinds
+            else sentence("0"),
+            sentence(
+                Math(r"[\delta_{\min},\delta_{\max}]", "[δ<sub>min</sub>, δ<sub>max</sub>]")
+                if TermKind.SLACK in kinds
+                else Math(r"\{0\}", "{0}")
+            ),
+            sentence(
+                "(", Eqs(("bounds",)), "), ", *(("(", Eqs(("scale",)), ")") if scaled else ("1",))
+            )
+            if boxed
+            else sentence("none, 1"),
+        ]
+
+    def terms_table(self, sections: list[Section]) -> None:
+        """Each controller's terms in the one program (3) they all solve (reading 220: no
+        displayed program; 221, 222: then no per-controller view), from the controllers' terms
+        on both tasks' arms: a cell that differs between the tasks gives both (T1, T2); the
+        free slack's row where its runs were made."""
         table = Table(
             "programs",
             sentence(
-                # the decision variables named (reading 156: only implied)
-                "Each task's programs in ",
-                QDOT,
-                " (and ",
-                Math(r"\delta", "δ"),
-                # (built from each controller's terms, as the docstring says: the caption
-                # gave its line to Section II's definitions, readings 190, 191)
-                "), by the brief's item (Task 1: three links; Task 2: two); ",
-                Math("B", "<i>B</i>"),
-                ": the speed box (",
-                Eqs(("bounds",)),
-                "), ",
-                Math(r"\alpha^*", "α*"),
-                ": the task scale (",
-                Eqs(("scale",)),
-                ").",
+                "Each controller's terms in (",
+                Eqs(("qp",)),
+                "); T1, T2: Tasks 1, 2.",
             ),
             [
-                sentence("task, ctrl."),
-                sentence("minimise"),
-                sentence("subject to"),
+                sentence("ctrl."),
+                sentence(Math("w_E", "<i>w</i><sub>E</sub>")),
+                sentence(Math("w_M", "<i>w</i><sub>M</sub>")),
+                sentence("slack set ", Math("D", "<i>D</i>")),
+                sentence(Math("B", "<i>B</i>"), ", ", Math(r"\alpha^*", "α*")),
             ],
-            align="lll",
+            align="lllll",
             font="scriptsize",
-            colsep=2.5,  # (readings 190-193: the cells touched at 0.8 pt)
-            stretch=1.25,  # the transposes' superscripts clear of the row above
-            html_only=True,
+            colsep=3.0,
+            placement="b",  # under the formulation's first column, beside what it sets
         )
-        # the brief's items in its order, each with its pair (no heading rows: two lines saved);
-        # a program two items share is one row naming both (IVKC's: two more lines)
-        merged: dict[tuple[str, str, str], tuple[list[str], list[Sentence]]] = {}
-        for task, item, names in (
-            ("task1", "1.1", (Name.UC_IVKC, Name.UC_EMDM)),
-            ("task1", "1.2", (Name.C_IVKC, Name.C_EMDM)),
-            ("task2", "2.1", (Name.C_IVKC, Name.C_EMDM)),
-            ("task2", "2.2", (Name.UC_IVKC, Name.UC_EMDM)),
-        ):
-            for name in names:
-                row = self.program_row(task, name)
-                key = (str(name), render_latex(row[1]), render_latex(row[2]))
-                merged.setdefault(key, ([], row))[0].append(item)
-        for items, row in merged.values():
-            table.rows.append([sentence("/".join(items) + " ", *row[0]), *row[1:]])
+        for name in (Name.UC_IVKC, Name.UC_EMDM, Name.C_IVKC, Name.C_EMDM):
+            one, two = (self.term_cells(t, name) for t in ("task1", "task2"))
+            row = [one[0]]
+            for a, b in zip(one[1:], two[1:], strict=True):
+                same = render_latex(a) == render_latex(b)
+                row.append(a if same else sentence("T1: ", *a, "; T2: ", *b))
+            table.rows.append(row)
+        if any(k in self.rec.evidence for k in SLACK_POLICIES.values()):
+            table.rows.append(
+                [
+                    sentence("free slack"),
+                    sentence("same"),
+                    sentence("same"),
+                    sentence(Math(r"\mathbb{R}^2", "ℝ²")),
+                    sentence("(", Eqs(("bounds",)), "), 1"),
+                ]
+            )
         self.tables["programs"] = table
         for s in sections:
             if s.key == "formulation":
@@ -190,13 +173,10 @@ class Tables(Claims):
         indented = sentence(
             " Indented rows vary the nominal run above: ",
             Upright(ablation_span()),
-            " test a cause; free slack: (",
-            Eqs(("qp",)),
-            ") with ",
-            Math(r"\alpha^*=1", "α* = 1"),
-            ", ",
-            Math(r"D=\mathbb{R}^2", "<i>D</i> = ℝ²"),
-            ", not scaling.",
+            # (the free slack's terms are the programs table's last row)
+            " test a cause; free slack (",
+            Ref("tab", "programs"),
+            ") replaces scaling.",
         )
         if self.grid_miss() is not None:  # (readings 194, 195: their own A2a differed)
             indented += sentence(

@@ -207,13 +207,14 @@ class Task1(Claims):
         times = [self.mv(t, c, "time_to_goal") for c in (*PAIRS["UC"], *PAIRS["C"])]
         if scaled and None not in times and min(times[2:]) > max(times[:2]):
             answer += sentence(
-                ". The ",
-                self.scn(t, "arm", "qd_max", 0, fmt="g", unit="rad/s"),
-                " speed limit makes both slower than the UC pair",
-                # (the shared commands' span follows: the scaled one on the page, for room)
+                # on the page only (the arrival times are Table II's: room for the per-
+                # controller terms table, readings 221, 222)
                 PageOnly(
                     tuple(
                         sentence(
+                            ". The ",
+                            self.scn(t, "arm", "qd_max", 0, fmt="g", unit="rad/s"),
+                            " speed limit makes both slower than the UC pair",
                             " (the task is scaled for the first ",
                             self.ev(t, emdm, "scaling", "first_duration", fmt=".2f", unit="s"),
                             ")",
