@@ -207,7 +207,8 @@ class Front(Goals):
             if self.slack_better_on_all():  # the recommendation first (reading 164 found none)
                 p += sentence(
                     # (one claim per sentence, editor after readings 209, 210)
-                    "A free slack beats task scaling. It makes C-EMDM ",
+                    # (221: "beats" read as general; it is these runs')
+                    "In our runs, a free slack does better than task scaling. It makes C-EMDM ",
                     listed(gains),
                     " in Task 1. ",
                     *arrive,

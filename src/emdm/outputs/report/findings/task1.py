@@ -374,10 +374,14 @@ class Task1(Claims):
         )
         i = self.dearest_later("UC-EMDM")
         if i is not None:  # dearer later: say so
+            last = i == len(self.rec.fronts["UC-EMDM"]) - 1
             answer += sentence(
-                " Near the goal (",
+                " At the goal (" if last else " Near the goal (",
                 K_EQ,
                 self.frontn("UC-EMDM", i, "k", "d"),
+                # (221: the brief's k = T front is at the arrived state, whose command the
+                # loop never sends)
+                ", a command never sent" if last else "",
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
                 "), where the minimal effort is only ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
