@@ -724,26 +724,11 @@ def test_scaled_spans_are_hatched_apart_from_the_damper_tint(tmp_path, drawn):
 
 
 def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, drawn):
-    """The pitch's Pareto slide, for peers: one front (its effort on a log axis, as it spans
-    decades) and the whole runs (linear), no colour scale; the ends and the nominal weights
-    named at their points, one name for two that would overlap, the runs that miss the goal
+    """The pitch's Pareto slide, for peers: one panel, the whole runs on linear axes, no colour
+    scale; the ends and the nominal weights named at their points, the runs that miss the goal
     named in a note and not drawn."""
     from emdm.outputs import paper_figures as pf
 
-    ratios = [0.0, 1.0, 50.0, 1e4]
-    points = [
-        {"w_effort": 0.1, "w_manip": 0.1 * r, "E": 40 + r**1.3, "M": 2 + r / 300} for r in ratios
-    ]
-    front = {
-        "nominal_ratio": 50.0,
-        "steps": [{"k": 0, "t": 0.0, "points": points}, {"k": 9, "t": 0.9, "points": points}],
-    }
-    # each step's record: the nominal's and the effort-only optimum's effort (the second step's
-    # optimum spends none: no bar, as a ratio of nothing)
-    infos = [
-        {"nominal_index": 2, "nominal_E": 43.6, "zero_E": 40.0},
-        {"nominal_index": 2, "nominal_E": 1e-3, "zero_E": 0.0},
-    ]
     grid = [
         {
             "w_effort": 0.1,
@@ -755,37 +740,21 @@ def test_the_pitch_trade_off_names_its_ends_and_the_nominal_point(tmp_path, draw
         for r in (0.0, 50.0, 351.0, 1e3)
     ]
     with formats((".png",)):
-        pf.pareto_slide_figure(front, infos, grid, tmp_path / "p")
+        pf.pareto_slide_figure(50.0, grid, tmp_path / "p")
     fig = drawn[-1]
-    assert len(fig.axes) == 3  # no colour bar
-    assert [(ax.get_xscale(), ax.get_yscale()) for ax in fig.axes[:2]] == [
-        ("linear", "log"),
-        ("linear", "linear"),
-    ]
-    # the third panel: the nominal's extra effort per step, a bar labelled with its value
-    bars = fig.axes[2].patches
-    assert [b.get_height() for b in bars] == pytest.approx([9.0])
-    assert [t.get_text() for t in fig.axes[2].texts] == ["+9"]
-    assert [t.get_text() for t in fig.axes[2].get_xticklabels()] == ["0.0"]
-    named = [{t.get_text(): t.xy for t in ax.texts if hasattr(t, "xy")} for ax in fig.axes]
-    assert named[0] == {
-        "effort only": (2.0, 40.0),
-        "nominal": (points[2]["M"], points[2]["E"]),
-        "$w_M/w_E=10^{4}$": (points[3]["M"], points[3]["E"]),
+    (ax,) = fig.axes  # one idea, no colour bar
+    assert (ax.get_xscale(), ax.get_yscale()) == ("linear", "linear")
+    named = {t.get_text(): t.xy for t in ax.texts if hasattr(t, "xy")}
+    assert named == {
+        "effort only": (0.25, 5.0),
+        "nominal": (0.25 + 50 / 2e4, 5.5),
+        "$w_M/w_E=351$": (0.25 + 351 / 2e4, 5 + 3.51),
     }
-    assert named[1]["$w_M/w_E=351$"] == (0.25 + 351 / 2e4, 5 + 3.51)
-    assert named[1]["nominal"] == (0.25 + 50 / 2e4, 5.5)
-    notes = [t.get_text() for t in fig.axes[1].texts if not hasattr(t, "xy")]
+    notes = [t.get_text() for t in ax.texts if not hasattr(t, "xy")]
     assert notes == ["$w_M/w_E=10^{3}$:\nmisses the goal"]
-    drawn_x = {float(x) for c in fig.axes[1].collections for x, _ in c.get_offsets()}
+    drawn_x = {float(x) for c in ax.collections for x, _ in c.get_offsets()}
     assert 0.25 + 1e3 / 2e4 not in drawn_x  # the missed run is not drawn
-    front["nominal_ratio"] = 1.0  # its point next to the effort-only one: one name for both
-    with formats((".png",)):
-        pf.pareto_slide_figure(
-            front, [{**i, "nominal_index": 1} for i in infos], grid, tmp_path / "p"
-        )
-    names = [t.get_text() for t in drawn[-1].axes[0].texts if hasattr(t, "xy")]
-    assert names == ["effort only, nominal", "$w_M/w_E=10^{4}$"]
+    assert 0.25 + 351 / 2e4 in drawn_x
 
 
 def test_the_workspace_figure_names_start_and_goal_on_a_slide_and_keeps_the_full_legend_in_print(

@@ -650,7 +650,7 @@ def test_the_sweep_levels_off_where_a_smaller_ratio_comes_within_one_percent(
     assert "We would lower UC-EMDM's $w_M$ from 5 to 1.5 for Task 1's goal." in conclusion()
     page = " ".join(render_html(p) for p in Story(Data(root)).conclusion().paragraphs)
     assert re.search(
-        r"for <span[^>]*>−20%</span> effort", page
+        r"with <span[^>]*>20%</span> less effort", page
     )  # the reason: Section III-B's in the paper, the page's here
 
 

@@ -919,119 +919,58 @@ def pareto_figure(
     return stem
 
 
-def nominal_price(info: dict[str, Any]) -> float | None:
-    """How much more effort the nominal weights spend than the effort-only optimum at one
-    front's step (%), from its record (``fronts.json``); ``None`` where that optimum spends
-    none (a ratio of nothing)."""
-    zero = float(info["zero_E"])
-    return 100.0 * (float(info["nominal_E"]) / zero - 1.0) if zero > 0.0 else None
-
-
 def pareto_slide_figure(
-    front: dict[str, Any],
-    infos: Sequence[dict[str, Any]],
+    nominal: float,
     grid: list[dict[str, Any]],
     stem: Path,
-    step: int = 0,
     width: float | None = None,
-    height: float = 1.75,
+    height: float = 2.5,
     medium: Medium = SLIDE,
 ) -> Path:
-    """The pitch's trade-off, for peers: one step's front (``step``, an index into the brief's
-    four), the whole runs, on linear axes, with no colour scale: the ends and the nominal
-    weights are named where they are (effort only, nominal, the most dexterity-weighted), and
-    the settings that miss the goal are named in a note; and, as bars, what the nominal weights
-    cost at each of the brief's steps (:func:`nominal_price`, the slide's "up to +X % later").
-    ``infos`` are the steps' records (``fronts.json``), in the fronts' order. The paper's
-    :func:`pareto_figure` shows every front on log axes."""
-    width = medium.wide if width is None else width
-    nominal = float(front["nominal_ratio"])
-    data, near = front["steps"][step], int(infos[step]["nominal_index"])
-    pts = data["points"]
+    """The pitch's trade-off, for peers: one idea, the whole runs' mean m against their total
+    effort, one run per weight ratio (``grid``, the sweep's records), on linear axes with no
+    colour scale; the ends and the ``nominal`` ratio's run named where they are (effort only,
+    nominal, the most dexterity-weighted that arrives), the settings that miss the goal named
+    in a note and not drawn (readings 209-222: the slide's three panels, with one step's front
+    and the nominal weights' price per step, were too technical for a peer talk). The paper's
+    :func:`pareto_figure` shows every front."""
+    width = 0.55 * medium.wide if width is None else width
     ok = [r for r in grid if "error" not in r and r.get("reached")]
     bad = [r for r in grid if "error" in r or not r.get("reached")]
 
     def ratio(r: dict[str, Any]) -> float:
         return float(r["w_manip"] / r["w_effort"])
 
-    prices = [(d["t"], nominal_price(i)) for d, i in zip(front["steps"], infos, strict=True)]
+    x = [float(r["mean_manipulability"]) for r in ok]
+    y = [float(r["total_effort"]) for r in ok]
+    nom = next((i for i, r in enumerate(ok) if np.isclose(ratio(r), nominal)), None)
     with _figure(stem, medium, width, height) as fig:
-        left, right, cost = fig.subplots(1, 3, width_ratios=[1.0, 1.0, 0.75])
-        panels = (
-            (left, [p["M"] for p in pts], [p["E"] for p in pts], [ratio(p) for p in pts], near),
-            (
-                right,
-                [r["mean_manipulability"] for r in ok],
-                [r["total_effort"] for r in ok],
-                [ratio(r) for r in ok],
-                next((i for i, r in enumerate(ok) if np.isclose(ratio(r), nominal)), None),
-            ),
-        )
-        places_of = {
-            left: ((0.08, 0.45, "left"), (0.25, 0.2, "left")),
-            right: ((0.05, 0.22, "left"), (0.78, 0.32, "right")),
-        }
-        for ax, x, y, ratios, nom in panels:
-            ax.plot(x, y, color="grey", linewidth=0.6, zorder=1)
-            ax.scatter(x, y, s=14, color="#0072B2", zorder=2, linewidths=0)
-            if nom is not None:
-                _ring(ax, x[nom], y[nom], medium)
-            if ax is left:  # one step's effort spans decades (Fig. 2's axis); the runs' do not
-                _value_axis(ax, y)
-            else:
-                ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3), useMathText=True)
-            ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
-            ax.set_xlim(min(x) - 0.06 * (max(x) - min(x)), max(x) + 0.06 * (max(x) - min(x)))
-            ends = [(0, "effort only"), (len(x) - 1, rf"$w_M/w_E={_ratio_tex(ratios[-1])}$")]
-            if nom is not None:
-                ends.insert(1, (nom, "nominal"))
-                to_frac = ax.transData + ax.transAxes.inverted()
-                apart = to_frac.transform((x[nom], y[nom])) - to_frac.transform((x[0], y[0]))
-                if float(np.hypot(*apart)) < 0.05:  # one blob at this size: one name for both
-                    ends[:2] = [(nom, "effort only, nominal")]
-            # each name in the axes' empty upper left (the fronts run along the bottom and up
-            # the right): effort only above the foot, nominal beside it, the last to its left
-            places = dict(zip(("effort only", "nominal"), places_of[ax], strict=True))
-            places["effort only, nominal"] = places["nominal"]
-            to_axes = ax.transAxes + ax.transData.inverted()
-            for at, label in ends:
-                x_text, y_text, ha = places.get(label, (0.62, 0.92, "right"))
-                ax.annotate(
-                    label,
-                    (x[at], y[at]),
-                    xytext=to_axes.transform((x_text, y_text)),
-                    fontsize=medium.tiny,
-                    ha=ha,
-                    va="center",
-                    arrowprops={"arrowstyle": "-", "color": "grey", "linewidth": 0.6},
-                )
-        left.set_title(f"one step: the start ($k={data['k']}$)", fontsize=medium.small)
-        left.set_xlabel(r"manipulability rate $M$ (m$^2$/s)")
-        left.set_ylabel(r"effort $E$ (rad$^2$/s$^2$)")
-        right.set_title("whole runs", fontsize=medium.small)
-        right.set_xlabel(r"mean manipulability $m$ (m$^2$)")
-        right.set_ylabel(r"total effort (rad$^2$/s)")
+        ax = fig.subplots()
+        ax.plot(x, y, color="grey", linewidth=0.6, zorder=1)
+        ax.scatter(x, y, s=14, color="#0072B2", zorder=2, linewidths=0)
+        if nom is not None:
+            _ring(ax, x[nom], y[nom], medium)
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+        ax.set_xlim(min(x) - 0.06 * (max(x) - min(x)), max(x) + 0.06 * (max(x) - min(x)))
+        ends = [(0, "effort only", (0.05, 0.22, "left"))]
+        if nom is not None:
+            ends.append((nom, "nominal", (0.78, 0.32, "right")))
+        ends.append((len(x) - 1, rf"$w_M/w_E={_ratio_tex(ratio(ok[-1]))}$", (0.62, 0.92, "right")))
+        to_axes = ax.transAxes + ax.transData.inverted()
+        for at, label, (x_text, y_text, ha) in ends:
+            ax.annotate(
+                label,
+                (x[at], y[at]),
+                xytext=tuple(to_axes.transform((x_text, y_text))),
+                fontsize=medium.tiny,
+                ha=ha,
+                va="center",
+                arrowprops={"arrowstyle": "-", "color": "grey", "linewidth": 0.6},
+            )
+        ax.set_xlabel(r"mean manipulability $m$ (m$^2$)")
+        ax.set_ylabel(r"total effort (rad$^2$/s)")
         if bad:  # not drawn: their effort would flatten the others
-            _missed_note(right, bad, "misses the goal", 0.78, medium)
-        shown = [(t, p) for t, p in prices if p is not None]
-        bars = cost.bar(range(len(shown)), [p for _, p in shown], color="#0072B2", width=0.6)
-        # each bar's value written on it: no value axis (its ticks would repeat them)
-        cost.bar_label(bars, [f"+{p:.0f}" for _, p in shown], fontsize=medium.tiny, padding=1)
-        cost.set_xticks(range(len(shown)), [f"{t:.1f}" for t, _ in shown])
-        cost.set_xlabel(r"nominal, at $t$ (s)")
-        cost.set_yticks([])
-        cost.spines[["left", "top", "right"]].set_visible(False)
-        cost.set_title("extra effort (%)", fontsize=medium.small)
-        cost.margins(y=0.15)  # room for the bars' labels
-        fig.canvas.draw()  # the formatters now know their scale: fold it into the labels
-        for ax, unit in ((left, r"rad$^2$/s$^2$"), (right, r"rad$^2$/s")):
-            if ax.get_yscale() == "log":
-                continue
-            power = _offset_power(ax.yaxis.get_major_formatter())
-            if power:
-                ax.yaxis.get_offset_text().set_visible(False)
-                label = ax.get_ylabel().split(" (")[0]
-                ax.set_ylabel(rf"{label} ($10^{{{power}}}$ {unit})")
+            _missed_note(ax, bad, "misses the goal", 0.78, medium)
     return stem
 
 

@@ -84,9 +84,6 @@ QUICK = ReportConfig(
     goal_runs=64,
 )
 
-SLIDE_PARETO_STEP = 0
-"""The pitch's Pareto slide: the front it draws, the first (k = 0), beside the whole runs and
-each step's extra effort at the nominal weights."""
 
 GLYPHS = "figures/glyphs"
 """Under ``paper/``: each solver's line and marker in the convergence figure, drawn beside its

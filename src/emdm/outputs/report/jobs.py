@@ -59,7 +59,6 @@ from .config import (
     PAIRS,
     QUICK,
     SLACK_POLICIES,
-    SLIDE_PARETO_STEP,
     TASKS,
     Evidence,
     ReportConfig,
@@ -68,9 +67,9 @@ from .config import (
 
 PAPER_FIGURES = "paper/figures"
 SLIDE_FIGURES = "paper/slides"
-SLIDE_PARETO_WIDTH = 398.34 / 72.27
-"""in: the pitch's Pareto figure, shown at its own size (the 16:9 slide's 398.34 pt text
-width: three panels): drawn so, its text is printed at its set size."""
+SLIDE_PARETO_WIDTH = 0.55 * 398.34 / 72.27
+"""in: the pitch's Pareto figure, shown at its own size (its column of the 16:9 slide's
+398.34 pt text width, the bullets beside it): drawn so, its text is printed at its set size."""
 
 
 # ------------------------------------------------------------------------ in-process runs
@@ -596,11 +595,9 @@ def _data_figures(stage: Path, dt_task2: float) -> list[str]:
     out.append(
         str(
             pf.pareto_slide_figure(
-                fronts[Name.UC_EMDM],
-                infos[Name.UC_EMDM],
+                float(fronts[Name.UC_EMDM]["nominal_ratio"]),
                 grids[Name.UC_EMDM],
                 stage / SLIDE_FIGURES / "pareto",
-                step=SLIDE_PARETO_STEP,
                 width=SLIDE_PARETO_WIDTH,
             )
         )

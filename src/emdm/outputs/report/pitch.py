@@ -8,7 +8,7 @@ from typing import Any
 from ...core.controllers import Name
 from .document import Document
 from .findings import M_SYM, Story
-from .findings.base import T_EQ, glossed
+from .findings.base import glossed
 from .findings.claims import listed
 from .findings.records import EvidenceKey
 from .trace import Data, Sentence, cap, sentence
@@ -310,24 +310,6 @@ class Pitch:
             " effort",
         )
 
-    def dearer_later(self, uc: str) -> tuple[Any, ...]:
-        """``, up to +X % later (t = T s)`` when a later front's nominal optimum costs more
-        (the paper's Pareto answer says so too: :meth:`Story.dearest_later`); the slide's
-        figure draws every step's extra effort as a bar (:func:`~..paper_figures.nominal_price`)."""
-        i = self.s.dearest_later("UC-EMDM")
-        if i is None:
-            return ()
-        return (  # said as a time of the run: the bars' axis
-            "; near the goal (",
-            T_EQ,
-            self.s.frontn("UC-EMDM", i, "t", ".1f", "s"),
-            # the percentage's base said (reading 146: a bar without it overstates the cost), its
-            # value left to the paper (reading 151: the slide was overloaded)
-            "), where that effort is almost zero, ",
-            self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), fmt=".0f"),
-            " more",
-        )
-
     def policy(self) -> list[Sentence]:
         """The take-away on task scaling, from the free-slack runs: what the slack does better."""
         gains = self.s.slack_gains()
@@ -366,27 +348,17 @@ class Pitch:
         return out
 
     def pareto(self) -> list[Sentence]:
-        """The trade-off slide: what the weight ratio buys at the start and over whole runs."""
-        uc = "data/task1-pareto-UC-EMDM/fronts.json"  # (the percentages trace both operands)
-        if "UC-EMDM" not in self.s.rec.fronts:
+        """The trade-off slide, one idea (readings 209-222: its three panels and per-step prices
+        were too technical for peers): over whole runs, the dexterity weight's return falls, and
+        the paper's advice. Empty without the whole-run sweep's levelling off."""
+        s = self.s
+        if s.levels_off_at() is None or s.beyond_nominal() is None:
             return []
-        out = [
+        return [
             sentence(
-                # (the fronts' range is the paper's: one number per bullet, reading 194)
-                "More weight on dexterity buys more, each gain dearer than the last (left)"
-            )
+                "Past a point, more weight on dexterity buys little mean ",
+                M_SYM,
+                " for more effort",
+            ),
+            cap(s.weight_advice()),
         ]
-        if self.s.front("UC-EMDM", 0, "zero_E") > 0:
-            out.append(
-                sentence(  # (reading 204: "+346% of a near-zero effort" confused; in words)
-                    "The nominal weights cost ",
-                    self.d.pct(
-                        (uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), fmt=".1f"
-                    ),
-                    " more effort than the cheapest command at the start",
-                    *self.dearer_later(uc),
-                )
-            )
-        # (the ratio whose steps miss the goal, A2a, is the paper's and the backup table's:
-        # one idea per slide, readings 187-191)
-        return out

@@ -24,7 +24,8 @@ def listed(words: list[str]) -> str:
 
 class Claims(StoryBase):
     def weight_advice(self, why: bool = True) -> Sentence:
-        """``lower UC-EMDM's w_M in Task 1 from 5 to 1.52: its mean m stays within 1% for -13% effort``:
+        """``lower UC-EMDM's w_M from 5 to 1.52 for Task 1's goal: its mean m stays within 1% with
+        13% less effort``:
         the whole-run sweep's recommendation (the conclusion's; the page's with it), or
         nothing where no smaller ratio comes within :data:`LEVEL` of the nominal mean m."""
         found = self.levels_off_at()
@@ -46,9 +47,9 @@ class Claims(StoryBase):
                 sentence(
                     ": its mean ",
                     M_SYM,
-                    f" stays within {LEVEL:.0%} for ",
-                    self.d.pct((f, "runs", k, "total_effort"), (f, "runs", n, "total_effort")),
-                    " effort",
+                    f" stays within {LEVEL:.0%} with ",
+                    self.d.cut((f, "runs", k, "total_effort"), (f, "runs", n, "total_effort")),
+                    " less effort",
                 )
                 if why
                 else []
