@@ -297,16 +297,17 @@ class Task1(Claims):
         if "UC-EMDM" not in self.rec.fronts:
             return sec
         cap = sentence(
-            "Pareto fronts between effort ",
+            # (two lines, not three: room for the per-controller terms table, 221, 222)
+            "Pareto fronts of effort ",
             E_SYM,
-            " and manipulability rate ",
+            " and rate ",
             MRATE,
             " at ",
             Math(
                 r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
                 "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
             ),
-            " (columns 1–4), each point the optimum at the nominal run's state ",
+            ", each point the optimum at the nominal run's ",
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
@@ -314,16 +315,16 @@ class Task1(Claims):
             Math("w_M=0", "<i>w</i><sub>M</sub> = 0"),
             " at the bar's foot; circle: nominal",
             *(  # the nominal ratio, in neither sweep's count (readings took it for missing)
-                (" ratio ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
+                (", ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
                 if self.d.exists(PARETO_RECORD)
                 else ()
             ),
-            "); right: whole runs, one per setting. Without a slack only the ratio matters",
+            "); right: whole runs. Without a slack, only the ratio matters",
         )
         cap += sentence(PageOnly(tuple(self.ratios_swept())))  # the sweeps: on the page
         fronts = self.rec.fronts.get("C-EMDM", [])
         if any(f.slack_distinct is not None for f in fronts):  # jobs._job_pareto drew them
-            cap += sentence("; hollow: a scaled step's optimum under the free slack")
+            cap += sentence("; hollow: a scaled step's free-slack optimum")
         cap += sentence(".")
         sec.figures.append(self.figure("pareto", "figures/pareto", cap, wide=True))
         answer = sentence(  # the finding, then its evidence (editor after readings 209, 210);
