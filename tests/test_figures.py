@@ -921,6 +921,10 @@ def test_the_solver_slide_says_each_verdict_and_what_it_cost(tmp_path, drawn):
             "off by 0.11, out of bounds, 344 evals",
         ]
     )
+    # the pitch leaves out the controls and fallbacks it names
+    with formats((".png",)):
+        pf.solver_verdict_figure(lab, 0.05, tmp_path / "v", omit=("close", "far"))
+    assert [t.get_text() for t in drawn[-1].axes[0].get_yticklabels()] == ["qp", "sqp"]
 
 
 def test_the_task2_1_figure_draws_c_ivkc_with_the_same_free_slack(tmp_path, monkeypatch):

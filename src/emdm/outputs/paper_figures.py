@@ -1077,15 +1077,18 @@ def solver_figure(lab: dict[str, Any], dt: float, stem: Path, medium: Medium = P
     return stem
 
 
-def solver_verdict_figure(lab: dict[str, Any], dt: float, stem: Path) -> Path:
+def solver_verdict_figure(
+    lab: dict[str, Any], dt: float, stem: Path, omit: Sequence[str] = ()
+) -> Path:
     """The pitch's solver slide: one axis, the median time per program of each solver (rows by
     family, the control period dashed), and in a column beside the axes, in words, whether its
     answer is the optimum: ``exact`` (:func:`~emdm.studies.lab.exact_answer`, filled), else
     hollow with ``within 10^-k``, ``off by g``, and ``out of bounds`` (violation above 1e-6),
     then the median objective evaluations of the solvers that count them (``522 evals``), and
-    a gradient method's gradient evaluations (``6 evals + 5 grads``). The
-    paper's :func:`solver_figure` plots the gaps on an axis."""
-    rows = lab["solvers"]
+    a gradient method's gradient evaluations (``6 evals + 5 grads``). The solvers in ``omit``
+    are left out (the pitch's: the controls and fallbacks a peer need not meet). The paper's
+    :func:`solver_figure` plots the gaps on an axis."""
+    rows = {k: r for k, r in lab["solvers"].items() if k not in omit}
     order = [
         k
         for f in ("exact", "gradient", "gradient-free")
