@@ -90,16 +90,24 @@ class Front(Goals):
                 ):  # one sentence, like for like, the program named (221: the abstract
                     # ended on a run of counts; 211, 212: a lone reduced count read as the full
                     # program's, so "reduced" is said; the full program's counts are the body's)
+                    # (223, 224: "the same reduced programs" was undefined there, and its 7
+                    # read as plain slsqp's 6: both said, each with its program)
                     out += sentence(
-                        "On the same reduced two-link programs, the gradient-based ",
+                        "On the two-link programs, the gradient-based ",
                         grad,
-                        " needs a median of ",
-                        *self.evaluations(lab, LIKE_FOR_LIKE),
-                        ", the gradient-free ",
+                        " finds the exact optimum in a median of ",
+                        *self.evaluations(lab, grad),
+                        ". The only exact gradient-free method, "
+                        if len(self.exact(rows, "gradient-free")) == 1
+                        else ". The fastest exact gradient-free method, ",
                         free,
-                        " ",
+                        ", needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        "; both are exact.",
+                        " on the smaller program it searches, where ",
+                        grad,
+                        " needs ",
+                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
+                        ".",
                     )
                 else:
                     out += sentence(  # (editor after 209, 210: the subject first)

@@ -359,7 +359,7 @@ class Goals(Claims):
         """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
         misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
         delta = v_d and the slack's pull is only w_S|delta| = c_S. The dexterity term outweighs it: the
-        tip stops 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the
+        tip ends 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the
         term); C-IVKC with a free slack reaches 216.`` Task 2's EMDM controllers whose term loses
         goals; empty where it loses none."""
         rec = self.rec.goals
@@ -413,7 +413,7 @@ class Goals(Claims):
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    ". The dexterity term outweighs it: the tip stops ",
+                    ". The dexterity term outweighs it: the tip ends ",
                     *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
                     " short",
                 )
