@@ -44,7 +44,7 @@ def unreached(stalled: bool) -> Sentence:
 class Tables(Claims):
     OUTCOME_COLUMNS: tuple[tuple[MetricKey, str], ...] = (
         ("mean_manipulability", ".3f"),
-        ("total_effort", ".2f"),
+        ("total_effort", ".3f"),  # (223: the percentages checkable from the table)
         ("max_abs_qd", ".2f"),
         ("scaled_steps", "d"),
     )
