@@ -41,7 +41,8 @@ class Front(Goals):
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
                     "arrive. IVKC can only slow down along the line and stops short. There, "
                     # (reading 208: not "the same": each with its own weight; 209, 210: plainer)
-                    "given an unbounded slack each, ",
+                    # (225, 226: "unbounded" against Section II's 10^3 m/s)
+                    "given a practically unbounded slack each, ",
                     *self.slack_race("IVKC", "EMDM"),
                     ". ",
                 )
@@ -103,7 +104,7 @@ class Front(Goals):
                         free,
                         ", needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        " on the smaller program it searches, where ",
+                        " evaluations on the smaller program it searches, where ",
                         grad,
                         " needs ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),

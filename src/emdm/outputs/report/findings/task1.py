@@ -247,7 +247,8 @@ class Task1(Claims):
                     )
                 ),
                 ", both send the same commands: with joints at their speed bounds, "
-                "only one command is feasible",
+                # (222, 225 took it for the scaled steps' alone: it holds after them too)
+                "only one command is feasible, scaled or not",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
@@ -386,7 +387,7 @@ class Task1(Claims):
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
                 "), where the minimal effort is only ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
-                ", it costs ",
+                ", the nominal ratio costs ",  # (225: "it" had no clear referent)
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), ".0f"),
                 " more",
             )

@@ -37,9 +37,10 @@ class Task2(Claims):
         if e6["t"] >= mine["t"]:
             return ()
         return (
+            # (226: which term, and which run's time, said)
             ". The term delays that crossing from ",
-            self.evidn(key, "runs", emdm, "events", "singular", "t", fmt=".2f"),
-            " to ",
+            self.evidn(key, "runs", emdm, "events", "singular", "t", fmt=".2f", unit="s"),
+            " (A4) to ",
             self.ev("task2", emdm, "singular", "t", fmt=".2f", unit="s"),
         )
 
