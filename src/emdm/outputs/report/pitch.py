@@ -11,7 +11,7 @@ from .findings import M_SYM, Story
 from .findings.base import glossed
 from .findings.claims import listed
 from .findings.records import EvidenceKey
-from .trace import Data, Sentence, cap, sentence
+from .trace import Data, Math, Sentence, cap, sentence
 
 
 @dataclass
@@ -141,8 +141,8 @@ class Pitch:
                 sentence(
                     "Why: the line needs the elbow folded into its stop zone; EMDM's slack lets "
                     "it detour, flipping the elbow through ",
-                    M_SYM,
-                    " = 0",
+                    # one unbreakable piece (225: "m" and "= 0" fell on two lines)
+                    Math(r"\mbox{$m=0$}", "<i>m</i> = 0"),
                 )
             )
         out.bullets["task2"] = t2c
