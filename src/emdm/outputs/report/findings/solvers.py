@@ -488,7 +488,8 @@ class Solvers(StoryBase):
                 # (readings 183, 186: six lines of caption; the columns in order)
                 ", cold, from Python (*: compiled). ",
                 Unit("ms"),
-                ", it./ev.: median time, iterations/evaluations (–: none",
+                # (223: the gradient counts the text quotes were not in the table)
+                ", it./ev.: median time, iterations/evaluations (+gradients; –: none",
                 *(  # a backend whose wrapper reports no count records 0 (qpsolvers' daqp)
                     ("; ", ", ".join(quiet), ": not reported")
                     if (quiet := [k for k, r in rows.items() if not r.median_iterations])
@@ -560,6 +561,11 @@ class Solvers(StoryBase):
                             self.sn(lab, k, "median_iterations") if r.median_iterations else "–",
                             "/",
                             self.sn(lab, k, "median_evaluations") if r.median_evaluations else "–",
+                            *(
+                                ("+", self.sn(lab, k, "median_gradients"))
+                                if r.median_gradients
+                                else ()
+                            ),
                         ),
                         sentence(  # two digits, as the text quotes them
                             self.sn(lab, k, "max_abs_gap", ".2g")
