@@ -383,13 +383,13 @@ class Task1(Claims):
                 self.frontn("UC-EMDM", i, "k", "d"),
                 # (221: the brief's k = T front is at the arrived state, whose command the
                 # loop never sends)
-                ", a command never sent" if last else "",
+                ", no command sent" if last else "",
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
-                "), where the minimal effort is only ",
-                self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
-                ", the nominal ratio costs ",  # (225: "it" had no clear referent)
+                # (225: "it" had no clear referent; 223-226: the minimum after the price)
+                "), the nominal ratio costs ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), ".0f"),
-                " more",
+                " more than the minimal ",
+                self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
             answer += sentence(".")
         answer += self.whole_runs_levelled()
