@@ -1408,3 +1408,35 @@ def test_page_only_words_are_on_the_page_and_not_in_the_paper(quick_report):
     paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
     for words in ("In closed loop ",):
         assert words in page and words not in paper
+
+
+def test_the_uc_trade_at_a_finer_step_is_told_as_its_record_has_it(quick_report, tmp_path):
+    """Readings 213, 227, 228: most of a UC run's effort comes in its first second, so the UC
+    pair's 17%/25% trade depends on the step. Section III-A gives the trade at a five times
+    finer step from its evidence run, and only while each run spends most of its effort in its
+    first second and EMDM's changes are both rises."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "evidence.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    entry = record["runs"]["t1-uc-finer-dt"]
+    assert entry["overrides"] == {"motion.dt": 0.01}
+    runs = entry["runs"]
+
+    def told() -> str:
+        return "".join(p.plain() for p in Story(Data(root)).finer_dt_trade())
+
+    ivkc, emdm = runs["UC-IVKC"], runs["UC-EMDM"]
+    m = round(100 * (emdm["mean_manipulability"] / ivkc["mean_manipulability"] - 1))
+    e = round(100 * (emdm["total_effort"] / ivkc["total_effort"] - 1))
+    assert f"at Δt = 0.01 s, it is {m}% more mean m for {e}% more effort." in told()
+    emdm["total_effort"] = 0.5 * ivkc["total_effort"]  # a saving is not "more effort"
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert told() == ""
+    emdm["total_effort"] = 2.0 * ivkc["total_effort"]
+    runs["UC-IVKC"]["reached"] = False
+    path.write_text(json.dumps(record), encoding="utf-8")
+    assert told() == ""

@@ -205,6 +205,14 @@ EVIDENCE = (
     Evidence(
         "t1-uc-no-manip", "task1", (Name.UC_EMDM,), {"weights.manipulability": 0.0}, Name.UC_IVKC
     ),
+    Evidence(  # the UC pair's trade at a five times finer step: most of their effort comes in
+        # the first second, so its total depends on dt (readings 213, 227; 228: A2b's own
+        # baseline)
+        "t1-uc-finer-dt",
+        "task1",
+        (Name.UC_IVKC, Name.UC_EMDM),
+        {"motion.dt": 0.01},
+    ),
     Evidence(
         "t1-c-slack-policy",
         "task1",

@@ -169,6 +169,7 @@ class PairEvents:
 
 EvidenceKey = Literal[
     "t1-uc-no-manip",
+    "t1-uc-finer-dt",
     "t1-c-slack-policy",
     "t2-c-slack-policy",
     "t2-c-ivkc-wide-limits",

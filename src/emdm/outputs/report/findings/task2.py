@@ -281,13 +281,19 @@ class Task2(Claims):
                 ),
             )
             pins = self.evv(t, ivkc, "pinned")
-            if pins:
+            if pins:  # (Fig. 5(f) shows it; on the page only: room, readings 227, 228)
                 p += sentence(
-                    ". Joint ",
-                    self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
-                    f" sits at its {pins[0]['side']} {pins[0]['kind']} bound from ",
-                    self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
-                    " on",
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                ". Joint ",
+                                self.ev(t, ivkc, "pinned", 0, "joint", fmt="d"),
+                                f" sits at its {pins[0]['side']} {pins[0]['kind']} bound from ",
+                                self.ev(t, ivkc, "pinned", 0, "t0", fmt=".2f", unit="s"),
+                                " on",
+                            )
+                        )
+                    )
                 )
             if not pins or pins[0]["joint"] != self.evv(t, ivkc, "stall", "joint"):
                 p += sentence(  # (a joint already named as pinned needs no second mention)
