@@ -189,7 +189,7 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     # runs
     assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
     assert re.search(
-        r"Under our task scaling, it stalls .{0,400}? from the goal from .{0,400}?\. Given a "
+        r"Under our task scaling, it stalls .{0,400}? short of the goal from .{0,400}?\. Given a "
         r"free slack each, both arrive, C-IVKC sooner",
         text,
     ), "the stall told before the free-slack runs"

@@ -108,7 +108,7 @@ class Task2(Claims):
                 # stall was told after the free-slack runs, in a sentence of its own)
                 ". Under our task scaling, it stalls ",
                 self.ev(t, ivkc, "stall", "error", fmt=".3f", unit="m"),
-                " from the goal from ",
+                " short of the goal from ",  # (230: "from ... from")
                 self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
                 " on (",
                 *figs,
