@@ -765,8 +765,13 @@ def _front_axes(
     note = ""
     if info["degenerate"]:
         note = "one point\n" + rf"($\alpha^*={info['alpha']:.2f}$)"
-        if slack:  # the hollow points beside it are another program's: say whose
-            note += "\nhollow: free slack"
+        if slack:  # the hollow point beside it is another program's: one point each (readings
+            # 227-229 counted two markers under "one point")
+            note = (
+                "one point each:\n"
+                + rf"scaled ($\alpha^*={info['alpha']:.2f}$),"
+                + "\nhollow: free slack"
+            )
     elif info["saturated_from_ratio"] is not None:
         # three short lines: a note as wide as its ratio ran into the front's nominal ring
         least = _ratio_tex(info["saturated_from_ratio"])
