@@ -342,7 +342,8 @@ class Task1(Claims):
             # (two lines, not three: room for the per-controller terms table, 221, 222)
             "Pareto fronts of effort ",
             E_SYM,
-            " and rate ",
+            # (227, 228: the text calls them convex; on these axes they look concave)
+            " (log axes: convex fronts can look concave) and rate ",
             MRATE,
             " at ",
             Math(
