@@ -84,7 +84,6 @@ QUICK = ReportConfig(
     goal_runs=64,
 )
 
-
 GLYPHS = "figures/glyphs"
 """Under ``paper/``: each solver's line and marker in the convergence figure, drawn beside its
 name in the solver table (the figure's legend)."""
@@ -195,8 +194,8 @@ class Evidence:
 
 
 FREE_SLACK = 1e3
-"""m/s: the slack bound of a "free" slack, the program (3) with alpha* = 1 of the slack rows. Scenarios take
-finite bounds only; a test checks that no evidence run comes near it."""
+"""m/s: the slack bound of a "free" slack, the program (3) with alpha* = 1 of the slack rows.
+Scenarios take finite bounds only; a test checks that no evidence run comes near it."""
 
 _FREE = {"slack.min": [-FREE_SLACK] * 2, "slack.max": [FREE_SLACK] * 2}
 """The overrides that lift a planar task's slack bounds to :data:`FREE_SLACK`."""

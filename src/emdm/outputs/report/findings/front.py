@@ -86,13 +86,10 @@ class Front(Goals):
                 # count read as the full program's; 209, 210: both counts in one sentence was
                 # the abstract's hardest; the full program's are the body's)
                 like = same and twin is not None and twin.median_gradients
-                if (
-                    like and free
-                ):  # one sentence, like for like, the program named (221: the abstract
-                    # ended on a run of counts; 211, 212: a lone reduced count read as the full
-                    # program's, so "reduced" is said; the full program's counts are the body's)
-                    # (223, 224: "the same reduced programs" was undefined there, and its 7
-                    # read as plain slsqp's 6: both said, each with its program)
+                if like and free:
+                    # slsqp's own counts, then cma-es's on the smaller program it searches with
+                    # slsqp's count there (221: the abstract ended on a run of counts; 223,
+                    # 224: "the same reduced programs" was undefined, its 7 read as slsqp's 6)
                     out += sentence(
                         "On the two-link programs, the gradient-based ",
                         grad,
