@@ -111,7 +111,10 @@ class Tables(Claims):
             sentence(
                 "Each controller's terms in (",
                 Eqs(("qp",)),
-                "); T1, T2: Tasks 1, 2.",
+                "); T1, T2: Tasks 1, 2; free slack: where ",
+                # (227, 232: the row read as every step's; 223: Task 2's C-EMDM has it always)
+                Math(r"\alpha^*<1", "α* &lt; 1"),
+                " (T2's C-EMDM: at every step).",
             ),
             [
                 sentence("ctrl."),

@@ -373,10 +373,11 @@ class Task1(Claims):
         answer = sentence(  # the finding, then its evidence (editor after readings 209, 210);
             # what the fronts say (reading 183: never interpreted): the weighted sum's optima
             # lie on the convex hull of the attainable (M, E) set
-            "Every front in ",
+            # each step's, not the whole runs' (231: a ratio there is dominated); a consequence,
+            # not a finding (215: E convex, M linear in q-dot)
+            "Every step's front (",
             Ref("fig", "pareto"),
-            # (a consequence, not a finding, reading 215: E convex, M linear in q-dot)
-            " is convex, as ",
+            ") is convex, as ",
             E_SYM,
             " is convex and ",
             MRATE,
