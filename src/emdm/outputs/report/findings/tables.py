@@ -111,10 +111,11 @@ class Tables(Claims):
             sentence(
                 "Each controller's terms in (",
                 Eqs(("qp",)),
-                "); T1, T2: Tasks 1, 2; free slack: where ",
-                # (227, 232: the row read as every step's; 223: Task 2's C-EMDM has it always)
+                "); T1, T2: Tasks 1, 2. Free slack: added where ",
+                # (227, 232: the row read as every step's; 233: "T2's C-EMDM: at every step"
+                # read as the nominal run's; in its free-slack run, its own slack is unbounded)
                 Math(r"\alpha^*<1", "α* &lt; 1"),
-                " (T2's C-EMDM: at every step).",
+                "; T2's C-EMDM's own slack unbounded.",
             ),
             [
                 sentence("ctrl."),

@@ -206,7 +206,9 @@ class Task1(Claims):
             " Most of each UC run's effort comes in its first second, so the trade depends on ",
             DT,
             ": at ",
-            *eq(DT, self.evidn(key, "overrides", "motion.dt", fmt="g", unit="s")),
+            # one piece, as k = 144 is (234: "dt" and "= 0.01 s" fell on two lines)
+            Math(r"\Delta t={}", "Δ<i>t</i> = "),
+            self.evidn(key, "overrides", "motion.dt", fmt="g", unit="s"),
             ", it is ",
             rise(keys[0]),
             " more mean ",
