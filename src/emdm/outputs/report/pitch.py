@@ -210,11 +210,13 @@ class Pitch:
         grad_best = Story.best(rows, "gradient") if rows else None
         out.bullets["solvers-verdict"] = (
             [
-                sentence(
+                sentence(  # (234: the verdict read as muddled; the winner first, then ours)
+                    "of the brief's two families, ",
                     grad_best,
-                    ", of the brief's two families; an exact QP method (",
+                    " wins; ",
+                    "our exact QP method, " if best_qp == "active-set" else "the exact QP method ",
                     best_qp,
-                    ") beats both (starred: compiled code)",
+                    " (compiled, starred), beats both",
                 )
             ]
             if best_qp and grad_best
