@@ -88,6 +88,12 @@ def eq(symbol: Math, value: Num) -> list[Any]:
     return [symbol, Text(" = "), value]
 
 
+def more_for_more(gain: Num, cost: Num) -> Sentence:
+    """``1% more mean m for 21% more effort``: a rise in mean m and the rise in effort it costs
+    (both unsigned: the caller has checked that both rise)."""
+    return sentence(gain, " more mean ", M_SYM, " for ", cost, " more effort")
+
+
 def bare(num: Num) -> Num:
     """The number without its unit (a table states the unit in its header)."""
     return Num(num.text, num.src, num.fmt, num.op)

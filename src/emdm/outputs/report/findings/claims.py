@@ -10,7 +10,7 @@ from __future__ import annotations
 from ....core.controllers import Name
 from ..config import PAIRS
 from ..trace import Num, PageOnly, Ref, Sentence, sentence
-from .base import M_SYM, W_M, StoryBase, run_label
+from .base import M_SYM, W_M, StoryBase, more_for_more, run_label
 from .records import GRID_FILE, EvidenceKey, MetricKey
 
 LEVEL = 0.01
@@ -336,14 +336,7 @@ class Claims(StoryBase):
         alike by the abstract, Section IV-C and the talk."""
         gain, cost = self.uc_term_gain(), self.uc_term_cost()
         if gain.text.startswith("+") and cost.text.startswith("+"):
-            return sentence(
-                self.uc_term_gain(".0f"),
-                " more mean ",
-                M_SYM,
-                " for ",
-                self.uc_term_cost(".0f"),
-                " more effort",
-            )
+            return more_for_more(self.uc_term_gain(".0f"), self.uc_term_cost(".0f"))
         return sentence(gain, " mean ", M_SYM, " for ", cost, " effort")
 
     def _no_term(self, key: str) -> tuple[str, ...]:

@@ -27,6 +27,7 @@ from .base import (
     VD,
     W_M,
     eq,
+    more_for_more,
     run_label,
 )
 from .claims import LEVEL, Claims
@@ -210,12 +211,8 @@ class Task1(Claims):
             Math(r"\Delta t={}", "Δ<i>t</i> = "),
             self.evidn(key, "overrides", "motion.dt", fmt="g", unit="s"),
             ", it is ",
-            rise(keys[0]),
-            " more mean ",
-            M_SYM,
-            " for ",
-            rise(keys[1]),
-            " more effort.",
+            *more_for_more(rise(keys[0]), rise(keys[1])),
+            ".",
         )
 
     def task1_c(self) -> Section:
