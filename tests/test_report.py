@@ -190,7 +190,7 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
     assert re.search(
         r"Under our task scaling, it stalls .{0,400}? short of the goal from .{0,400}?\. Given a "
-        r"free slack each, both arrive, C-IVKC sooner",
+        r"free slack each, both arrive: C-IVKC sooner",
         text,
     ), "the stall told before the free-slack runs"
     scaled_at_start = events["controllers"]["C-IVKC"]["scaling"]["initial_alpha"] < 1
@@ -1325,21 +1325,21 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     said = abstract()
     assert "IVKC can only slow down along the line and stops short." in said
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
-    assert ("both arrive, IVKC sooner" in said) == first
+    assert ("both arrive: IVKC sooner" in said) == first
     # the order and the mean m as the records have them (readings 209, 210: one clause each)
     i, e = runs["C-IVKC"], runs["C-EMDM"]
     i["time_to_goal"], e["time_to_goal"] = 20.0, 10.0
     i["mean_manipulability"], e["mean_manipulability"] = 0.2, 0.1
     path.write_text(json.dumps(record), encoding="utf-8")
-    assert "both arrive, EMDM sooner, IVKC with a higher mean m." in abstract()
+    assert "both arrive: EMDM sooner, IVKC with a higher mean m." in abstract()
     e["mean_manipulability"] = 0.3
     path.write_text(json.dumps(record), encoding="utf-8")
-    assert "both arrive, EMDM sooner and with a higher mean m." in abstract()
+    assert "both arrive: EMDM sooner and with a higher mean m." in abstract()
     runs["C-EMDM"].update(reached=False, time_to_goal=None)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = abstract()
     assert (
-        "There, given a practically unbounded slack each, IVKC arrives." in said
+        "With a practically unbounded slack each, IVKC arrives." in said
         and "both arrive" not in said
     )
 

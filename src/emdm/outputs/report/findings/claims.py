@@ -204,7 +204,7 @@ class Claims(StoryBase):
         return not e.get("reached") or i["time_to_goal"] < e["time_to_goal"]
 
     def slack_race(self, ivkc: str, emdm: str, times: bool = False) -> Sentence:
-        """``both arrive, C-IVKC sooner and with a higher mean m``: Task 2's constrained
+        """``both arrive: C-IVKC sooner and with a higher mean m``: Task 2's constrained
         pair given a free slack each (the controllers named ``ivkc`` and ``emdm``: the abstract
         says IVKC and EMDM). Who arrives, who first, whose mean m is higher (readings 209, 210:
         one clause each); ``times``: the arrival times after "sooner", on the page only."""
@@ -220,7 +220,8 @@ class Claims(StoryBase):
         first = Name.C_IVKC if self.ivkc_first_with_slack() else Name.C_EMDM
         other = Name.C_EMDM if first == Name.C_IVKC else Name.C_IVKC
         # (readings 219, 220: one clause, the verb said once)
-        told = sentence(f"both arrive, {named[first]} sooner")
+        # (235, 236: a colon, not a run of commas)
+        told = sentence(f"both arrive: {named[first]} sooner")
         if times:
             told += sentence(
                 PageOnly(

@@ -39,10 +39,11 @@ class Front(Goals):
                     "On a two-link arm, the joint limits block the straight line to the goal. "
                     # (readings 197, 198: plainer; 'IVKC gets the same' was wrong, both change)
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
-                    "arrive. IVKC can only slow down along the line and stops short. There, "
+                    "arrive. IVKC can only slow down along the line and stops short. "
                     # (reading 208: not "the same": each with its own weight; 209, 210: plainer)
-                    # (225, 226: "unbounded" against Section II's 10^3 m/s)
-                    "given a practically unbounded slack each, ",
+                    # (225, 226: "unbounded" against Section II's 10^3 m/s; 235, 236: the
+                    # hardest sentence as "There, given ..., both arrive, IVKC sooner")
+                    "With a practically unbounded slack each, ",
                     *self.slack_race("IVKC", "EMDM"),
                     ". ",
                 )
@@ -101,11 +102,12 @@ class Front(Goals):
                         free,
                         ", needs ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        " evaluations on the smaller program it searches, where ",
+                        # (236: "where slsqp needs 7" read as the full program's count)
+                        " evaluations on the smaller program it searches; ",
                         grad,
                         " needs ",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        ".",
+                        " there.",
                     )
                 else:
                     out += sentence(  # (editor after 209, 210: the subject first)

@@ -113,9 +113,12 @@ class Tables(Claims):
                 Eqs(("qp",)),
                 "); T1, T2: Tasks 1, 2. Free slack: added where ",
                 # (227, 232: the row read as every step's; 233: "T2's C-EMDM: at every step"
-                # read as the nominal run's; in its free-slack run, its own slack is unbounded)
+                # read as the nominal run's; in its free-slack run, its own slack is unbounded;
+                # 235, 236: "own slack unbounded" cryptic)
                 Math(r"\alpha^*<1", "α* &lt; 1"),
-                "; T2's C-EMDM's own slack unbounded.",
+                "; in T2's C-EMDM, it replaces ",
+                Math("D", "<i>D</i>"),
+                ".",
             ),
             [
                 sentence("ctrl."),

@@ -400,14 +400,14 @@ class Task1(Claims):
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
             ". ",
         )
-        answer += sentence("The nominal ratio costs ")
+        answer += sentence("The nominal weights need ")  # (235: plainer than "ratio costs")
         e0 = self.front("UC-EMDM", 0, "zero_E")
         en = self.front("UC-EMDM", 0, "nominal_E")
         answer += sentence(
             *(
                 (
                     self.d.pct((uc, "steps", 0, "nominal_E"), (uc, "steps", 0, "zero_E"), ".1f"),
-                    " more than the minimal effort at ",
+                    " more effort than the minimum at ",
                     K_EQ,
                     "0",
                 )
@@ -428,9 +428,9 @@ class Task1(Claims):
                 ", no command sent" if last else "",
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
                 # (225: "it" had no clear referent; 223-226: the minimum after the price)
-                "), the nominal ratio costs ",
+                "), they need ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), ".0f"),
-                " more than the minimal ",
+                " more than the minimum, ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
             answer += sentence(".")
