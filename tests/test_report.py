@@ -1344,6 +1344,72 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     )
 
 
+def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp_path):
+    """Readings 198, 236: the abstract's solver counts are like for like: slsqp's on the
+    program in the joint speeds alone (the lab's slsqp-reduced) against the one exact
+    gradient-free method's on that same program, each read from the lab's record (the quick
+    lab has neither, so a copy of its record is given both)."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    lab = record["solvers"]
+    lab["slsqp-reduced"] = {**lab["slsqp"], "median_evaluations": 7.0, "median_gradients": 4.0}
+    free = next(n for n, r in lab.items() if r["family"] == "gradient-free")
+    for r in lab.values():
+        if r["family"] == "gradient-free":
+            r.update(max_abs_gap=1e-3, max_violation=0.0)
+    lab[free].update(max_abs_gap=0.0, max_violation=0.0, median_evaluations=321.0)
+    path.write_text(json.dumps(record), encoding="utf-8")
+    said = "".join(p.plain() for p in Story(Data(root)).abstract())
+    assert (
+        "rewritten in the joint speeds alone, the gradient-based slsqp finds the exact optimum "
+        "in a median of 7 objective and 4 gradient evaluations; the only exact gradient-free "
+        f"method, {free}, needs 321." in said
+    ), said
+
+
+def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
+    quick_report, tmp_path
+):
+    """Readings 218, 236: the conclusion answers Task 2.1 in one sentence, said only while the
+    lab's record has the fastest exact gradient-based method faster than every gradient-free
+    one and the exact QP method faster still."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    lab = record["solvers"]
+
+    def said() -> str:
+        path.write_text(json.dumps(record), encoding="utf-8")
+        return "".join(p.plain() for p in Story(Data(root)).conclusion().paragraphs[0])
+
+    lab["active-set"]["median_time"], lab["slsqp"]["median_time"] = 1e-5, 1e-3
+    for r in lab.values():
+        if r["family"] == "gradient-free":
+            r["median_time"] = 1e-2
+    verdict = (
+        "On programs this small, the gradient-based slsqp is exact and faster than every "
+        "gradient-free method; our active-set method is faster still."
+    )
+    assert verdict in said()
+    free = next(n for n, r in lab.items() if r["family"] == "gradient-free")
+    lab[free]["median_time"] = 1e-4
+    assert "On programs this small" not in said()
+    lab[free]["median_time"] = 1e-2
+    for r in lab.values():
+        if r["family"] == "exact":
+            r["median_time"] = 1e-2
+    assert "On programs this small" not in said()
+
+
 def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report, tmp_path):
     """Reading 130: UC-EMDM's -21 % effort and +2 % mean m were both put to its slack. The run
     without the dexterity term (Table II) splits them: while it still saves effort at about

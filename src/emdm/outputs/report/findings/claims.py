@@ -243,6 +243,29 @@ class Claims(StoryBase):
             told += sentence(f", {named[other]} with a higher mean ", M_SYM)
         return told
 
+    def solver_verdict(self) -> Sentence:
+        """``On programs this small, the gradient-based slsqp is exact and faster than every
+        gradient-free method; our active-set method is faster still.``: Task 2.1's answer in one
+        sentence (readings 218, 236: the conclusion had none), said only while Table III
+        holds it: the fastest exact gradient-based method beats every gradient-free one in
+        median time, and the fastest exact QP method beats it."""
+        rows = self.solvers("task2-lab-C-EMDM")
+        grad = self.best(rows, "gradient")
+        qp = self.best(rows, "exact")
+        free = [r for r in rows.values() if r.family == "gradient-free"]
+        if not (grad and qp and free):
+            return []
+        t = rows[grad].median_time
+        if not (all(r.median_time > t for r in free) and rows[qp].median_time < t):
+            return []
+        return sentence(
+            "On programs this small, the gradient-based ",
+            grad,
+            " is exact and faster than every gradient-free method; ",
+            "our active-set method" if qp == "active-set" else f"the QP method {qp}",
+            " is faster still. ",
+        )
+
     def emdm_without_term(self, label: bool = True, when: bool = True) -> Sentence:
         """Task 2's C-EMDM without the dexterity term (empty unless it arrives sooner); its
         arrival time on the page only unless ``when`` (the paper's is Table II's)."""

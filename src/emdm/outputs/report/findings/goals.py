@@ -405,17 +405,24 @@ class Goals(Claims):
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
                     # (209, 210: plainer)
-                    # (219: plainer, the slack named)
-                    ". At rest, ",
-                    Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"),
-                    " and the slack's pull is only ",
-                    Math(
-                        r"w_S\|\delta\|=c_S",
-                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
+                    # (219: plainer, the slack named; 235, 236: on the page only, the paper's
+                    # room going to the conclusion's solver verdict)
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                ". At rest, ",
+                                Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"),
+                                " and the slack's pull is only ",
+                                Math(
+                                    r"w_S\|\delta\|=c_S",
+                                    "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
+                                ),
+                                ". The dexterity term outweighs it: the tip ends ",
+                                *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
+                                " short",
+                            )
+                        )
                     ),
-                    ". The dexterity term outweighs it: the tip ends ",
-                    *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
-                    " short",
                 )
                 continue
             out += sentence(
