@@ -338,7 +338,7 @@ class Goals(Claims):
         return out + sentence(".")
 
     def uc_trade_goals(self) -> Sentence:
-        """`` Over 256 random start-goal pairs per task, drawn uniformly within the joint
+        """`` Over 256 random pairs of start and goal poses per task, drawn uniformly within the joint
         limits, UC-EMDM's median trade against UC-IVKC is 11% more mean m for 57% more
         effort.``"""
         rec = self.rec.goals
@@ -348,8 +348,9 @@ class Goals(Claims):
         return sentence(
             " Over ",
             self.goaln("runs"),
-            # (reading 202: sampled how, against the limits?)
-            " random start-goal pairs per task, drawn uniformly within the joint limits, "
+            # (reading 202: sampled how, against the limits? 235: a goal is a random pose's tip)
+            " random pairs of start and goal poses per task, drawn uniformly within the joint "
+            "limits, "
             "UC-EMDM's median trade against UC-IVKC is ",
             *self.median_trade(*scale),
             ".",
