@@ -173,7 +173,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         scale1 = record["tasks"]["task1"]["policies"]["scale"]
         m, e = (scale1["pairs"]["UC"][k][1] for k in ("mean_manipulability", "total_effort"))
         assert (
-            f"Over {runs} random pairs of start and goal poses per task, drawn uniformly within "
+            f"On Task 1's arm, over {runs} uniformly random pairs of start and goal poses within "
             "the joint limits" in body["t1-uc"]
         )
         # both rise: said as "more"; otherwise signed

@@ -732,9 +732,15 @@ def test_the_terms_table_sets_each_controllers_terms_in_the_one_program(report):
     assert list(rows) == ["UC-IVKC", "UC-EMDM", "C-IVKC", "C-EMDM", "free slack"]
     for name, (w_e, w_m, slack, box) in rows.items():
         if name == "free slack":
-            # its bound the records' (the free-slack runs' overrides: 10^3, "103" as text)
+            # its bound the records' (the free-slack runs' overrides: 10^3, "103" as text),
+            # where it acts in the cell (237, 238: simulated at every step)
             power = round(np.log10(FREE_SLACK))
-            assert (w_e, w_m, slack, box) == ("same", "same", f"|δi| ≤ 10{power}", "(1), 1")
+            assert (w_e, w_m, slack, box) == (
+                "same",
+                "same",
+                f"|δi| ≤ 10{power} if α* < 1",
+                "(1), 1",
+            )
             continue
         is_emdm = "EMDM" in name
         assert (w_e, w_m) == (
@@ -1366,7 +1372,7 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     path.write_text(json.dumps(record), encoding="utf-8")
     said = "".join(p.plain() for p in Story(Data(root)).abstract())
     assert (
-        "rewritten in the joint speeds alone, the gradient-based slsqp finds the exact optimum "
+        "reduced to the joint speeds, the gradient-based slsqp finds the exact optimum "
         "in a median of 7 objective and 4 gradient evaluations; the only exact gradient-free "
         f"method, {free}, needs 321." in said
     ), said
@@ -1377,7 +1383,7 @@ def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
 ):
     """Readings 218, 236: the conclusion answers Task 2.1 in one sentence, said only while the
     lab's record has the fastest exact gradient-based method faster than every gradient-free
-    one and the exact QP method faster still."""
+    one (238: the compiled QP methods are not compared with them there)."""
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
@@ -1391,22 +1397,19 @@ def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
         path.write_text(json.dumps(record), encoding="utf-8")
         return "".join(p.plain() for p in Story(Data(root)).conclusion().paragraphs[0])
 
-    lab["active-set"]["median_time"], lab["slsqp"]["median_time"] = 1e-5, 1e-3
+    lab["slsqp"]["median_time"] = 1e-3
     for r in lab.values():
         if r["family"] == "gradient-free":
             r["median_time"] = 1e-2
     verdict = (
         "On programs this small, the gradient-based slsqp is exact and faster than every "
-        "gradient-free method; our active-set method is faster still."
+        "gradient-free method."
     )
     assert verdict in said()
     free = next(n for n, r in lab.items() if r["family"] == "gradient-free")
     lab[free]["median_time"] = 1e-4
     assert "On programs this small" not in said()
-    lab[free]["median_time"] = 1e-2
-    for r in lab.values():
-        if r["family"] == "exact":
-            r["median_time"] = 1e-2
+    lab[free]["median_time"], lab["slsqp"]["max_abs_gap"] = 1e-2, 1.0
     assert "On programs this small" not in said()
 
 

@@ -94,8 +94,8 @@ class Front(Goals):
                     out += sentence(
                         # one like-for-like sentence, two counts (235, 236: the abstract's
                         # numbers; the full program's counts are the body's)
-                        "On the two-link programs, rewritten in the joint speeds alone, the "
-                        "gradient-based ",
+                        # (238: the count is slsqp-reduced's: "reduced", as the body names it)
+                        "On the two-link programs reduced to the joint speeds, the gradient-based ",
                         grad,
                         " finds the exact optimum in a median of ",
                         *self.evaluations(lab, LIKE_FOR_LIKE),

@@ -338,29 +338,28 @@ class Goals(Claims):
         return out + sentence(".")
 
     def uc_trade_goals(self) -> Sentence:
-        """`` Over 256 random pairs of start and goal poses per task, drawn uniformly within the joint
-        limits, UC-EMDM's median trade against UC-IVKC is 11% more mean m for 57% more
-        effort.``"""
+        """`` On Task 1's arm, over 256 uniformly random pairs of start and goal poses within
+        the joint limits, UC-EMDM's median trade against UC-IVKC is 11% more mean m for
+        57% more effort.``"""
         rec = self.rec.goals
         if rec is None or rec.tasks["task1"].policies["scale"].pairs.get("UC") is None:
             return []
         scale = ("tasks", "task1", "policies", "scale", "pairs", "UC")
         return sentence(
-            " Over ",
+            # (reading 202: sampled how, against the limits? 235: a goal is a random pose's
+            # tip; 237: "per task" beside Task 1's numbers alone)
+            " On Task 1's arm, over ",
             self.goaln("runs"),
-            # (reading 202: sampled how, against the limits? 235: a goal is a random pose's tip)
-            " random pairs of start and goal poses per task, drawn uniformly within the joint "
-            "limits, "
+            " uniformly random pairs of start and goal poses within the joint limits, "
             "UC-EMDM's median trade against UC-IVKC is ",
             *self.median_trade(*scale),
             ".",
         )
 
     def term_reach_cost(self) -> Sentence:
-        """`` On the random goals, the dexterity term costs goals near full reach. UC-EMDM
-        misses all 59 goals farther than 0.880 m from the base (none without the term). At rest,
-        delta = v_d and the slack's pull is only w_S|delta| = c_S. The dexterity term outweighs it: the
-        tip ends 0.0012 to 0.019 m short. C-EMDM reaches 161 of the 256 goals (215 without the
+        """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
+        all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
+        term). C-EMDM reaches 161 of the 256 goals (215 without the
         term); C-IVKC with a free slack reaches 216.`` Task 2's EMDM controllers whose term loses
         goals; empty where it loses none."""
         rec = self.rec.goals
@@ -400,7 +399,10 @@ class Goals(Claims):
                     self.goaln(*where, "count"),
                     " goals farther than ",
                     self.goaln(*where, "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
-                    " from the base (",
+                    # by how much (237: "misses" hid that they are near misses)
+                    " from the base, by ",
+                    *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
+                    " (",
                     "none" if without == 0 else str(without),
                     " without the term)",
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
@@ -418,9 +420,7 @@ class Goals(Claims):
                                     r"w_S\|\delta\|=c_S",
                                     "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                                 ),
-                                ". The dexterity term outweighs it: the tip ends ",
-                                *self.goal_range(*where, "final_error", fmt=".2g", unit="m"),
-                                " short",
+                                ", which the dexterity term outweighs",
                             )
                         )
                     ),

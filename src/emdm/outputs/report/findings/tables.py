@@ -111,14 +111,12 @@ class Tables(Claims):
             sentence(
                 "Each controller's terms in (",
                 Eqs(("qp",)),
-                "); T1, T2: Tasks 1, 2. Free slack: added where ",
                 # (227, 232: the row read as every step's; 233: "T2's C-EMDM: at every step"
                 # read as the nominal run's; in its free-slack run, its own slack is unbounded;
-                # 235, 236: "own slack unbounded" cryptic)
-                Math(r"\alpha^*<1", "α* &lt; 1"),
-                "; in T2's C-EMDM, it replaces ",
+                # 235, 236: "own slack unbounded" cryptic; 237, 238: where it acts is the row's)
+                "); T1, T2: Tasks 1, 2. Free slack: in T2's C-EMDM, it replaces ",
                 Math("D", "<i>D</i>"),
-                ".",
+                " at every step.",
             ),
             [
                 sentence("ctrl."),
@@ -157,6 +155,9 @@ class Tables(Claims):
                             0,
                             fmt=".0e",
                         ),
+                        # (237, 238: simulated at every step from the caption alone)
+                        " if ",
+                        Math(r"\alpha^*<1", "α* &lt; 1"),
                     ),
                     sentence("(", Eqs(("bounds",)), "), 1"),
                 ]

@@ -356,8 +356,9 @@ class Task1(Claims):
             " (colour: its log, ",
             Math("w_M=0", "<i>w</i><sub>M</sub> = 0"),
             " at the bar's foot; circle: nominal",
-            *(  # the nominal ratio, in neither sweep's count (readings took it for missing)
-                (", ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
+            *(  # the nominal ratio, in neither sweep's count (readings took it for missing;
+                # 238: ", 50" cryptic)
+                (" ", RATIO, " = ", self.d.num(PARETO_RECORD, "nominal_ratio", fmt=".3g"))
                 if self.d.exists(PARETO_RECORD)
                 else ()
             ),
@@ -428,9 +429,10 @@ class Task1(Claims):
                 ", no command sent" if last else "",
                 # a percentage of a vanishing effort near the goal: its size in rad^2/s^2 too
                 # (225: "it" had no clear referent; 223-226: the minimum after the price)
-                "), they need ",
+                # (238: which of the two the number was)
+                "), their effort is ",
                 self.d.pct((uc, "steps", i, "nominal_E"), (uc, "steps", i, "zero_E"), ".0f"),
-                " more than the minimum, ",
+                " above the minimum of ",
                 self.frontn("UC-EMDM", i, "zero_E", ".1e", "rad²/s²"),
             )
             answer += sentence(".")

@@ -213,7 +213,7 @@ class Task2(Claims):
                     ),
                     "; elbow ",
                     sols[o].elbow,
-                    " needs ",
+                    " would put ",
                     q(joint),
                     PageOnly(
                         tuple(
@@ -226,7 +226,7 @@ class Task2(Claims):
                     ),
                     " ",
                     self.geon(t, "solutions", o, "outside_by", fmt=".2f", unit="rad"),
-                    " beyond its limit. ",
+                    " past its limit. ",  # (237: awkward)
                 )
             if geo.line_blocked:
                 p += sentence(
