@@ -207,6 +207,10 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         if no_term["C-EMDM"]["lost"]:
             c = scale2["C-EMDM"]["arrived"], no_term["C-EMDM"]["arrived"]
             assert f"C-EMDM reaches {c[0]} of the {runs} goals ({c[1]} without the term)" in cost
+        # ... and the conclusion says so wherever the body does (239: in neither the abstract
+        # nor the conclusion), "near full reach" as the body's
+        assert ("the term costs EMDM random goals" in conclusion) == bool(cost)
+        assert ("; near full reach, the term costs" in conclusion) == ("Near full reach" in cost)
     # what the dexterity term costs C-EMDM in arrivals (reading 179), said where it costs any
     term = record["tasks"]["task2"]["no_term"]["C-EMDM"]
     said = "without its dexterity term"

@@ -244,8 +244,8 @@ class Claims(StoryBase):
         return told
 
     def solver_verdict(self) -> Sentence:
-        """``On programs this small, the gradient-based slsqp is exact and faster than every
-        gradient-free method.``: Task 2.1's answer in one sentence (readings 218, 236: the
+        """``The gradient-based slsqp is exact and faster than every gradient-free method.``:
+        Task 2.1's answer in one sentence (readings 218, 236: the
         conclusion had none), said only while Table III holds it: the fastest exact
         gradient-based method beats every gradient-free one in median time, all of them run
         from Python (238: not the compiled QP methods, whose times are not like for like)."""
@@ -258,9 +258,7 @@ class Claims(StoryBase):
         if not all(r.median_time > t for r in free):
             return []
         return sentence(
-            "On programs this small, the gradient-based ",
-            grad,
-            " is exact and faster than every gradient-free method. ",
+            "The gradient-based ", grad, " is exact and faster than every gradient-free method. "
         )
 
     def emdm_without_term(self, label: bool = True, when: bool = True) -> Sentence:

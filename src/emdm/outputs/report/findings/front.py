@@ -88,22 +88,25 @@ class Front(Goals):
                 # the abstract's hardest; the full program's are the body's)
                 like = same and twin is not None and twin.median_gradients
                 if like and free:
-                    # both on the program in q-dot alone, said in words (221: the abstract
-                    # ended on a run of counts; 223, 224: "the same reduced programs" was
-                    # undefined; 236: slsqp's count there read as the full program's)
+                    # (221: the abstract ended on a run of counts; 223, 224: "the same reduced
+                    # programs" was undefined; 236: slsqp's count there read as the full
+                    # program's; the reduced program is said in words)
                     out += sentence(
-                        # one like-for-like sentence, two counts (235, 236: the abstract's
-                        # numbers; the full program's counts are the body's)
-                        # (238: the count is slsqp-reduced's: "reduced", as the body names it)
-                        "On the two-link programs reduced to the joint speeds, the gradient-based ",
+                        # slsqp's own counts (the body's and Table III's), then like for like on
+                        # the reduced program (239, 240: its 7 alone read as slsqp's 6)
+                        "On the two-link programs, the gradient-based ",
                         grad,
                         " finds the exact optimum in a median of ",
-                        *self.evaluations(lab, LIKE_FOR_LIKE),
-                        "; the only exact gradient-free method, "
+                        *self.evaluations(lab, grad),
+                        "; with the slack eliminated, it needs ",
+                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
+                        " and ",
+                        self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
+                        ", and the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
-                        else "; the fastest exact gradient-free method, ",
+                        else ", and the fastest exact gradient-free method, ",
                         free,
-                        ", needs ",
+                        ", ",
                         self.sn(lab, free, "median_evaluations", ".4g"),
                         ".",
                     )
@@ -147,7 +150,9 @@ class Front(Goals):
             ". A non-redundant arm can only trade tracking for dexterity through a slack, an "
             "allowed tip-velocity error. Like",
             Cite("haviland"),
-            ", our controller, EMDM, solves one strictly convex quadratic program (QP) per step, "
+            # (239: the brief's controller, not ours)
+            ", the brief's controller EMDM solves one strictly convex quadratic program (QP) per "
+            "step, "
             # ("certified" is Section II's term, editor after 209, 210)
             "with our active-set method, which checks each answer's optimality. We compare it "
             # (non-breaking hyphens, reading 211: "(UC-" split over a line)
@@ -213,10 +218,10 @@ class Front(Goals):
             if self.slack_better_on_all():  # the recommendation first (reading 164 found none)
                 p += sentence(
                     # (one claim per sentence, editor after readings 209, 210)
-                    # (221: "beats" read as general; it is these runs')
-                    "In our runs, a free slack does better than task scaling. It makes C-EMDM ",
+                    # (221: "beats" read as general; 239: not of Task 2's C-EMDM, so Task 1's)
+                    "In Task 1, a free slack beats task scaling: it makes C-EMDM ",
                     listed(gains),
-                    " in Task 1. ",
+                    ". ",
                     *arrive,
                     "Scaling only keeps the tip's path straighter. ",
                 )

@@ -114,7 +114,7 @@ class Tables(Claims):
                 # (227, 232: the row read as every step's; 233: "T2's C-EMDM: at every step"
                 # read as the nominal run's; in its free-slack run, its own slack is unbounded;
                 # 235, 236: "own slack unbounded" cryptic; 237, 238: where it acts is the row's)
-                "); T1, T2: Tasks 1, 2. Free slack: in T2's C-EMDM, it replaces ",
+                "); T1, T2: Tasks 1, 2. Free slack: T2's C-EMDM uses it instead of ",
                 Math("D", "<i>D</i>"),
                 " at every step.",
             ),
