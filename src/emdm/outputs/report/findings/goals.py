@@ -417,22 +417,22 @@ class Goals(Claims):
                     # why, in one sentence (readings 200, 201: stated without a mechanism; the
                     # page's Section V derives it)
                     # (209, 210: plainer)
-                    # (219: plainer, the slack named; 235, 236: on the page only, the paper's
-                    # room going to the conclusion's solver verdict)
+                    # (219: plainer, the slack named; 241: the paper needs the why, in one
+                    # clause; "delta = v_d" on the page)
+                    ". At rest, ",
                     PageOnly(
                         tuple(
                             sentence(
-                                ". At rest, ",
-                                Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"),
-                                " and the slack's pull is only ",
-                                Math(
-                                    r"w_S\|\delta\|=c_S",
-                                    "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
-                                ),
-                                ", which the dexterity term outweighs",
+                                Math(r"\delta=v_d", "<i>δ</i> = <i>v</i><sub>d</sub>"), " and "
                             )
                         )
                     ),
+                    "the slack's pull is only ",
+                    Math(
+                        r"w_S\|\delta\|=c_S",
+                        "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
+                    ),
+                    ", which the term outweighs",
                 )
                 continue
             out += sentence(
@@ -446,9 +446,15 @@ class Goals(Claims):
                 " without the term)",
             )
             if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
-                out += sentence(
-                    "; C-IVKC with a free slack reaches ",
-                    self.arrivals("task2", "slack", Name.C_IVKC),
+                out += sentence(  # (on the page: the paper's room is the why above, 241)
+                    PageOnly(
+                        tuple(
+                            sentence(
+                                "; C-IVKC with a free slack reaches ",
+                                self.arrivals("task2", "slack", Name.C_IVKC),
+                            )
+                        )
+                    )
                 )
         return out + sentence(".")
 
