@@ -74,6 +74,29 @@ def test_the_formulations_run_in_headings_each_open_a_paragraph(quick_report):
         assert f"\n\n\\emph{{{heading}}}" in tex, heading
 
 
+def test_the_paper_writes_each_tasks_programs_out(quick_report):
+    """Readings 221-242: each task's programs are written out in the paper (Task 2's C-EMDM as
+    (3), Task 1's without the slack, C-IVKC's), with the scenario's weights; the table of each
+    controller's terms is the page's alone, and nothing in the paper cites it."""
+    import json
+
+    tex = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    weights = json.loads(
+        (quick_report / "data" / "task1" / "metrics.json").read_text(encoding="utf-8")
+    )["scenario"]["weights"]
+    assert "This is C-EMDM's program on Task~2's arm." in tex
+    task1 = (
+        r"\[\min_{\dot q}\ \tfrac12w_E\|\dot q\|^2-w_MJ_m^\top\dot q\quad\text{s.t. }"
+        r"J\dot q=\alpha^*v_d,\ \dot q\in B,\]"
+    )
+    ivkc = r"\[\min_{\dot q}\ \tfrac12\|\dot q\|^2\quad\text{s.t. }J\dot q=\alpha^*v_d,\ \dot q\in B.\]"
+    assert task1 in tex and ivkc in tex
+    assert f"$w_E={weights['effort']:g}$ and $w_M={weights['manipulability']:g}$" in tex
+    assert "tab:programs" not in tex
+    page = (quick_report / "index.html").read_text(encoding="utf-8")
+    assert 'id="tab-programs"' in page
+
+
 def test_the_pitch_is_16_9_with_8_to_13_slides_and_backups(quick_report):
     """A 10-minute talk: at most 13 frames before the backups, the title's included (Task 1's
     policy has a slide of its own since readings 152-153 found it a second idea beside the
