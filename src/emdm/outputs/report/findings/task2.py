@@ -170,9 +170,11 @@ class Task2(Claims):
                     "workspace",
                     "figures/workspace",
                     sentence(
-                        "Task 2: the straight line to the goal enters the disc unreachable with ",
-                        Math(r"|q_2|", "|<i>q</i><sub>2</sub>|"),
-                        " outside its stop zone (hatched); C-IVKC stalls short of it, C-EMDM "
+                        # (241: "the disc unreachable with |q2| outside ..." ambiguous)
+                        "Task 2: the straight line to the goal enters the hatched disc, out of "
+                        "reach while ",
+                        Math(r"q_2", "<i>q</i><sub>2</sub>"),
+                        " is out of its stop zone; C-IVKC stalls short of it, C-EMDM "
                         "goes around and flips its elbow into ",
                         self.goal_pose(t),
                         # (Task 2's animations named too, reading 169: only Task 1's were)
