@@ -60,8 +60,9 @@ class Front(Goals):
             # Section IV-C's, readings 203, 204: the abstract read as a list of percentages)
             out += (
                 sentence(
-                    "Without limits, EMDM's slack, not its dexterity term, saves effort against "
-                    "IVKC. "
+                    # (244: "without limits" read as both arms')
+                    "Without limits on that arm, EMDM's slack, not its dexterity term, saves "
+                    "effort. "
                 )
                 if by_term
                 else sentence(

@@ -286,9 +286,10 @@ class Task1(Claims):
                         )
                     )
                 ),
-                ", both send the same commands: with joints at their speed bounds, "
-                # (222, 225 took it for the scaled steps' alone: it holds after them too)
-                "only one command is feasible, scaled or not",
+                # (222, 225 took it for the scaled steps' alone: it holds after them too;
+                # 243: plainer)
+                ", both send the same commands: the speed bounds leave one feasible command "
+                "per step, scaled or not",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
             sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
