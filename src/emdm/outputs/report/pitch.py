@@ -116,11 +116,7 @@ class Pitch:
             sentence(  # one number each (readings 197, 198: slide 9 carried too much text)
                 "C-EMDM ",
                 *s.outcome(t2, Name.C_EMDM),
-                "; mean ",
-                M_SYM,
-                " ",
-                s.pct(t2, Name.C_EMDM, Name.C_IVKC, "mean_manipulability"),
-                " against C-IVKC",
+                *self.mean_m_beside(t2),
             ),
         ]
         if s.ivkc_with_slack() and not s.mv(t2, Name.C_IVKC, "reached"):
@@ -275,6 +271,23 @@ class Pitch:
             out.figures[name] = self.d.exists(f"paper/slides/{name}.png")
         out.single_point = s.single_point_vertex() is not None
         return out
+
+    def mean_m_beside(self, t: str) -> Sentence:
+        """``, but its mean m is 27% below C-IVKC's``: Task 2's C-EMDM mean m against C-IVKC's
+        in words (244: "mean m -27% against C-IVKC" cryptic on a slide)."""
+        f = f"data/{t}/metrics.json"
+        a = (f, "controllers", Name.C_EMDM, "mean_manipulability")
+        b = (f, "controllers", Name.C_IVKC, "mean_manipulability")
+        lower = self.s.mv(t, Name.C_EMDM, "mean_manipulability") < self.s.mv(
+            t, Name.C_IVKC, "mean_manipulability"
+        )
+        return sentence(
+            ", but its mean " if lower else "; its mean ",
+            M_SYM,
+            " is ",
+            self.d.cut(a, b) if lower else self.d.pct(a, b, ".0f"),
+            " below C-IVKC's" if lower else " above C-IVKC's",
+        )
 
     def tight_slack_stalls(self) -> bool:
         """Task 2's C-EMDM with its slack bounded to 0.1 m/s does not reach the goal."""
