@@ -740,16 +740,13 @@ class Task1(Claims):
                         # (not "evenly spaced", reading 209: step 1 is added to them)
                         " C-EMDM programs re-solved offline, the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
-                        " scaled ones allow only one command (feasible-set width ",
-                        Math(r"\leq", "≤"),
-                        " ",
+                        # ("up to", not "<=": the width is rounded, 246: 2.44e-15 under 2.4e-15)
+                        " scaled ones allow only one command (feasible-set width up to ",
                     )
                     if "steps" in vertex
                     else (
                         " These are Task 1's challenge: only one command is feasible "
-                        "(feasible-set width ",
-                        Math(r"\leq", "≤"),
-                        " ",
+                        "(feasible-set width up to ",
                     )
                 ),
                 self.d.num(
