@@ -204,8 +204,8 @@ class Tables(Claims):
             indented += sentence(
                 " ",
                 Upright(run_label(GRID_MISS)),
-                # (reading 197: "sensitive to rounding" was cryptic)
-                " diverges, so its digits depend on rounding.",
+                # (reading 197: "sensitive to rounding" was cryptic; 247: then do not print them)
+                " diverges (–: digits that depend on rounding).",
             )
 
         def caption(evidence: bool) -> Sentence:
@@ -353,8 +353,11 @@ class Tables(Claims):
             for metric, fmt in self.OUTCOME_COLUMNS:
                 if not value("reached") and fmt != "d":
                     # a run that blew up: its digits depend on rounding (reading 177 got
-                    # 10,674 where the record has 11,749), so two or three significant ones
-                    fmt = ".2g" if metric != "max_abs_qd" else ".3g"
+                    # 10,674 where the record has 11,749; 235-248 got efforts of 1.09e4 to
+                    # 1.26e4 and peaks of 49 to 125 rad/s), so none printed; the page's
+                    # text gives the record's
+                    out.append(sentence("–"))
+                    continue
                 big = fmt.endswith("f") and abs(value(metric)) >= 1e3  # 11749 read as 117.49
                 out.append(sentence(num(metric, ",.0f" if big else fmt)))
             return out

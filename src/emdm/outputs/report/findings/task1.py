@@ -86,7 +86,7 @@ class Task1(Claims):
                 f"{emdm} ", *self.outcome(t, emdm), f", {ivkc} ", *self.outcome(t, ivkc), *where
             )
         answer += sentence(
-            ", their tips never more than ",
+            ", with their tips never more than ",  # (248: a comma splice)
             gap,
             " apart",
             *(
