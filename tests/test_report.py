@@ -751,6 +751,24 @@ def test_the_terms_table_sets_each_controllers_terms_in_the_one_program(report):
         assert box == ("(1), (2)" if name.startswith("C-") else "none, 1"), (name, box)
 
 
+def test_a_diverging_runs_digits_are_not_printed(report):
+    """Readings 177, 235-248: the run that diverges (A2a) gives digits its readers' simulators
+    could not reproduce, so Table II prints "miss" and dashes for it, and its caption says why;
+    its finer-step twin (A2b) arrives and keeps its digits."""
+    root, page = report
+    rows = {row[0]: row[1:] for row in page.tables["tab-outcomes"][1:] if len(row) > 1}
+    a2a = next(v for k, v in rows.items() if k.strip().startswith("A2a"))
+    a2b = next(v for k, v in rows.items() if k.strip().startswith("A2b"))
+    grid = json.loads((root / "data/task1-pareto-UC-EMDM/weight_grid.json").read_text())
+    assert any(not r["reached"] for r in grid["runs"])
+    assert a2a[0] == "miss" and a2a[1:4] == ["–", "–", "–"], a2a
+    assert a2a[4].isdigit(), a2a  # its scaled steps: a count, exact whatever the rounding
+    assert all(c not in ("–", "miss") for c in a2b[:4]), a2b
+    assert "diverges (–: digits that depend on rounding)" in (root / "index.html").read_text(
+        encoding="utf-8"
+    )
+
+
 def test_references_are_numbered_alike_in_the_paper_and_the_page():
     """The bibliography's order (IEEE: order of first citation) is one list, REFERENCES: the
     LaTeX bibliography and the page's list give the same order, so [n] means one work in both."""

@@ -423,13 +423,11 @@ class Tables(Claims):
             pair(
                 unreached(False)
                 if stall(metric, runs[i].reached)
-                # a run that blew up: two significant digits, as Table II (reading 198: the
-                # backup slide's 11,749 claimed digits its caption calls unreliable)
-                else sentence(
-                    self.gridn(
-                        ctrl, i, metric, fmt=plain(fmt, metric) if runs[i].reached else ".2g"
-                    )
-                ),
+                # a run that blew up: no digits, as Table II (reading 198: the backup slide's
+                # 11,749 claimed digits its caption calls unreliable; 247: none are)
+                else sentence(self.gridn(ctrl, i, metric, fmt=plain(fmt, metric)))
+                if runs[i].reached
+                else sentence("–"),
                 nominal
                 if stall(metric, self.mv("task1", ctrl, "reached"))
                 else sentence(self.mt("task1", ctrl, metric, fmt)),
@@ -486,7 +484,7 @@ class Tables(Claims):
                 Upright(run_label(GRID_MISS)),
                 " is from ",
                 Ref("fig", "pareto"),
-                "'s sweep; for ",
+                "'s sweep and diverges (–: digits that depend on rounding); for ",
                 Upright(run_label(FINER_STEP)),
                 ", the nominal weights at ",
                 *self.e3_step(),
