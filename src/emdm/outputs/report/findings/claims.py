@@ -245,10 +245,10 @@ class Claims(StoryBase):
 
     def solver_verdict(self) -> Sentence:
         """``The gradient-based slsqp is exact and faster than every gradient-free method.``:
-        Task 2.1's answer in one sentence (readings 218, 236: the
-        conclusion had none), said only while Table III holds it: the fastest exact
-        gradient-based method beats every gradient-free one in median time, all of them run
-        from Python (238: not the compiled QP methods, whose times are not like for like)."""
+        Task 2.1's answer in one sentence (readings 218, 236: the conclusion had none), said
+        only while Table III holds it: the fastest exact gradient-based method beats every
+        gradient-free one in median time, all of them run from Python (238: not the compiled
+        QP methods, whose times are not like for like)."""
         rows = self.solvers("task2-lab-C-EMDM")
         grad = self.best(rows, "gradient")
         free = [r for r in rows.values() if r.family == "gradient-free"]

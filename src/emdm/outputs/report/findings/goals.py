@@ -380,9 +380,10 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
         all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). C-EMDM reaches 161 of the 256 goals (215 without the
-        term); C-IVKC with a free slack reaches 216.`` Task 2's EMDM controllers whose term loses
-        goals; empty where it loses none."""
+        term). At rest, the slack's pull is only w_S|delta| = c_S, which the term outweighs.
+        C-EMDM reaches 161 of the 256 goals (215 without the term).`` (the page adds delta = v_d
+        and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose term loses goals;
+        empty where it loses none."""
         losers, near = self.term_losers()
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
