@@ -244,7 +244,7 @@ class Claims(StoryBase):
         return told
 
     def solver_verdict(self) -> Sentence:
-        """``The gradient-based slsqp is exact and faster than every gradient-free method.``:
+        """``Offline, gradient-based slsqp is exact and faster than every gradient-free method.``:
         Task 2.1's answer in one sentence (readings 218, 236: the conclusion had none), said
         only while Table III holds it: the fastest exact gradient-based method beats every
         gradient-free one in median time, all of them run from Python (238: not the compiled
@@ -257,8 +257,11 @@ class Claims(StoryBase):
         t = rows[grad].median_time
         if not all(r.median_time > t for r in free):
             return []
+        # ("offline": Table III's programs; 249: in the loop its KKT residual reaches 2.4e-6)
         return sentence(
-            "The gradient-based ", grad, " is exact and faster than every gradient-free method. "
+            "Offline, gradient-based ",
+            grad,
+            " is exact and faster than every gradient-free method. ",
         )
 
     def emdm_without_term(self, label: bool = True, when: bool = True) -> Sentence:
