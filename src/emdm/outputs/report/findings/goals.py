@@ -380,7 +380,7 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
         all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, the slack's pull is only w_S|delta| = c_S, which the term outweighs.
+        term). At rest, the slack pulls with only w_S|delta| = c_S; the term pulls harder.
         C-EMDM reaches 161 of the 256 goals (215 without the term).`` (the page adds delta = v_d
         and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose term loses goals;
         empty where it loses none."""
@@ -428,12 +428,13 @@ class Goals(Claims):
                             )
                         )
                     ),
-                    "the slack's pull is only ",
+                    # (249-252: "which the term outweighs" their hardest; their plainer form)
+                    "the slack pulls with only ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    ", which the term outweighs",
+                    "; the term pulls harder",
                 )
                 continue
             out += sentence(
