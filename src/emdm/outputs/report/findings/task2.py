@@ -395,7 +395,10 @@ class Task2(Claims):
                 higher = e6["mean_manipulability"] > self.mv(t, emdm, "mean_manipulability")
                 if higher:  # the finding, then its run (editor after readings 209, 210)
                     # (247: not of UC-EMDM, whose term buys 1% against A6)
-                    p += sentence(f"Here, {emdm}'s dexterity term does not raise ", M_SYM, ". ")
+                    # (253: "Here" read as A3's arm)
+                    p += sentence(
+                        f"On this arm, {emdm}'s dexterity term does not raise ", M_SYM, ". "
+                    )
                 p += cap(self.emdm_without_term(when=not higher)) + sentence(
                     *(
                         (  # its time and mean are Table II's (readings 190-195: too dense)
