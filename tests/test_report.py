@@ -1394,7 +1394,7 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
         "On the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
         f"of {own['median_evaluations']:.4g} objective and {own['median_gradients']:.4g} "
         "gradient evaluations; with the slack eliminated, it needs 7 and 4, and the only exact "
-        f"gradient-free method, {free}, 321." in said
+        f"gradient-free method, {free}, needs 321." in said
     ), said
 
 

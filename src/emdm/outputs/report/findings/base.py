@@ -503,9 +503,9 @@ class StoryBase:
             "velocities, limits dotted; grey: beyond a limit"
         )
         if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
-            out += sentence(
-                f"; speeds cut at {FAR_BEYOND:g}×, the largest peak past a cut written in its "
-                "run's colour"
+            out += sentence(  # (245, 248, 250, 255: "speeds cut at 1.5x ..." cryptic)
+                f"; speed axes clipped at {FAR_BEYOND:g}× the limit, the largest clipped peak "
+                "labelled in its run's colour"
             )
         return out
 

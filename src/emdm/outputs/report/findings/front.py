@@ -107,7 +107,7 @@ class Front(Goals):
                         if len(self.exact(rows, "gradient-free")) == 1
                         else ", and the fastest exact gradient-free method, ",
                         free,
-                        ", ",
+                        ", needs ",  # (255: ", cma-es, 522." an elliptical fragment)
                         self.sn(lab, free, "median_evaluations", ".4g"),
                         ".",
                     )
