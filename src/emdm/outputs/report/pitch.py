@@ -10,7 +10,7 @@ from .document import Document
 from .findings import M_SYM, Story
 from .findings.base import glossed
 from .findings.claims import listed
-from .findings.records import EvidenceKey
+from .findings.records import EvidenceKey, MetricKey
 from .trace import Data, Math, Sentence, cap, sentence
 
 
@@ -275,17 +275,15 @@ class Pitch:
     def mean_m_beside(self, t: str) -> Sentence:
         """``, but its mean m is 27% below C-IVKC's``: Task 2's C-EMDM mean m against C-IVKC's
         in words (244: "mean m -27% against C-IVKC" cryptic on a slide)."""
-        f = f"data/{t}/metrics.json"
-        a = (f, "controllers", Name.C_EMDM, "mean_manipulability")
-        b = (f, "controllers", Name.C_IVKC, "mean_manipulability")
-        lower = self.s.mv(t, Name.C_EMDM, "mean_manipulability") < self.s.mv(
-            t, Name.C_IVKC, "mean_manipulability"
-        )
+        key: MetricKey = "mean_manipulability"
+        lower = self.s.mv(t, Name.C_EMDM, key) < self.s.mv(t, Name.C_IVKC, key)
         return sentence(
             ", but its mean " if lower else "; its mean ",
             M_SYM,
             " is ",
-            self.d.cut(a, b) if lower else self.d.pct(a, b, ".0f"),
+            self.s.cut(t, Name.C_EMDM, Name.C_IVKC, key)
+            if lower
+            else self.s.pct(t, Name.C_EMDM, Name.C_IVKC, key, ".0f"),
             " below C-IVKC's" if lower else " above C-IVKC's",
         )
 

@@ -341,6 +341,11 @@ class StoryBase:
         f = f"data/{task}/metrics.json"
         return self.d.pct((f, "controllers", a, key), (f, "controllers", b, key), fmt)
 
+    def cut(self, task: str, a: str, b: str, key: MetricKey) -> Num:
+        """How much less ``a``'s ``key`` is than ``b``'s, in percent (``27%`` below)."""
+        f = f"data/{task}/metrics.json"
+        return self.d.cut((f, "controllers", a, key), (f, "controllers", b, key))
+
     def ttg(self, task: str, ctrl: str) -> Num:
         return self.mt(task, ctrl, "time_to_goal", ".2f", "s")
 

@@ -483,7 +483,6 @@ class Task2(Claims):
         lower = self.mv(t, emdm, "mean_manipulability") < self.mv(t, ivkc, "mean_manipulability")
         if crosses and same and not reached_i and lower:  # (a plain-language edit: the means
             # are Table II's; the common window says the stall's tail does not change its mean)
-            f = f"data/{t}/metrics.json"
             # (it goes on the evidence runs' paragraph, whose A4 tells the crossing: a line
             # saved for the abstract's like-for-like count)
             sec.paragraphs[-1] += sentence(
@@ -493,10 +492,7 @@ class Task2(Claims):
                 f" leaves {emdm}'s mean ",
                 M_SYM,
                 " ",
-                self.d.cut(
-                    (f, "controllers", emdm, "mean_manipulability"),
-                    (f, "controllers", ivkc, "mean_manipulability"),
-                ),
+                self.cut(t, emdm, ivkc, "mean_manipulability"),
                 f" below the stalled {ivkc}'s (",
                 Ref("tab", "outcomes"),
                 f"). Over {emdm}'s ",
