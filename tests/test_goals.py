@@ -196,7 +196,7 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
                 assert f" {ctrls[c]['arrived']}" in told, (pol, c)
         misses = [rows["scale"][c]["missed"] for c in ("C-IVKC", "C-EMDM")]
         every = all(m and m["count"] and m["at_stop"] == m["count"] for m in misses)
-        assert ("stall with a joint stopped by its damper" in told) == every
+        assert ("stall with a joint held at its stop zone" in told) == every
         # Task 2.2: the goals the dexterity term costs, both EMDM controllers (192, 193)
         cost = render_latex(story.term_reach_cost())
         assert cost and cost in body["t2-uc"]

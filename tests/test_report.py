@@ -187,9 +187,9 @@ def test_task2_c_ivkc_is_explained_not_just_compared(report):
     text = (root / "index.html").read_text(encoding="utf-8")
     # the brief's pair first, its stall the policy's (where and when), then the like-for-like
     # runs
-    assert "In the brief, only C-EMDM has a slack. It leaves the straight line" in text
+    assert "Only C-EMDM, which has a slack in the brief, leaves the straight line" in text
     assert re.search(
-        r"Under our task scaling, it stalls .{0,400}? short of the goal from .{0,400}?\. Given a "
+        r"Under our task scaling, it stalls .{0,400}? short of the goal from .{0,400}?\. With a "
         r"free slack each, both arrive: C-IVKC sooner",
         text,
     ), "the stall told before the free-slack runs"
@@ -1347,7 +1347,7 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
         return "".join(p.plain() for p in Story(Data(root)).abstract())
 
     said = abstract()
-    assert "IVKC can only slow down along the line and stops short." in said
+    assert "IVKC, which we let only slow down along the line, stops short." in said
     first = runs["C-IVKC"]["time_to_goal"] < runs["C-EMDM"]["time_to_goal"]
     assert ("both arrive: IVKC sooner" in said) == first
     # the order and the mean m as the records have them (readings 209, 210: one clause each)
@@ -1369,10 +1369,10 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
 
 
 def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp_path):
-    """Readings 198, 236, 239, 240: the abstract gives slsqp's own counts (Table III's), then
-    like for like on the program with the slack eliminated: slsqp's there (the lab's
-    slsqp-reduced) and the one exact gradient-free method's, each read from the lab's record
-    (the quick lab has neither, so a copy of its record is given both)."""
+    """Readings 198, 236, 239, 240: the abstract compares like for like on the program with
+    the slack eliminated, said first: slsqp's counts there (the lab's slsqp-reduced) and the one
+    exact gradient-free method's, each read from the lab's record (the quick lab has neither,
+    so a copy of its record is given both); slsqp's own are IV-B's and Table II's."""
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
@@ -1389,11 +1389,9 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     lab[free].update(max_abs_gap=0.0, max_violation=0.0, median_evaluations=321.0)
     path.write_text(json.dumps(record), encoding="utf-8")
     said = "".join(p.plain() for p in Story(Data(root)).abstract())
-    own = lab["slsqp"]
     assert (
-        "On the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
-        f"of {own['median_evaluations']:.4g} objective and {own['median_gradients']:.4g} "
-        "gradient evaluations; with the slack eliminated, it needs 7 and 4, and the only exact "
+        "With the slack eliminated, the gradient-based slsqp finds the two-link programs' exact "
+        "optimum in a median of 7 objective and 4 gradient evaluations; the only exact "
         f"gradient-free method, {free}, needs 321." in said
     ), said
 
@@ -1470,8 +1468,9 @@ def test_task2_2_says_whose_gain_is_the_slacks_and_whose_the_terms(quick_report,
         cost = 100 * (effort_emdm / run["total_effort"] - 1)
         assert f"for {cost:.0f}% more effort" in share
     assert ("the dexterity term buys" in share) == by_term
-    lead = "The saving comes from the slack. " if by_term else ""  # the finding, then its run
-    assert share.startswith(lead + "Without the dexterity term (A6), UC-EMDM ")
+    # the finding, then its run
+    lead = "The saving comes from the slack: without" if by_term else "Without"
+    assert share.startswith(lead + " the dexterity term (A6), UC-EMDM ")
     run["mean_manipulability"] = m["UC-EMDM"]  # as dexterous without the term: not the term's
     path.write_text(json.dumps(record), encoding="utf-8")
     by_term, abstract, share = said()

@@ -456,8 +456,14 @@ class StoryBase:
                 sentence(" and a lower mean ", M_SYM),
             ),
         }
-        p = sentence("Scaling has a price: with a free slack instead, C-EMDM ")
-        for metric, better in self._policy_terms():
+        terms = self._policy_terms()
+        # the finding first (a plain-language edit), said only when it holds on every outcome
+        p = sentence(
+            "Here, a free slack beats scaling: with it, C-EMDM "
+            if all(better for _, better in terms)
+            else "Scaling has a price: with a free slack instead, C-EMDM "
+        )
+        for metric, better in terms:
             p += words[metric][0 if better else 1]
         p += sentence(
             " (",

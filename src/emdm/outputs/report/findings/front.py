@@ -38,8 +38,9 @@ class Front(Goals):
                     # scaling' undefined in the abstract)
                     "On a two-link arm, the joint limits block the straight line to the goal. "
                     # (readings 197, 198: plainer; 'IVKC gets the same' was wrong, both change)
+                    # (253: "can only slow down" read as IVKC's property, not our policy's)
                     "A slack, an allowed tip-velocity error, lets EMDM leave the line and "
-                    "arrive. IVKC can only slow down along the line and stops short. "
+                    "arrive. IVKC, which we let only slow down along the line, stops short. "
                     # (reading 208: not "the same": each with its own weight; 209, 210: plainer)
                     # (225, 226: "unbounded" against Section II's 10^3 m/s; 235, 236: the
                     # hardest sentence as "There, given ..., both arrive, IVKC sooner")
@@ -93,19 +94,17 @@ class Front(Goals):
                     # programs" was undefined; 236: slsqp's count there read as the full
                     # program's; the reduced program is said in words)
                     out += sentence(
-                        # slsqp's own counts (the body's and Table III's), then like for like on
-                        # the reduced program (239, 240: its 7 alone read as slsqp's 6)
-                        "On the two-link programs, the gradient-based ",
+                        # like for like first (a plain-language edit: the abstract's longest
+                        # sentence; slsqp's own counts on the full program are IV-B's and
+                        # Table II's, and "with the slack eliminated" leads, so its 7 is not
+                        # read as the full program's 6, 239, 240)
+                        "With the slack eliminated, the gradient-based ",
                         grad,
-                        " finds the exact optimum in a median of ",
-                        *self.evaluations(lab, grad),
-                        "; with the slack eliminated, it needs ",
-                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        " and ",
-                        self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
-                        ", and the only exact gradient-free method, "
+                        " finds the two-link programs' exact optimum in a median of ",
+                        *self.evaluations(lab, LIKE_FOR_LIKE),
+                        "; the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
-                        else ", and the fastest exact gradient-free method, ",
+                        else "; the fastest exact gradient-free method, ",
                         free,
                         ", needs ",  # (255: ", cma-es, 522." an elliptical fragment)
                         self.sn(lab, free, "median_evaluations", ".4g"),
@@ -134,33 +133,33 @@ class Front(Goals):
     def introduction(self) -> Section:
         sec = Section("intro", "Introduction")
         intro = sentence(
-            "A planar arm must bring its tip to a goal with little joint-velocity effort "
-            "while staying dexterous (large manipulability ",
+            # (a plain-language edit: each term said in everyday words at first use)
+            "A planar arm must bring its tip to a goal with little joint-speed effort and stay "
+            "dexterous, able to move its tip in any direction (large manipulability ",
             M_SYM,
             Cite("yoshikawa"),
             "). Resolved-rate control",
             Cite("whitney"),
-            " (IVKC) follows the goal through the Jacobian's pseudoinverse. On a redundant arm, "
-            "a gradient step in its null space can also raise ",
+            " (IVKC) tracks the goal via the Jacobian's pseudoinverse. A redundant arm (with a "
+            "spare joint) can also raise ",
             M_SYM,
+            " by a null-space gradient step, which leaves the tip still",
             Cite("liegeois"),
-            ". Later controllers keep joint limits as hard constraints",
+            ". Later controllers enforce joint limits",
             Cite("flacco"),
             ",",
             Cite("haviland"),
-            ". A non-redundant arm can only trade tracking for dexterity through a slack, an "
+            ". A non-redundant arm can only trade tracking for dexterity through a slack: an "
             "allowed tip-velocity error. Like",
             Cite("haviland"),
             # (239: the brief's controller, not ours)
-            ", the brief's controller EMDM solves one strictly convex quadratic program (QP) per "
-            "step, "
+            ", the course brief's controller EMDM solves a quadratic program (QP) per step; "
             # ("certified" is Section II's term, editor after 209, 210)
-            "with our active-set method, which checks each answer's optimality. We compare it "
+            "our active-set solver checks each answer's optimality. We compare it with IVKC, "
             # (non-breaking hyphens, reading 211: "(UC-" split over a line)
-            "with IVKC, each unconstrained (UC\u2011) or with joint limits (C\u2011). We coded "
-            "both from the course's "
+            "each without (UC\u2011) or with joint limits (C\u2011). We coded both from the "
             # what "the brief" is, once (reading 195: cited ten times, never summarised)
-            "project brief, which sets the arms, parameters and questions (its skeleton code was "
+            "brief, which sets arms, parameters and questions (its skeleton code was "
             "unavailable)",
             # the derivative check on the page (reading 187: room for the definitions)
             PageOnly(tuple(self.derivatives_checked())),

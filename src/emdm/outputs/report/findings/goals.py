@@ -292,7 +292,7 @@ class Goals(Claims):
 
     def policy_goals(self) -> Sentence:
         """`` Of the 256 random pairs, both reach 217 with a free slack but 146 with
-        scaling; the rest stall with a joint stopped by its damper.``:
+        scaling; the rest stall with a joint held at its stop zone.``:
         Task 1's policies on the many goals, beside the one goal's (readings 190, 191:
         told in the conclusion only, the policy's strongest evidence went undiscussed)."""
         rec = self.rec.goals
@@ -334,7 +334,7 @@ class Goals(Claims):
         missed = [r.missed for r in rows["scale"] if r is not None]
         if all(m is not None and m.count and m.at_stop == m.count for m in missed):
             # (at the stop distance, where the damper allows no speed towards the limit)
-            out += sentence("; the rest stall with a joint stopped by its damper")
+            out += sentence("; the rest stall with a joint held at its stop zone")
         return out + sentence(".")
 
     def uc_trade_goals(self) -> Sentence:
@@ -380,7 +380,7 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
         all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, the slack pulls with only w_S|delta| = c_S; the term pulls harder.
+        term). At rest, the slack pulls towards the goal with only w_S|delta| = c_S; the term pulls harder.
         C-EMDM reaches 161 of the 256 goals (215 without the term).`` (the page adds delta = v_d
         and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose term loses goals;
         empty where it loses none."""
@@ -429,7 +429,7 @@ class Goals(Claims):
                         )
                     ),
                     # (249-252: "which the term outweighs" their hardest; their plainer form)
-                    "the slack pulls with only ",
+                    "the slack pulls towards the goal with only ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",

@@ -97,8 +97,9 @@ class Task2(Claims):
                 self.evv(t, ivkc, "scaling") and self.evv(t, ivkc, "scaling", "initial_alpha") < 1.0
             )  # the brief's exact program has no solution there: what the policy is for
             answer = sentence(  # one fact per sentence (copy edit after readings 150-153)
-                f"In the brief, only {emdm} has a slack. It leaves the straight line and arrives "
-                "in ",
+                # (a plain-language edit: who arrives first, then why)
+                f"Only {emdm}, which has a slack in the brief, leaves the straight line and "
+                "arrives, in ",
                 self.ttg(t, emdm),
                 f". {ivkc} ",
                 "cannot meet its task constraint from step 0 on and must stay on the line"
@@ -112,7 +113,7 @@ class Task2(Claims):
                 self.ev(t, ivkc, "stall", "t", fmt=".2f", unit="s"),
                 " on (",
                 *figs,
-                "). Given a free slack each, ",
+                "). With a free slack each, ",
             )
             answer += self.slack_race(ivkc, emdm, times=True)
             answer += sentence(" (", Ref("tab", "outcomes"), ")")
@@ -664,8 +665,8 @@ class Task2(Claims):
         slacks = saves and self.uc_term_raises_m()  # the slack's saving, not the term's
         out = sentence(
             # the finding first, then its run (editor after readings 209, 210)
-            "The saving comes from the slack. " if slacks else "",
-            "Without the dexterity term (",
+            "The saving comes from the slack: without" if slacks else "Without",
+            " the dexterity term (",
             run_label(key),
             f"), {emdm} ",
             "still" if saves else "no longer",
