@@ -36,7 +36,7 @@ SEEDED = ("differential-evolution", "cma-es")
 """The stochastic methods: each takes a ``seed`` (0 by default), so a run is reproducible and
 their spread is sampled by running seeds 0, 1, ... (:data:`emdm.studies.lab.SEEDS`)."""
 
-WHOLE_GENERATIONS = ("differential-evolution",)
+WHOLE_GENERATIONS = ("differential-evolution", "cma-es")
 """The methods whose budget ends them at the last whole generation that fits in it: they stop
 a few evaluations short of the budget."""
 PENALISED = ("nelder-mead", "powell", "cma-es")
@@ -248,10 +248,13 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                     "tolx": 1e-13,
                 },
             )
+            # cma stops once its count passes maxfevals, after the generation that passed it
+            # (606 of a 600 budget): the last whole generation that fits ends it instead
+            es.opts["maxfevals"] = max(budget - es.popsize, 0)
             es.optimize(rec)
-            t, iterations, ok = es.result.xbest, int(es.result.iterations), True
-            if es.result.evaluations >= budget:
-                ok = False
+            t, iterations = es.result.xbest, int(es.result.iterations)
+            limited = "maxfevals" in es.result.stop  # (not one of its convergence tests)
+            ok = not limited
         else:  # pragma: no cover - guarded by the registry
             raise ValueError(method)
         if not ok:
