@@ -206,7 +206,9 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
         assert ("(none without the term)" in cost) == (no_term["UC-EMDM"]["arrived"] == runs)
         if no_term["C-EMDM"]["lost"]:
             c = scale2["C-EMDM"]["arrived"], no_term["C-EMDM"]["arrived"]
-            assert f"C-EMDM reaches {c[0]} of the {runs} goals ({c[1]} without the term)" in cost
+            ivkc = scale2["C-IVKC"]["arrived"]  # (its peer's count beside it, 260)
+            told = f"C-EMDM reaches {c[0]} of the {runs} goals ({c[1]} without the term; "
+            assert told + f"C-IVKC {ivkc})" in cost
         # ... and the conclusion says so wherever the body does (239: in neither the abstract
         # nor the conclusion), "near full reach" as the body's
         assert ("the term costs EMDM random goals" in conclusion) == bool(cost)

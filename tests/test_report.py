@@ -950,11 +950,11 @@ def test_the_single_point_claim_is_made_only_where_measured(quick_report, tmp_pa
     def said() -> str:
         return " ".join(render_latex(p) for s in document(root).sections for p in s.paragraphs)
 
-    assert "allow only one command (feasible-set width up to" in said()
+    assert "allow only one command: their feasible set is up to" in said()
     vertex["max_width"] = 1e-3  # a segment, not a point
     path.write_text(json.dumps(lab), encoding="utf-8")
     assert not Pitch(Data(root), document(root)).build().single_point
-    assert "allow only one command (feasible-set width" not in said()
+    assert "allow only one command: their feasible set" not in said()
 
 
 def test_task1_slide_title_says_its_idea_only_where_measured(quick_report, tmp_path):

@@ -501,21 +501,21 @@ class StoryBase:
             E_SYM,
             " (log, floored at ",
             Math(rf"10^{{{EFFORT_FLOOR_EXP}}}", f"10<sup>−{-EFFORT_FLOOR_EXP}</sup>"),
-            "), (c) distance to the goal ",
+            "), (c) distance to goal ",
             ERR,
-            " (log; dotted: the tolerance), ",
+            " (log; dotted: tolerance), ",
         )
         if path:
             out += sentence("(d) tip paths (dotted: the straight line), ")
         out += sentence(
-            f"{joints[0]} joint positions, limits and damper zones (orange), {joints[1]} joint "
+            f"{joints[0]} joint positions with limits and damper zones (orange), {joints[1]} "
             # grey beyond both kinds of limit (reading 220: a position past its limit did not
-            # read as a violation)
-            "velocities, limits dotted; grey: beyond a limit"
+            # read as a violation); the notes as sentences (a plain-language edit)
+            "joint velocities, limits dotted. Grey: beyond a limit"
         )
         if far:  # each cut joint's peak written at its cut (the runs' peaks: Table II's column)
             out += sentence(  # (245, 248, 250, 255: "speeds cut at 1.5x ..." cryptic)
-                f"; speed axes clipped at {FAR_BEYOND:g}× the limit, the largest clipped peak "
+                f". Speed axes stop at {FAR_BEYOND:g}× the limit; the largest clipped peak is "
                 "labelled in its run's colour"
             )
         return out
@@ -555,7 +555,7 @@ class StoryBase:
             far = self.far_beyond(task, PAIRS[group])
             out += sentence(": ") + self.panels(far, path=FOURTH_PANEL[task] == "path")
             if not ARMS_IN_PAPER and self.anim(task, group):  # (the stills' caption named them)
-                out += sentence("; animations: ", File(f"animations/{task}/"))
+                out += sentence(". Animations: ", File(f"animations/{task}/"))
         elif (task, group) == ("task2", "UC"):  # as Task 2.1's, its run without the term dotted
             key: EvidenceKey = "t2-uc-emdm-no-manip"
             out += sentence(", as in ", Ref("fig", "t2-c"))
@@ -571,8 +571,9 @@ class StoryBase:
             out += sentence(
                 ". Panel (d): the tracking gap ",
                 GAP_MATH,
-                ", the slack or the scaled-off ",
+                ", the slack or ",
                 Math(r"(1-\alpha^*)\|v_d\|", "(1 − α*)‖<i>v</i><sub>d</sub>‖"),
+                " lost to scaling",
                 "; log, floored at ",
                 GAP_FLOOR_MATH,
                 "" if FOURTH_PANEL["task1"] == "path" else ". Joints: (e), (f)",

@@ -223,7 +223,7 @@ class Front(Goals):
                     listed(gains),
                     ". ",
                     *arrive,
-                    "Scaling only keeps the tip's path straighter. ",
+                    "Scaling only buys a straighter tip path. ",
                 )
             else:
                 p += sentence(

@@ -380,10 +380,10 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
         all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, the slack pulls towards the goal with only w_S|delta| = c_S; the term pulls harder.
-        C-EMDM reaches 161 of the 256 goals (215 without the term).`` (the page adds delta = v_d
-        and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose term loses goals;
-        empty where it loses none."""
+        term). At rest, the slack's pull is only w_S|delta| = c_S; the term pulls harder.
+        C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143).`` (the
+        page adds delta = v_d and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose
+        term loses goals; empty where it loses none."""
         losers, near = self.term_losers()
         rec = self.rec.goals
         task = rec.tasks.get("task2") if rec is not None else None
@@ -429,7 +429,7 @@ class Goals(Claims):
                         )
                     ),
                     # (249-252: "which the term outweighs" their hardest; their plainer form)
-                    "the slack pulls towards the goal with only ",
+                    "the slack's pull is only ",  # (259, 260: plainer)
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
@@ -445,7 +445,14 @@ class Goals(Claims):
                 self.goaln("runs"),
                 " goals (",
                 self.goaln("tasks", "task2", "no_term", c, "arrived"),
-                " without the term)",
+                " without the term",
+                # its peer's count beside it (260: C-EMDM's alone had no measure)
+                *(
+                    ("; C-IVKC ", self.arrivals("task2", "scale", Name.C_IVKC))
+                    if c == Name.C_EMDM and Name.C_IVKC in task.policies["scale"].controllers
+                    else ()
+                ),
+                ")",
             )
             if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
                 out += sentence(  # (on the page: the paper's room is the why above, 241)

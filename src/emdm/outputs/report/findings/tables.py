@@ -25,7 +25,7 @@ from .claims import Claims
 from .records import EvidenceKey, GridKey, MetricKey, RunOutcome
 
 MISS_NOTE = Text("; miss: not reached")
-STALL_NOTE = "stall: at rest short of it"
+STALL_NOTE = "stall: stopped short"
 """What "stall" means in Tables I and II (a run's record has a stall event)."""
 """Table II's caption names a miss only where the table has one."""
 
@@ -232,7 +232,7 @@ class Tables(Claims):
                 Unit("rad²/s"),
                 "), peak speed (",
                 Unit("rad/s"),
-                "), task-scaled steps.",
+                "), scaled steps.",
                 *(indented if evidence else sentence()),
             )
 

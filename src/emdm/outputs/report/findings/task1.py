@@ -226,7 +226,7 @@ class Task1(Claims):
             ". ",
             "Both (",
             Ref("fig", "t1-c"),
-            ") keep every joint within its speed limit and at least ",
+            ") obey every speed limit and keep each joint at least ",
             self.mt(t, ivkc, "min_stop_margin", ".3f", "rad"),
             f" ({ivkc}) or ",
             self.mt(t, emdm, "min_stop_margin", ".3f", "rad"),
@@ -376,15 +376,16 @@ class Task1(Claims):
             # lie on the convex hull of the attainable (M, E) set
             # each step's, not the whole runs' (231: a ratio there is dominated); a consequence,
             # not a finding (215: E convex, M linear in q-dot)
-            "Every step's front (",
+            # (a plain-language edit: the finding in words first, then why)
+            "Each gain in ",
+            MRATE,
+            " costs more effort than the last: every step's front (",
             Ref("fig", "pareto"),
             ") is convex, as ",
             E_SYM,
             " is convex and ",
             MRATE,
-            " linear: each gain in ",
-            MRATE,
-            " costs more effort than the last. At ",
+            " linear. At ",
             K_EQ,
             "0, raising ",
             RATIO,
@@ -396,7 +397,7 @@ class Task1(Claims):
             self.frontn("UC-EMDM", 0, "M_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "M_max", ".3g", "m²/s"),
-            ". Its effort rises from ",
+            ", and its effort from ",
             self.frontn("UC-EMDM", 0, "E_min", ".3g"),
             " to ",
             self.frontn("UC-EMDM", 0, "E_max", ".3g", "rad²/s²"),
@@ -741,18 +742,18 @@ class Task1(Claims):
                         " C-EMDM programs re-solved offline, the ",
                         self.d.num(lab, "challenges", "scaled_vertex", "steps", fmt="d"),
                         # ("up to", not "<=": the width is rounded, 246: 2.44e-15 under 2.4e-15)
-                        " scaled ones allow only one command (feasible-set width up to ",
+                        " scaled ones allow only one command: their feasible set is up to ",
                     )
                     if "steps" in vertex
                     else (
-                        " These are Task 1's challenge: only one command is feasible "
-                        "(feasible-set width up to ",
+                        " These are Task 1's challenge: only one command is feasible, the "
+                        "feasible set up to ",
                     )
                 ),
                 self.d.num(
                     lab, "challenges", "scaled_vertex", "max_width", fmt=".1e", unit="rad/s"
                 ),
-                "). That point is degenerate: ",
+                " wide. That point is degenerate: ",
                 self.d.num(lab, "challenges", "scaled_vertex", "active", 0, fmt="d"),
                 *(
                     ("–", self.d.num(lab, "challenges", "scaled_vertex", "active", 1, fmt="d"))
@@ -782,7 +783,7 @@ class Task1(Claims):
             # missed it while it was on the page only)
             p += declines
         p += sentence(
-            " Otherwise, Task 1 is well conditioned (condition number ",
+            " Otherwise, Task 1 is well conditioned (",
             COND_J,
             " ",
             Math(r"\leq", "≤"),

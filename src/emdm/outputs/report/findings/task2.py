@@ -175,7 +175,7 @@ class Task2(Claims):
                         "Task 2: the straight line to the goal enters the hatched disc, out of "
                         "reach while ",
                         Math(r"q_2", "<i>q</i><sub>2</sub>"),
-                        " is out of its stop zone; C-IVKC stalls short of it, C-EMDM "
+                        " is out of its stop zone. C-IVKC stalls short of it; C-EMDM "
                         "goes around and flips its elbow into ",
                         self.goal_pose(t),
                         # (Task 2's animations named too, reading 169: only Task 1's were)
@@ -317,7 +317,7 @@ class Task2(Claims):
                 " path, ",
                 self.ev(t, emdm, "detour", fmt=".0%"),
                 # why longer (a copy editor's "so what"): around the disc it cannot enter
-                " longer than the line, detours around the blocked disc. "
+                " longer than the line, goes around the blocked disc. "
                 if geo is not None and geo.line_blocked
                 else " longer than the line. ",
             )
@@ -347,7 +347,7 @@ class Task2(Claims):
                     "At ",
                     T_EQ,
                     self.ev(t, emdm, "singular", "t", fmt=".2f", unit="s"),
-                    ", the arm passes through the singular stretched pose (",
+                    ", the arm passes through the stretched, singular pose (",
                     # (cond J's peak there: Section IV-B's challenge, said once)
                     *eq(M_SYM, self.ev(t, emdm, "singular", "m_min", fmt=".1e", unit="m²")),
                     ") and flips its elbow into ",
