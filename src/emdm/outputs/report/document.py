@@ -100,7 +100,11 @@ class Document:
                 if table.number == 0 and not table.html_only:
                     tab += 1
                     table.number = tab
-        for table in self.tables.values():
+        # the page's own tables next, by first appearance (a table in no section, such as the
+        # pitch's, last: numbering them in the dictionary's order left gaps on the page)
+        shown = [key for section in self.sections for key in section.tables]
+        for key in (*shown, *self.tables):
+            table = self.tables[key]
             if table.number == 0:
                 tab += 1
                 table.number = tab

@@ -150,14 +150,14 @@ def _events(stage: Path, scenarios: dict[str, Scenario], runs: dict[str, dict[st
     write_json(
         stage / "data" / "evidence.json",
         {
-            "table_ii": _table_ii_index(),
+            "rows": _rows_index(),
             "runs": {ev.key: _evidence_run(ev, runs[ev.task]) for ev in EVIDENCE},
         },
     )
 
 
-def _table_ii_index() -> dict[str, str]:
-    """Where each of Table II's rows is recorded: an entry of ``runs`` here, or (A2a, A2b) the
+def _rows_index() -> dict[str, str]:
+    """Where each of Table I's A-rows is recorded: an entry of ``runs`` here, or (A2a, A2b) the
     weight grid of Fig. 2, whose run it is."""
     from .findings.base import ABLATIONS, FINER_STEP, GRID_MISS, run_label
     from .findings.records import GRID_FILE

@@ -102,6 +102,16 @@ class Front(Goals):
                         grad,
                         " finds the two-link programs' exact optimum in a median of ",
                         *self.evaluations(lab, LIKE_FOR_LIKE),
+                        # its own counts with the slack (260, 261: the 7 is Table II's
+                        # slsqp-reduced row, slsqp's is 6 and 5)
+                        " (",
+                        self.sn(lab, grad, "median_evaluations", ".4g"),
+                        *(
+                            (" and ", self.sn(lab, grad, "median_gradients", ".4g"))
+                            if rows[grad].median_gradients
+                            else ()
+                        ),
+                        " with it)",
                         "; the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
                         else "; the fastest exact gradient-free method, ",

@@ -378,9 +378,10 @@ class Goals(Claims):
         return losers, near
 
     def term_reach_cost(self) -> Sentence:
-        """`` Near full reach, the dexterity term makes EMDM miss random goals. UC-EMDM misses
-        all 59 goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, the slack's pull is only w_S|delta| = c_S; the term pulls harder.
+        """`` Near full reach, the dexterity term makes EMDM miss goals: UC-EMDM misses all 59
+        random goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
+        term). At rest, the term's pull w_M J_m balances the slack's, fixed at
+        w_S|delta| = c_S.
         C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143).`` (the
         page adds delta = v_d and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose
         term loses goals; empty where it loses none."""
@@ -391,9 +392,9 @@ class Goals(Claims):
             return []
         out = sentence(  # (one sentence each)
             # (reading 205: "the term costs random goals" was cryptic)
-            " Near full reach, the dexterity term makes EMDM miss random goals. "
+            " Near full reach, the dexterity term makes EMDM miss goals: "
             if near
-            else " The dexterity term makes EMDM miss random goals. "
+            else " The dexterity term makes EMDM miss goals: "
         )
         slack = task.policies.get("slack")
         runs = self.goal("runs")
@@ -407,7 +408,7 @@ class Goals(Claims):
                     c,
                     " misses all ",
                     self.goaln(*where, "count"),
-                    " goals farther than ",
+                    " random goals farther than ",
                     self.goaln(*where, "goal_radius", 0, fmt=self.beyond_fmt(), unit="m"),
                     # by how much (237: "misses" hid that they are near misses)
                     " from the base, by ",
@@ -429,12 +430,15 @@ class Goals(Claims):
                         )
                     ),
                     # (249-252: "which the term outweighs" their hardest; their plainer form)
-                    "the slack's pull is only ",  # (259, 260: plainer)
+                    # (261: "pulls harder" compared sizes in different units; the stationarity
+                    # at q-dot = 0 is w_S J^T delta = -w_M J_m, the slack's side of fixed size)
+                    "the term's pull ",
+                    Math(r"w_MJ_m", "<i>w</i><sub>M</sub><i>J</i><sub>m</sub>"),
+                    " balances the slack's, fixed at ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    "; the term pulls harder",
                 )
                 continue
             out += sentence(

@@ -361,16 +361,16 @@ class Task2(Claims):
         e5 = self.evid("t2-c-ivkc-wide-limits", "runs", ivkc)
         told = bool(self.ivkc_with_slack()) and self.ivkc_first_with_slack()
         if not reached_i and told and e5.get("reached"):  # the slack run and the stall's cause told
-            p += sentence(
-                "With the joint limits widened to ",
+            p += sentence(  # the cause first, then its run (a plain-language edit)
+                f"The joint limits cause {ivkc}'s stall: widened to ",
                 *self.limits_widened(text=True),
                 " (",
                 run_label("t2-c-ivkc-wide-limits"),
                 ", ",
                 Ref("tab", "outcomes"),
-                f"), {ivkc} arrives too",  # (its time: Table II's)
+                "), they let it arrive",  # (its time: Table II's)
                 PageOnly(tuple(sentence(", in ", self.evid_goal("t2-c-ivkc-wide-limits", ivkc)))),
-                ": its stall comes from the limits. ",
+                ". ",
             )
         elif not reached_i and (e4.get("reached") or e5.get("reached")):
             p += sentence(f"{ivkc} reaches the goal ")
@@ -679,10 +679,9 @@ class Task2(Claims):
                 f" at nearly {ivkc}'s mean ",
                 M_SYM,
                 PageOnly(tuple(sentence(", ", m_run))),
-                " (",
-                Ref("tab", "outcomes"),
+                # (no Table I: the answer above cites it; the room for the slack's balance)
                 # the term's share, sized (reading 132: "raises" said how much?)
-                "). Against ",
+                ". Against ",
                 run_label(key),
                 ", the dexterity term buys ",
                 *self.uc_term_trade(),
