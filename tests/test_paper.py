@@ -74,24 +74,30 @@ def test_the_formulations_run_in_headings_each_open_a_paragraph(quick_report):
         assert f"\n\n\\emph{{{heading}}}" in tex, heading
 
 
-def test_the_paper_writes_each_tasks_programs_out(quick_report):
-    """Readings 221-242: each task's programs are written out in the paper (Task 2's C-EMDM as
-    (3), Task 1's without the slack, C-IVKC's), with the scenario's weights; the table of each
-    controller's terms is the page's alone, and nothing in the paper cites it."""
+def test_the_paper_writes_each_controllers_program_out(quick_report):
+    """Readings 221-262: each controller's program is written out in the paper, one display
+    row each (Task 2's C-EMDM numbered (3), the UC- ones no longer "by deletion"), EMDM's
+    objective f with the scenario's weights, Task 1's D = {0}; the table of each controller's
+    terms is the page's alone, and nothing in the paper cites it."""
     import json
 
     tex = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
     weights = json.loads(
         (quick_report / "data" / "task1" / "metrics.json").read_text(encoding="utf-8")
     )["scenario"]["weights"]
-    assert "This is C-EMDM's program on Task~2's arm." in tex
-    task1 = (
-        r"\[\min_{\dot q}\ \tfrac12w_E\|\dot q\|^2-w_MJ_m^\top\dot q\quad\text{s.t. }"
-        r"J\dot q=\alpha^*v_d,\ \dot q\in B,\]"
-    )
-    ivkc = r"\[\min_{\dot q}\ \tfrac12\|\dot q\|^2\quad\text{s.t. }J\dot q=\alpha^*v_d,\ \dot q\in B.\]"
-    assert task1 in tex and ivkc in tex
-    assert f"$w_E={weights['effort']:g}$ and $w_M={weights['manipulability']:g}$" in tex
+    f = r"$f=\tfrac12w_E\|\dot q\|^2-w_MJ_m^\top\dot q+\tfrac12w_S\|\delta\|^2$"
+    assert f + f", $w_E={weights['effort']:g}$ and $w_M={weights['manipulability']:g}$" in tex
+    display = tex[tex.index(r"\begin{alignat}") : tex.index(r"\end{alignat}")]
+    rows = {
+        "C-EMDM": r"\min_{\dot q,\,\delta}f\ \text{s.t. }J\dot q+\delta=\alpha^*v_d,\ \dot q\in B,"
+        r"\ \delta\in D,\label{eq:qp}",
+        "UC-EMDM": r"\min_{\dot q,\,\delta}f\ \text{s.t. }J\dot q+\delta=v_d,\ \delta\in D,",
+        "C-IVKC": r"\min_{\dot q}\tfrac12\|\dot q\|^2\ \text{s.t. }J\dot q=\alpha^*v_d,\ \dot q\in B,",
+        "UC-IVKC": r"\min_{\dot q}\tfrac12\|\dot q\|^2\ \text{s.t. }J\dot q=v_d\quad(\dot q=J^+v_d),",
+    }
+    for name, row in rows.items():
+        assert f"\\text{{{name}: }}&{row}" in display, name
+    assert "where $D=\\{0\\}$ on Task~1's arm." in tex
     assert "tab:programs" not in tex
     page = (quick_report / "index.html").read_text(encoding="utf-8")
     assert 'id="tab-programs"' in page
