@@ -380,8 +380,8 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss goals: UC-EMDM misses all 59
         random goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, the term's pull w_M J_m balances the slack's, fixed at
-        w_S|delta| = c_S.
+        term). At rest, w_M J_m = -w_S J^T delta: the term's pull balances the slack's, whose
+        size w_S|delta| = c_S does not grow near the goal.
         C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143).`` (the
         page adds delta = v_d and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose
         term loses goals; empty where it loses none."""
@@ -432,13 +432,18 @@ class Goals(Claims):
                     # (249-252: "which the term outweighs" their hardest; their plainer form)
                     # (261: "pulls harder" compared sizes in different units; the stationarity
                     # at q-dot = 0 is w_S J^T delta = -w_M J_m, the slack's side of fixed size)
-                    "the term's pull ",
-                    Math(r"w_MJ_m", "<i>w</i><sub>M</sub><i>J</i><sub>m</sub>"),
-                    " balances the slack's, fixed at ",
+                    # (263: through J^T, said so)
+                    Math(
+                        r"w_MJ_m=-w_SJ^\top\delta",
+                        "<i>w</i><sub>M</sub><i>J</i><sub>m</sub> = −<i>w</i><sub>S</sub>"
+                        "<i>J</i><sup>⊤</sup><i>δ</i>",
+                    ),
+                    ": the term's pull balances the slack's, whose size ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
+                    " does not grow near the goal",
                 )
                 continue
             out += sentence(

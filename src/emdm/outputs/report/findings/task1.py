@@ -555,9 +555,9 @@ class Task1(Claims):
                     *eq(DT, self.gridn("UC-EMDM", i, "finer_dt", "dt", fmt=".2f", unit="s")),
                     " (",
                     run_label(FINER_STEP),
-                    "): the Euler step, not ",
-                    W_M,
-                    ", causes the miss",
+                    # (263, 264: "the Euler step, not w_M" overclaimed: the weight's fast
+                    # commands and the coarse step miss together)
+                    "): its speeds need a finer Euler step",
                     PageOnly(  # (its effort on the page only)
                         tuple(
                             sentence(
