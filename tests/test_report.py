@@ -778,7 +778,7 @@ def test_a_diverging_runs_digits_are_not_printed(report):
     assert a2a[0] == "miss" and a2a[1:4] == ["–", "–", "–"], a2a
     assert a2a[4].isdigit(), a2a  # its scaled steps: a count, exact whatever the rounding
     assert all(c not in ("–", "miss") for c in a2b[:4]), a2b
-    assert "diverges (–: digits that depend on rounding)" in (root / "index.html").read_text(
+    assert "diverges, so its digits (–) depend on rounding" in (root / "index.html").read_text(
         encoding="utf-8"
     )
 
@@ -1383,10 +1383,10 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
 
 
 def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp_path):
-    """Readings 198, 236, 239, 240: the abstract compares like for like on the program with
-    the slack eliminated, said first: slsqp's counts there (the lab's slsqp-reduced) and the one
-    exact gradient-free method's, each read from the lab's record (the quick lab has neither,
-    so a copy of its record is given both); slsqp's own are IV-B's and Table II's."""
+    """Readings 198, 236-240, 263-266: the abstract gives slsqp's own counts (Table II's slsqp
+    row), then in brackets its counts on the program with the slack eliminated (the lab's
+    slsqp-reduced), the one the exact gradient-free method searches, each read from the lab's
+    record (the quick lab has neither, so a copy of its record is given both)."""
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
@@ -1405,10 +1405,10 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     said = "".join(p.plain() for p in Story(Data(root)).abstract())
     own = lab["slsqp"]
     assert (
-        "With the slack eliminated, the gradient-based slsqp finds the two-link programs' exact "
-        "optimum in a median of 7 objective and 4 gradient evaluations "
-        f"({own['median_evaluations']:.4g} and {own['median_gradients']:.4g} with it); the only "
-        f"exact gradient-free method, {free}, needs 321." in said
+        "On the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
+        f"of {own['median_evaluations']:.4g} objective and {own['median_gradients']:.4g} "
+        "gradient evaluations (7 and 4 without the slack); the only exact gradient-free method, "
+        f"{free}, needs 321." in said
     ), said
 
 

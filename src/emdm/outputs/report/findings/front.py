@@ -94,27 +94,22 @@ class Front(Goals):
                     # programs" was undefined; 236: slsqp's count there read as the full
                     # program's; the reduced program is said in words)
                     out += sentence(
-                        # like for like first (a plain-language edit: the abstract's longest
-                        # sentence; slsqp's own counts on the full program are IV-B's and
-                        # Table II's, and "with the slack eliminated" leads, so its 7 is not
-                        # read as the full program's 6, 239, 240)
-                        "With the slack eliminated, the gradient-based ",
+                        # slsqp's own counts, then like for like in brackets (263-266: each
+                        # rewrote the slack-free counts first, with "(6 and 5 with it)", so)
+                        "On the two-link programs, the gradient-based ",
                         grad,
-                        " finds the two-link programs' exact optimum in a median of ",
-                        *self.evaluations(lab, LIKE_FOR_LIKE),
-                        # its own counts with the slack (260, 261: the 7 is Table II's
-                        # slsqp-reduced row, slsqp's is 6 and 5)
+                        " finds the exact optimum in a median of ",
+                        *self.evaluations(lab, grad),
                         " (",
-                        self.sn(lab, grad, "median_evaluations", ".4g"),
+                        self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
                         *(
-                            (" and ", self.sn(lab, grad, "median_gradients", ".4g"))
-                            if rows[grad].median_gradients
+                            (" and ", self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"))
+                            if twin is not None and twin.median_gradients
                             else ()
                         ),
-                        " with it)",
-                        "; the only exact gradient-free method, "
+                        " without the slack); the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
-                        else "; the fastest exact gradient-free method, ",
+                        else " without the slack); the fastest exact gradient-free method, ",
                         free,
                         ", needs ",  # (255: ", cma-es, 522." an elliptical fragment)
                         self.sn(lab, free, "median_evaluations", ".4g"),

@@ -205,7 +205,8 @@ class Tables(Claims):
                 " ",
                 Upright(run_label(GRID_MISS)),
                 # (reading 197: "sensitive to rounding" was cryptic; 247: then do not print them)
-                " diverges (–: digits that depend on rounding).",
+                # (265, 266: "(-: digits that depend on rounding)" awkward)
+                " diverges, so its digits (–) depend on rounding.",
             )
 
         def caption(evidence: bool) -> Sentence:
