@@ -380,8 +380,8 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss goals: UC-EMDM misses all 59
         random goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, w_M J_m = -w_S J^T delta: the term's pull balances the slack's, whose
-        size w_S|delta| = c_S does not grow near the goal.
+        term). At rest, w_M J_m = -w_S J^T delta: the term's pull balances the slack's, which
+        stays at w_S|delta| = c_S even near the goal.
         C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143).`` (the
         page adds delta = v_d and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose
         term loses goals; empty where it loses none."""
@@ -438,12 +438,12 @@ class Goals(Claims):
                         "<i>w</i><sub>M</sub><i>J</i><sub>m</sub> = −<i>w</i><sub>S</sub>"
                         "<i>J</i><sup>⊤</sup><i>δ</i>",
                     ),
-                    ": the term's pull balances the slack's, whose size ",
+                    ": the term's pull balances the slack's, which stays at ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
                     ),
-                    " does not grow near the goal",
+                    " even near the goal",
                 )
                 continue
             out += sentence(
