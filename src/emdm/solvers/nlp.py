@@ -249,7 +249,8 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
                 },
             )
             # cma stops once its count passes maxfevals, after the generation that passed it
-            # (606 of a 600 budget): the last whole generation that fits ends it instead
+            # (606 of a 600 budget): the last whole generation that fits ends it instead (a
+            # budget below one generation still runs one)
             es.opts["maxfevals"] = max(budget - es.popsize, 0)
             es.optimize(rec)
             t, iterations = es.result.xbest, int(es.result.iterations)
