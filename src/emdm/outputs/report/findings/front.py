@@ -102,11 +102,8 @@ class Front(Goals):
                         *self.evaluations(lab, grad),
                         " (",
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
-                        *(
-                            (" and ", self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"))
-                            if twin is not None and twin.median_gradients
-                            else ()
-                        ),
+                        " and ",  # (``like`` holds its gradient count)
+                        self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
                         " without the slack); the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
                         else " without the slack); the fastest exact gradient-free method, ",
