@@ -208,7 +208,11 @@ def test_section_v_tries_the_answers_on_the_many_goals(quick_report, tmp_path):
             c = scale2["C-EMDM"]["arrived"], no_term["C-EMDM"]["arrived"]
             ivkc = scale2["C-IVKC"]["arrived"]  # (its peer's count beside it, 260)
             told = f"C-EMDM reaches {c[0]} of the {runs} goals ({c[1]} without the term; "
-            assert told + f"C-IVKC {ivkc})" in cost
+            slack2 = record["tasks"]["task2"]["policies"]["slack"]["controllers"]
+            # ... and with a free slack, which the conclusion's "more random goals" rests on
+            # (271: no number in the paper backed it)
+            freed = f", or {slack2['C-IVKC']['arrived']} with a free slack"
+            assert told + f"C-IVKC {ivkc}{freed})" in cost
         # ... and the conclusion says so wherever the body does (239: in neither the abstract
         # nor the conclusion), "near full reach" as the body's
         assert ("the term costs EMDM random goals" in conclusion) == bool(cost)

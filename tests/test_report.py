@@ -1412,6 +1412,34 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     ), said
 
 
+def test_task2_1_says_the_gradient_methods_residual_in_the_loop(quick_report, tmp_path):
+    """Reading 271: "slsqp finds the exact optimum" rested on the re-solved programs, while in
+    the loop its own iterates left KKT residuals up to 2.4e-6, above the 1e-9 that certifies
+    our answers. Section IV-B gives that residual beside its counts when it is above the
+    tolerance (read from a copy of the lab's record), and nothing when it is below."""
+    from emdm.core.tolerances import KKT_TOL
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    lab = record["solvers"]
+
+    def said() -> str:
+        path.write_text(json.dumps(record), encoding="utf-8")
+        story = Story(Data(root))
+        sec = story.task2_solvers()
+        return render_latex(sec.answer or [])
+
+    lab["slsqp"]["closed_loop_max_kkt"] = 3.14e-6
+    text = said()
+    assert "iterations (" in text and "; in the loop, its KKT residual reaches $3.1" in text
+    lab["slsqp"]["closed_loop_max_kkt"] = KKT_TOL / 10
+    assert "in the loop, its KKT residual" not in said()
+
+
 def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
     quick_report, tmp_path
 ):

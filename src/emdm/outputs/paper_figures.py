@@ -292,7 +292,7 @@ def pair_figure(
     upper_row = gap or path  # four panels above: narrower, so taller to stay legible
     height = ((2.5 if upper_row else 2.35) if n == 3 else 2.0) if medium is PAPER else 3.4
     with _figure(stem, medium, medium.column, height) as fig:
-        # the joint strips get most of the height: limits, damper zones and a joint held near its
+        # the joint strips get most of the height: limits, influence zones and a joint held near its
         # limit must be readable at column width (about 9 mm per strip in the paper), and the
         # panels above about 9 mm too (at 6 mm their three ticks crowded)
         outer = fig.add_gridspec(
@@ -431,7 +431,7 @@ def pair_figure(
         qd_axes[-1].set_xlabel(r"$t$ (s)")
         joint_q, joint_qd = ("(e)", "(f)") if gap or path else ("(d)", "(e)")
         q_axes[0].set_title(
-            rf"$\bf {joint_q}$ $q$ (rad), limits, damper zones", fontsize=medium.small, pad=2
+            rf"$\bf {joint_q}$ $q$ (rad), limits, influence zones", fontsize=medium.small, pad=2
         )
         qd_axes[0].set_title(
             rf"$\bf {joint_qd}$ $\dot q$ (rad/s), limits dotted", fontsize=medium.small, pad=2

@@ -160,7 +160,7 @@ def joints_figure(runs: Sequence[Run], kind: Joints, stem: Path) -> Path:
         what = (
             "joint velocities and limits"
             if kind is Joints.VELOCITIES
-            else "joint positions, damper zones"
+            else "joint positions, influence zones"
         )
         axes[0, 0].set_title(f"{_title(runs)}\n{what}")
         axes[0, 0].legend(ncols=2)

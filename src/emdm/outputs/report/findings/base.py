@@ -508,7 +508,7 @@ class StoryBase:
         if path:
             out += sentence("(d) tip paths (dotted: the straight line), ")
         out += sentence(
-            f"{joints[0]} joint positions with limits and damper zones (orange), {joints[1]} "
+            f"{joints[0]} joint positions with limits and influence zones (orange), {joints[1]} "
             # grey beyond both kinds of limit (reading 220: a position past its limit did not
             # read as a violation); the notes as sentences (a plain-language edit)
             "joint velocities, limits dotted. Grey: beyond a limit"

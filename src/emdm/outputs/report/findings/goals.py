@@ -380,10 +380,10 @@ class Goals(Claims):
     def term_reach_cost(self) -> Sentence:
         """`` Near full reach, the dexterity term makes EMDM miss goals: UC-EMDM misses all 59
         random goals farther than 0.880 m from the base, by 0.0012 to 0.019 m (none without the
-        term). At rest, w_M J_m = -w_S J^T delta: the term's pull balances the slack's, which
+        term). At rest, w_M J_m = -w_S J^T delta: the dexterity pull cancels the slack's, which
         stays at w_S|delta| = c_S even near the goal.
-        C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143).`` (the
-        page adds delta = v_d and C-IVKC's free-slack arrivals): Task 2's EMDM controllers whose
+        C-EMDM reaches 161 of the 256 goals (215 without the term; C-IVKC 143, or 216 with a
+        free slack).`` (the page adds delta = v_d): Task 2's EMDM controllers whose
         term loses goals; empty where it loses none."""
         losers, near = self.term_losers()
         rec = self.rec.goals
@@ -438,7 +438,7 @@ class Goals(Claims):
                         "<i>w</i><sub>M</sub><i>J</i><sub>m</sub> = −<i>w</i><sub>S</sub>"
                         "<i>J</i><sup>⊤</sup><i>δ</i>",
                     ),
-                    ": the term's pull balances the slack's, which stays at ",
+                    ": the dexterity pull cancels the slack's, which stays at ",
                     Math(
                         r"w_S\|\delta\|=c_S",
                         "<i>w</i><sub>S</sub>‖<i>δ</i>‖ = <i>c</i><sub>S</sub>",
@@ -455,25 +455,24 @@ class Goals(Claims):
                 " goals (",
                 self.goaln("tasks", "task2", "no_term", c, "arrived"),
                 " without the term",
-                # its peer's count beside it (260: C-EMDM's alone had no measure)
+                # its peer's count beside it (260: C-EMDM's alone had no measure), and the
+                # peer's with a free slack, which the conclusion's "more random goals" rests
+                # on (271: no number in the paper backed it)
                 *(
                     ("; C-IVKC ", self.arrivals("task2", "scale", Name.C_IVKC))
                     if c == Name.C_EMDM and Name.C_IVKC in task.policies["scale"].controllers
                     else ()
                 ),
+                *(
+                    (", or ", self.arrivals("task2", "slack", Name.C_IVKC), " with a free slack")
+                    if c == Name.C_EMDM
+                    and Name.C_IVKC in task.policies["scale"].controllers
+                    and slack is not None
+                    and Name.C_IVKC in slack.controllers
+                    else ()
+                ),
                 ")",
             )
-            if c == Name.C_EMDM and slack is not None and Name.C_IVKC in slack.controllers:
-                out += sentence(  # (on the page: the paper's room is the why above, 241)
-                    PageOnly(
-                        tuple(
-                            sentence(
-                                "; C-IVKC with a free slack reaches ",
-                                self.arrivals("task2", "slack", Name.C_IVKC),
-                            )
-                        )
-                    )
-                )
         return out + sentence(".")
 
     # ------------------------------------------------------------------ the conclusion's
