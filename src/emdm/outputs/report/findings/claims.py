@@ -104,11 +104,13 @@ class Claims(StoryBase):
         cheaper = grid[k].total_effort < grid[n].total_effort
         return (n, k) if k != n and cheaper else None
 
-    def dexterity_gain(self) -> Sentence:
+    def dexterity_gain(self, named: bool = True) -> Sentence:
         """Task 1: what EMDM buys over IVKC, without and with limits (its answer in numbers):
         ``raises the mean manipulability m by 17% for 25% more effort without joint limits,
         and by 22% for 26% more with them`` where every change is a rise (readings 190, 191:
-        "+17% ... for +25% effort, and +22% for +26%" was four signed numbers in a row)."""
+        "+17% ... for +25% effort, and +22% for +26%" was four signed numbers in a row).
+        ``named=False``: ``the mean m``, where m was just named (the abstract: its room)."""
+        what = "manipulability " if named else ""
         t1 = "task1"
         pairs = ((Name.UC_EMDM, Name.UC_IVKC), (Name.C_EMDM, Name.C_IVKC))
         keys: tuple[MetricKey, MetricKey] = ("mean_manipulability", "total_effort")
@@ -117,7 +119,8 @@ class Claims(StoryBase):
             return sentence(
                 "buys ",
                 self.pct(t1, *pairs[0], keys[0]),
-                " mean manipulability ",
+                " mean ",
+                what,
                 M_SYM,
                 " for ",
                 self.pct(t1, *pairs[0], keys[1]),
@@ -128,7 +131,8 @@ class Claims(StoryBase):
                 " with joint limits",
             )
         return sentence(
-            "raises the mean manipulability ",
+            "raises the mean ",
+            what,
             M_SYM,
             " by ",
             self.pct(t1, *pairs[0], keys[0], fmt=".0f"),

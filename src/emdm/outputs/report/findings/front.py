@@ -26,7 +26,7 @@ class Front(Goals):
             M_SYM,
             " (dexterity). We compare it with inverse velocity kinematics control (IVKC). On a "
             "redundant three-link arm, both track the goal equally well. EMDM ",
-            *self.dexterity_gain(),
+            *self.dexterity_gain(named=False),  # (m named just before: room for 271's unit)
             ". ",
         )
         if not self.mv(t2, Name.C_IVKC, "reached") and self.mv(t2, Name.C_EMDM, "reached"):
@@ -110,7 +110,7 @@ class Front(Goals):
                         free,
                         ", needs ",  # (255: ", cma-es, 522." an elliptical fragment)
                         self.sn(lab, free, "median_evaluations", ".4g"),
-                        ".",
+                        " evaluations.",  # (269, 272: the count had no unit)
                     )
                 else:
                     out += sentence(  # (editor after 209, 210: the subject first)
