@@ -97,7 +97,7 @@ def test_the_paper_writes_each_controllers_program_out(quick_report):
     }
     for name, row in rows.items():
         assert f"\\text{{{name}: }}&{row}" in display, name
-    assert "where $D=\\{0\\}$ on Task~1's arm." in tex
+    assert "where $D=\\{0\\}$ on Task~1's arm and for IVKC." in tex
     assert "tab:programs" not in tex
     page = (quick_report / "index.html").read_text(encoding="utf-8")
     assert 'id="tab-programs"' in page

@@ -1406,7 +1406,7 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     said = "".join(p.plain() for p in Story(Data(root)).abstract())
     own = lab["slsqp"]
     assert (
-        "On the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
+        "Offline, on the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
         f"of {own['median_evaluations']:.4g} objective and {own['median_gradients']:.4g} "
         "gradient evaluations (7 and 4 without the slack); the only exact gradient-free method, "
         f"{free}, needs 321 evaluations." in said

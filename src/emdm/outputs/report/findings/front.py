@@ -96,7 +96,8 @@ class Front(Goals):
                     out += sentence(
                         # slsqp's own counts, then like for like in brackets (263-266: each
                         # rewrote the slack-free counts first, with "(6 and 5 with it)", so)
-                        "On the two-link programs, the gradient-based ",
+                        # offline: in the loop its own iterates leave a residual (273, 274)
+                        "Offline, on the two-link programs, the gradient-based ",
                         grad,
                         " finds the exact optimum in a median of ",
                         *self.evaluations(lab, grad),
@@ -114,7 +115,8 @@ class Front(Goals):
                     )
                 else:
                     out += sentence(  # (editor after 209, 210: the subject first)
-                        "On the two-link programs, the gradient-based ",
+                        # offline: in the loop its own iterates leave a residual (273, 274)
+                        "Offline, on the two-link programs, the gradient-based ",
                         grad,
                         " reaches the exact optimum in a median of ",
                         *self.evaluations(lab, grad),
