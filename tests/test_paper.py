@@ -113,7 +113,12 @@ def test_the_pitch_is_16_9_with_8_to_13_slides_and_backups(quick_report):
     tex = (folder / "pitch.tex").read_text(encoding="utf-8")
     main, _, backup = tex.partition("\\appendix")
     assert 8 <= main.count("\\begin{frame}") <= 13
-    assert backup.count("\\begin{frame}") <= 6
+    assert backup.count("\\begin{frame}") <= 8
+    # the brief's Task 1 deliverable, the per-step fronts, among them (274: on no slide)
+    fronts = backup.split("Backup: Task 1 Pareto fronts at four steps", 1)[1].split("\\end{frame}")[
+        0
+    ]
+    assert "\\includegraphics[width=\\textwidth]{figures/pareto}" in fronts
 
 
 def test_the_compact_fallback_compiles(quick_report, tmp_path):

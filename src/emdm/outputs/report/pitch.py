@@ -269,6 +269,9 @@ class Pitch:
             "task2-evidence",
         ):
             out.figures[name] = self.d.exists(f"paper/slides/{name}.png")
+        # the paper's per-step fronts, the brief's Task 1 deliverable, as a backup (274: no
+        # slide showed the fronts at the four steps)
+        out.figures["fronts"] = self.d.exists("paper/figures/pareto.png")
         out.single_point = s.single_point_vertex() is not None
         return out
 
