@@ -454,6 +454,36 @@ def test_the_gradient_free_l1_penalty_is_exact_on_every_preset_program(preset_pr
         assert features["penalty_margin"] == (rho / largest if largest > 0 else np.inf)
 
 
+def test_the_penalised_methods_are_measured_again_with_a_smaller_weight(small_lab):
+    """Reading 275: a large l1 weight may make the penalised program badly scaled for the
+    gradient-free methods. The lab re-solves its programs with the weight scaled by
+    PENALTY_CHECK for each penalised method (and for no other), records the gaps and the
+    smaller weight's margin over the multipliers, and the solver honours the weight it is
+    given (a penalty below the multipliers is no longer exact)."""
+    from emdm.solvers.nlp import PENALISED, PENALTY
+    from emdm.studies.lab import PENALTY_CHECK
+
+    record = lab_json(small_lab)["solvers"]
+    margin = min(f["penalty_margin"] for f in small_lab.features.values())
+    for name, row in record.items():
+        check = row.get("penalty_check")
+        assert (check is not None) == (name in PENALISED), name
+        if check is None:
+            continue
+        assert check["penalty_weight"] == PENALTY * PENALTY_CHECK
+        assert check["penalty_margin"] == pytest.approx(margin * PENALTY_CHECK, rel=1e-12)
+        assert check["max_abs_gap"] >= 0 and check["failures"] == 0
+    # the weight reaches the search: far below the multipliers, the answer breaks a bound
+    solve = get_solver("nelder-mead").solve
+    qp = next(
+        program_at(small_lab.controller, small_lab.scenario, small_lab.reference.q[k]).qp
+        for k, f in small_lab.features.items()
+        if np.isfinite(f["penalty_margin"])
+    )
+    loose = solve(qp, penalty=1e-6)
+    assert loose.x is not None and qp.violation(loose.x) > 1e-6
+
+
 def test_admissible_width_is_the_feasible_sets_extent():
     """A segment has its length as width, a single point zero, and a free direction infinity:
     the measure behind "each admissible set is one point" (Task 1's scaled steps)."""

@@ -1441,6 +1441,39 @@ def test_task2_1_says_the_gradient_methods_residual_in_the_loop(quick_report, tm
     assert "in the loop, its KKT residual" not in said()
 
 
+def test_the_page_tries_the_gradient_free_penalty_smaller(quick_report, tmp_path):
+    """Reading 275: does the large l1 weight handicap the gradient-free methods? The page's
+    Task 2.1 answer gives each penalised method's gap with the lab's smaller weight beside its
+    nominal one, and says the weight does not handicap them only while none comes closer with
+    the smaller weight (forced in a copy of the record); the paper has no room for it."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data, render_html
+
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
+    record = json.loads(path.read_text(encoding="utf-8"))
+    checked = [n for n, r in record["solvers"].items() if "penalty_check" in r]
+    assert checked, "the quick lab runs a penalised method"
+
+    def said() -> tuple[str, str]:
+        path.write_text(json.dumps(record), encoding="utf-8")
+        answer = Story(Data(root)).task2_solvers().answer or []
+        return re.sub(r"<[^>]+>", "", render_html(answer)), render_latex(answer)
+
+    for n in checked:
+        check = record["solvers"][n]["penalty_check"]
+        check.update(penalty_margin=6.4, max_abs_gap=record["solvers"][n]["max_abs_gap"] + 0.1)
+    page, paper = said()
+    assert "still exact (at least 6.4 times every optimal multiplier)" in page
+    assert "the large weight does not handicap them" in page
+    assert "handicap" not in paper  # (page only)
+    first = record["solvers"][checked[0]]
+    if first["max_abs_gap"] > 1e-9:  # an inexact method that comes closer: no verdict
+        first["penalty_check"]["max_abs_gap"] = first["max_abs_gap"] / 10
+        assert "handicap" not in said()[0]
+
+
 def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
     quick_report, tmp_path
 ):

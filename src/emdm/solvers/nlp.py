@@ -44,9 +44,10 @@ PENALISED = ("nelder-mead", "powell", "cma-es")
 as constraints)."""
 
 
-def penalty_weight(qp: QP) -> float:
-    """``rho = PENALTY (1 + max|P|)``: the l1 penalty weight the :data:`PENALISED` methods use."""
-    return PENALTY * (1.0 + float(np.abs(qp.P).max()))
+def penalty_weight(qp: QP, per_unit: float = PENALTY) -> float:
+    """``rho = PENALTY (1 + max|P|)``: the l1 penalty weight the :data:`PENALISED` methods use
+    (``per_unit``: another weight per unit of ``1 + max|P|``, the lab's sensitivity check)."""
+    return per_unit * (1.0 + float(np.abs(qp.P).max()))
 
 
 DEFAULT_BUDGET = 2000
@@ -165,9 +166,15 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
     """A solver function running the gradient-free ``method`` on the reduced program."""
 
     def solve(
-        qp: QP, *, budget: int = DEFAULT_BUDGET, history: bool = False, seed: int = 0
+        qp: QP,
+        *,
+        budget: int = DEFAULT_BUDGET,
+        history: bool = False,
+        seed: int = 0,
+        penalty: float = PENALTY,
     ) -> SolverResult:
-        """``seed`` is used by the :data:`SEEDED` methods only (an integer >= 0)."""
+        """``seed`` is used by the :data:`SEEDED` methods only (an integer >= 0); ``penalty``,
+        the l1 weight per unit of ``1 + max|P|``, by the :data:`PENALISED` methods only."""
         from scipy.optimize import Bounds, LinearConstraint, differential_evolution, minimize
 
         start = time.perf_counter()
@@ -179,12 +186,12 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             rec(np.zeros(0))
             return _finish(red, np.zeros(0), "optimal", 0, rec, start)
         # the exact l1 penalty for the methods that cannot take the bounds themselves
-        penalty = penalty_weight(qp) if method in PENALISED else 0.0
+        rho = penalty_weight(qp, penalty) if method in PENALISED else 0.0
         t0 = np.zeros(red.dim)
         cons = LinearConstraint(red.G, -np.inf, red.h) if red.h.size else None
         status, iterations, limited = "optimal", 0, False
         if method in ("nelder-mead", "powell"):
-            rec = _Recorder(red, penalty=penalty, keep=history)
+            rec = _Recorder(red, penalty=rho, keep=history)
             options: dict[str, Any] = {"maxfev": budget, "xatol": 1e-12, "fatol": 1e-14}
             if method == "powell":
                 options = {"maxfev": budget, "xtol": 1e-12, "ftol": 1e-14}
@@ -196,7 +203,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             )
             t, iterations, ok = res.x, int(res.get("nit", 0)), bool(res.success)
         elif method in ("cobyqa", "cobyla"):
-            rec = _Recorder(red, penalty=penalty, keep=history)
+            rec = _Recorder(red, penalty=rho, keep=history)
             opts = (
                 {"maxfev": budget, "final_tr_radius": 1e-10}
                 if method == "cobyqa"
@@ -207,7 +214,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
             )
             t, iterations, ok = res.x, int(res.get("nit", res.nfev)), bool(res.success)
         elif method == "differential-evolution":
-            rec = _Recorder(red, penalty=penalty, keep=history)
+            rec = _Recorder(red, penalty=rho, keep=history)
             lo, hi = red.box()
             popsize = 15
             generation = popsize * red.dim  # trial points; only feasible ones are evaluated
@@ -233,7 +240,7 @@ def gradient_free(method: str) -> Callable[..., SolverResult]:
         elif method == "cma-es":
             import cma
 
-            rec = _Recorder(red, penalty=penalty, keep=history)
+            rec = _Recorder(red, penalty=rho, keep=history)
             lo, hi = red.box()
             sigma = 0.3 * float(np.max(hi - lo))
             es = cma.CMAEvolutionStrategy(

@@ -38,7 +38,7 @@ from ..errors import NoSolution, ScenarioError, check_stop, die_with_parent
 from ..sim.loop import Run, simulate
 from ..solvers import SolverResult, SolverSpec, available_solvers, get_solver
 from ..solvers.base import multipliers
-from ..solvers.nlp import DEFAULT_BUDGET, PENALTY, SEEDED, penalty_weight
+from ..solvers.nlp import DEFAULT_BUDGET, PENALISED, PENALTY, SEEDED, penalty_weight
 
 DEFAULT_LAB_SOLVERS = (
     "active-set",
@@ -61,6 +61,10 @@ DEFAULT_LAB_SOLVERS = (
 LIKE_FOR_LIKE = "slsqp-reduced"
 """slsqp on the gradient-free methods' own reduced program: the control that separates the
 method from the formulation, reported beside them, never a family's fastest."""
+
+PENALTY_CHECK = 1e-3
+"""The penalised methods are measured again with their l1 weight scaled by this (reading 275:
+does the large weight handicap them?); at the lab's margins the smaller weight stays exact."""
 
 SLOW_CALL = 0.02
 """A call slower than this (s) is timed once: its time is already far above timer noise."""
@@ -120,6 +124,9 @@ class SolverStudy:
     closed_loop_error: str | None = None
     seeds: list[dict[str, Any]] = field(default_factory=list)
     """A stochastic method's summary per seed (:func:`seed_summary`); empty for the others."""
+    penalty_check: dict[str, Any] | None = None
+    """A :data:`PENALISED` method's summary (:func:`run_summary`) with its l1 weight scaled by
+    :data:`PENALTY_CHECK`, beside ``penalty_weight``; None for the others."""
 
     def __getstate__(self) -> dict[str, Any]:
         # solver functions may be closures: pickle the solver by name (the registry restores it)
@@ -159,6 +166,8 @@ class SolverStudy:
         }
         if self.seeds:
             out["seeds"] = self.seeds
+        if self.penalty_check is not None:
+            out["penalty_check"] = self.penalty_check
         run = self.closed_loop
         if run is not None:
             out.update(
@@ -321,18 +330,30 @@ def representative_steps(run: Run) -> dict[Representative, int]:
 
 
 def _call(
-    spec: SolverSpec, qp: QP, budget: int | None, history: bool = False, seed: int | None = None
+    spec: SolverSpec,
+    qp: QP,
+    budget: int | None,
+    history: bool = False,
+    seed: int | None = None,
+    penalty: float | None = None,
 ) -> SolverResult:
     kwargs: dict[str, Any] = {"history": history}
     if budget is not None and spec.family == "gradient-free":
         kwargs["budget"] = budget
     if seed is not None:
         kwargs["seed"] = seed
+    if penalty is not None:  # (the penalised methods only)
+        kwargs["penalty"] = penalty
     return spec.solve(qp, **kwargs)
 
 
 def _timed(
-    spec: SolverSpec, qp: QP, budget: int | None, repeats: int, seed: int | None = None
+    spec: SolverSpec,
+    qp: QP,
+    budget: int | None,
+    repeats: int,
+    seed: int | None = None,
+    penalty: float | None = None,
 ) -> tuple[SolverResult, float]:
     """The solver's result and the median wall time of up to ``repeats`` solves (>= 1)."""
     times = []
@@ -340,7 +361,7 @@ def _timed(
     for _ in range(max(1, repeats)):
         start = time.perf_counter()
         try:
-            result = _call(spec, qp, budget, seed=seed)
+            result = _call(spec, qp, budget, seed=seed, penalty=penalty)
         except Exception as exc:  # a raising solver is a measured failure
             result = SolverResult(None, f"error: {type(exc).__name__}: {exc}", 0, 0.0)
         times.append(time.perf_counter() - start)
@@ -407,9 +428,14 @@ def run_lab(
             parts.append(_study(*job))
             if progress is not None:
                 progress(job[2])
-    for spec, (solves, histories, run, error, seeds) in zip(specs, parts, strict=True):
-        studies[spec.name] = SolverStudy(spec, solves, histories, run, error, seeds)
+    for spec, (solves, histories, run, error, seeds, check) in zip(specs, parts, strict=True):
+        studies[spec.name] = SolverStudy(spec, solves, histories, run, error, seeds, check)
     features = {k: step_features(reference, k, qp) for k, qp in programs.items()}
+    for study in studies.values():  # the smaller weight's margin over the multipliers
+        if study.penalty_check is not None and features:
+            scale = study.penalty_check["penalty_weight"] / PENALTY  # (rho is linear in it)
+            margin = min(f["penalty_margin"] for f in features.values())
+            study.penalty_check["penalty_margin"] = margin * scale
     return LabResult(
         scenario,
         ctrl,
@@ -440,6 +466,7 @@ def _study(
     Run | None,
     str | None,
     list[dict[str, Any]],
+    dict[str, Any] | None,
 ]:
     """One solver's measurements (runs in a worker process when the lab is parallel)."""
     spec = get_solver(name)
@@ -454,6 +481,11 @@ def _study(
         for seed in range(1, SEEDS):
             again = _solves(spec, programs, optimum, budget, 1, seed)
             seeds.append(seed_summary(seed, again, period))
+    check = None
+    if name in PENALISED:  # the same programs with a smaller l1 weight (reading 275)
+        weight = PENALTY * PENALTY_CHECK
+        again = _solves(spec, programs, optimum, budget, 1, penalty=weight)
+        check = {"penalty_weight": weight, **run_summary(again, scenario.motion.dt)}
     histories: dict[Representative, tuple[dict[str, float], ...]] = {}
     for label, k in reps.items():
         try:
@@ -468,7 +500,7 @@ def _study(
             )
         except NoSolution as exc:
             error = str(exc)
-    return solves, histories, run, error, seeds
+    return solves, histories, run, error, seeds, check
 
 
 def _solves(
@@ -478,12 +510,13 @@ def _solves(
     budget: int | None,
     repeats: int,
     seed: int | None = None,
+    penalty: float | None = None,
 ) -> list[StepSolve]:
     """``spec``'s answer to every program, each timed (median of up to ``repeats`` solves)."""
     solves = []
     for k in sorted(programs):
         qp = programs[k]
-        result, elapsed = _timed(spec, qp, budget, repeats, seed)
+        result, elapsed = _timed(spec, qp, budget, repeats, seed, penalty)
         x = result.x if result.x is not None and np.all(np.isfinite(result.x)) else None
         objective = qp.objective(x) if x is not None else math.nan
         solves.append(
@@ -504,12 +537,16 @@ def _solves(
 
 
 def seed_summary(seed: int, solves: Sequence[StepSolve], period: float) -> dict[str, Any]:
-    """One seed's run of a stochastic method over the lab's programs: its median evaluations,
-    largest |gap| and bound violation over the answers found, failures, and the programs it took
-    longer than the control ``period`` (s) to solve."""
+    """One seed's run of a stochastic method over the lab's programs (:func:`run_summary`)."""
+    return {"seed": seed, **run_summary(solves, period)}
+
+
+def run_summary(solves: Sequence[StepSolve], period: float) -> dict[str, Any]:
+    """A method's run over the lab's programs: its median evaluations, largest |gap| and bound
+    violation over the answers found, failures, and the programs it took longer than the
+    control ``period`` (s) to solve."""
     found = [s for s in solves if s.x is not None]
     return {
-        "seed": seed,
         "median_evaluations": float(np.median([s.evaluations for s in solves])),
         "max_abs_gap": float(max((abs(s.gap) for s in found), default=math.nan)),
         "max_violation": float(max((s.violation for s in found), default=math.nan)),

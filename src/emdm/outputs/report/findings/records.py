@@ -222,6 +222,7 @@ SolverKey = Literal[
     "time_to_goal",
     "closed_loop_max_kkt",
     "seeds",
+    "penalty_check",
 ]
 """The fields of :class:`SolverRow`."""
 
@@ -237,6 +238,23 @@ class SeedRun:
     (:func:`emdm.studies.lab.seed_summary`)."""
 
     seed: int
+    median_evaluations: float
+    max_abs_gap: float
+    max_violation: float
+    failures: int
+    over_period: int
+
+
+@dataclass(frozen=True)
+class PenaltyCheck:
+    """A penalised method over a lab's programs again, with a smaller l1 weight (reading 275):
+    ``.../solvers/NAME/penalty_check`` (:func:`emdm.studies.lab.run_summary`)."""
+
+    penalty_weight: float
+    """Its weight per unit of ``1 + max|P|`` (the lab's ``penalty_weight`` is the nominal one)."""
+    penalty_margin: float
+    """That weight over the largest optimal multiplier, the smallest over the programs (the
+    penalty is exact above 1)."""
     median_evaluations: float
     max_abs_gap: float
     max_violation: float
@@ -276,6 +294,8 @@ class SolverRow:
     """Alone in the closed loop: the largest relative KKT residual of its answers."""
     seeds: list[SeedRun] = field(default_factory=list)
     """A stochastic method's runs over seeds 0, 1, ... (empty for the others)."""
+    penalty_check: PenaltyCheck | None = None
+    """A penalised method's runs with a smaller l1 weight (None for the others)."""
 
 
 LabKey = Literal[
