@@ -120,6 +120,9 @@ CASES = [
     ("scenario_from_dict(on_infeasible x)",
      lambda E: E.em.scenario_from_dict(_with(E, "controller", "on_infeasible", "x")), SE,
      "controller.on_infeasible", False),
+    ("scenario_from_dict(slack x)",
+     lambda E: E.em.scenario_from_dict(_with(E, "controller", "slack", "x")), SE,
+     "controller.slack", False),
     # ------------------------------------------------------------------ Scenario methods
     ("with_overrides(None)", lambda E: E.t1.with_overrides(None), SE, "overrides", BEFORE),
     ("with_overrides(str)", lambda E: E.t1.with_overrides("motion.dt=1"), SE, "overrides",

@@ -139,3 +139,26 @@ def test_unknown_controller():
     with pytest.raises(emdm.EmdmError, match="unknown controller 'X-EMDM'"):
         get_controller("X-EMDM")
     assert get_controller("c-emdm").name == "C-EMDM"
+
+
+def test_the_brief_slack_applies_on_every_arm_when_asked():
+    """Readings 269, 277: the brief's Table 1 lists slack limits for the redundant arm too.
+    ``controller.slack = "always"`` puts EMDM's slack (its bounds and weight c_S/||e||) into the
+    three-link program; the default, ``auto``, keeps the brief's slack program to the
+    non-redundant arm. IVKC has no slack either way."""
+    nominal = emdm.load_scenario("task1")
+    always = emdm.load_scenario("task1", {"controller.slack": "always"})
+    q = np.asarray(nominal.motion.q0)
+    for name in ("UC-EMDM", "C-EMDM"):
+        assert _program(nominal, name, q)[3].n_slack == 0
+        qp = _program(always, name, q)[3]
+        assert qp.n_slack == 2
+        np.testing.assert_array_equal(qp.lb[-2:], always.slack.min)
+        np.testing.assert_array_equal(qp.ub[-2:], always.slack.max)
+        e = always.motion.goal - always.planar_arm.kinematics(q).p
+        w_s = always.weights.slack / np.linalg.norm(e)
+        assert qp.P[-1, -1] == pytest.approx(w_s, rel=1e-12)
+    assert _program(always, "C-IVKC", q)[3].n_slack == 0
+    # the brief's slack lets the start's task through: C-EMDM's first step is not scaled
+    assert emdm.simulate(always, "C-EMDM").alpha[0] == 1.0
+    assert emdm.simulate(nominal, "C-EMDM").alpha[0] < 1.0

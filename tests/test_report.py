@@ -1474,6 +1474,28 @@ def test_the_page_tries_the_gradient_free_penalty_smaller(quick_report, tmp_path
         assert "handicap" not in said()[0]
 
 
+def test_the_page_tries_the_brief_slack_on_task_1(quick_report):
+    """Readings 269, 277: the brief's Table 1 lists a slack box for the three-link arm, which
+    the paper's Task 1 programs leave out (D = {0}). An evidence run puts it in (``controller.
+    slack = "always"``); the page's Task 1.2 answer gives each EMDM's outcomes beside its
+    nominal ones, and says C-EMDM needs no scaling only when none of its steps was scaled."""
+    from emdm.outputs.report.findings import Story
+    from emdm.outputs.report.trace import Data, render_html
+
+    record = json.loads((quick_report / "data" / "evidence.json").read_text(encoding="utf-8"))
+    run = record["runs"]["t1-brief-slack"]
+    assert run["overrides"] == {"controller.slack": "always"}
+    said = re.sub(r"<[^>]+>", "", render_html(Story(Data(quick_report)).brief_slack()))
+    c = run["runs"]["C-EMDM"]
+    assert said.startswith(" With the brief's slack box")
+    assert (" C-EMDM needs no scaling" in said) == (c["scaled_steps"] == 0)
+    assert f"{c['mean_manipulability']:.3f}" in said
+    assert f"{run['runs']['UC-EMDM']['total_effort']:.3f}" in said
+    paper = (quick_report / "paper" / "paper.tex").read_text(encoding="utf-8")
+    assert "brief's slack box" not in paper  # (the page only: the paper has no room)
+    assert "brief's slack box" in (quick_report / "index.html").read_text(encoding="utf-8")
+
+
 def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
     quick_report, tmp_path
 ):

@@ -49,7 +49,7 @@ from .terms import CODE, PACK, ProgramData, ProgramOut, StepInput, TermKind, bui
 from .terms.damper import joint_bounds as _joint_bounds
 from .terms.obstacle import SLOWEST
 from .tolerances import ERROR_FLOOR
-from .validation import POLICIES
+from .validation import POLICIES, SlackUse
 
 
 class When(StrEnum):
@@ -104,6 +104,8 @@ class Controller:
         """Whether ``term`` is part of this controller's program on ``scenario``'s arm."""
         if term.when is When.NON_REDUNDANT_OR_OBSTACLES and scenario.obstacles:
             return True
+        if term.kind is TermKind.SLACK and scenario.controller.slack is SlackUse.ALWAYS:
+            return True  # the slack on every arm (``controller.slack = "always"``)
         return term.when is When.ALWAYS or not scenario.redundant
 
     def program_data(self, scenario: Scenario, weights: Weights | None = None) -> ProgramData:

@@ -51,7 +51,7 @@ from .sections import (
 from .serial import SerialArm, _tool
 from .serial_kernels import ROWS_ALL, ROWS_ROT, ROWS_TRANS
 from .urdf import UrdfArm, read_urdf
-from .validation import Policy, _check_consistency
+from .validation import Policy, SlackUse, _check_consistency
 
 
 @dataclass(frozen=True, eq=False)
@@ -474,6 +474,7 @@ def scenario_from_dict(data: Mapping[str, Any], *, source: str = "<python>") -> 
 
     warnings_found = _check_consistency(check, parsed, n)
     parsed["controller"]["on_infeasible"] = Policy(parsed["controller"]["on_infeasible"])
+    parsed["controller"]["slack"] = SlackUse(parsed["controller"]["slack"])
     name = data.get("name") or Path(source).stem or "scenario"
     sections = {s: SECTION_TYPES[s](**values) for s, values in parsed.items()}
     obstacles = (

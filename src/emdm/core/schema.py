@@ -90,7 +90,7 @@ SCHEMA: dict[str, dict[str, Key]] = {
         "stop": Key("joints", 0.0872665),
         "gain": Key("joints", 1.0),
     },
-    "controller": {"on_infeasible": Key("str", "scale")},
+    "controller": {"on_infeasible": Key("str", "scale"), "slack": Key("str", "auto")},
     "planes": {
         "normals": Key("rows", []),
         "offsets": Key("list", []),

@@ -10,7 +10,7 @@ from enum import StrEnum
 
 from .arm import Vector
 from .chain import Chain
-from .validation import Policy
+from .validation import Policy, SlackUse
 
 
 class Task(StrEnum):
@@ -122,6 +122,9 @@ class ObstacleDamper:
 
 @dataclass(frozen=True)
 class ControllerSettings:
-    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (docs/mathematics.md)."""
+    """``on_infeasible``: ``scale`` (SNS task scaling), ``slack`` or ``error`` (docs/mathematics.md);
+    ``slack``: where EMDM's task slack applies, ``auto`` (the brief's: a non-redundant arm, or a
+    scene with obstacles) or ``always`` (every arm)."""
 
     on_infeasible: Policy
+    slack: SlackUse = SlackUse.AUTO

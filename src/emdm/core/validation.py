@@ -28,6 +28,16 @@ class Policy(StrEnum):
 POLICIES = tuple(Policy)
 
 
+class SlackUse(StrEnum):
+    """Where EMDM's task slack (the brief's slack program) is part of the program."""
+
+    AUTO = "auto"  # the brief's: on a non-redundant arm (and on any arm in a scene with obstacles)
+    ALWAYS = "always"  # on every arm (the brief's Table 1 lists slack limits for Task 1 too)
+
+
+SLACK_USES = tuple(SlackUse)
+
+
 def _fmt(values: Vector) -> str:
     return "[" + ", ".join(f"{v:g}" for v in values) + "]"
 
@@ -212,6 +222,11 @@ def _check_consistency(check: _Checker, p: dict[str, dict[str, Any]], n: int) ->
         raise check.fail(
             "controller.on_infeasible",
             f"must be one of {', '.join(POLICIES)}, got {p['controller']['on_infeasible']!r}",
+        )
+    if p["controller"]["slack"] not in SLACK_USES:
+        raise check.fail(
+            "controller.slack",
+            f"must be one of {', '.join(SLACK_USES)}, got {p['controller']['slack']!r}",
         )
 
     check_start_angles(check, "motion.q0", motion["q0"], arm["q_min"], arm["q_max"], damper["stop"])

@@ -219,6 +219,13 @@ EVIDENCE = (
         {"controller.on_infeasible": "slack", **_FREE},  # (6): the slack free, as in Task 2
         like_for_like_slack=True,
     ),
+    Evidence(  # the brief's slack box on the redundant arm too: its Table 1 lists it for Task 1
+        # (readings 269, 277: never tried)
+        "t1-brief-slack",
+        "task1",
+        (Name.UC_EMDM, Name.C_EMDM),
+        {"controller.slack": "always"},
+    ),
     Evidence(  # both with a free slack: C-EMDM's bound lifted to one no run comes near
         "t2-c-slack-policy",
         "task2",

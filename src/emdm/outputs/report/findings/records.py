@@ -171,6 +171,7 @@ EvidenceKey = Literal[
     "t1-uc-no-manip",
     "t1-uc-finer-dt",
     "t1-c-slack-policy",
+    "t1-brief-slack",
     "t2-c-slack-policy",
     "t2-c-ivkc-wide-limits",
     "t2-c-emdm-no-manip",

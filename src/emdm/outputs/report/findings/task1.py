@@ -292,9 +292,16 @@ class Task1(Claims):
                 "per step, scaled or not",
             )
             # one paragraph with the policy weighed: both tell what scaling does to the pair
-            sec.paragraphs.append(p + sentence(". ") + self.policy_weighed())
+            sec.paragraphs.append(
+                p
+                + sentence(". ")
+                + self.policy_weighed()
+                + sentence(PageOnly(tuple(self.brief_slack())))
+            )
         else:
-            sec.paragraphs.append(self.policy_weighed())
+            sec.paragraphs.append(
+                self.policy_weighed() + sentence(PageOnly(tuple(self.brief_slack())))
+            )
         return sec
 
     def ratios_swept(self) -> Sentence:
