@@ -227,7 +227,11 @@ class Front(Goals):
                     listed(gains),
                     ". ",
                     *arrive,
-                    "Scaling only buys a straighter tip path. ",
+                    # why it stays nominal all the same (280: never said)
+                    "Scaling only buys a straighter tip path; we keep it nominal as, unlike a "
+                    "slack, it changes only ",
+                    Math("v_d", "<i>v</i><sub>d</sub>"),
+                    "'s length. ",
                 )
             else:
                 p += sentence(

@@ -350,7 +350,8 @@ class Task1(Claims):
             "Pareto fronts of effort ",
             E_SYM,
             # (227, 228: the text calls them convex; on these axes they look concave)
-            " (log axes: convex fronts can look concave) and rate ",
+            # (280: two narrow panels are linear)
+            " (log axes where it spans decades: convex fronts can look concave) and rate ",
             MRATE,
             " at ",
             Math(
