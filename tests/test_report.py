@@ -1383,6 +1383,15 @@ def test_the_abstract_calls_task_scaling_a_design_choice_and_orders_the_slack_ru
     )
 
 
+def _lab_copy(quick_report: Path, tmp_path: Path) -> tuple[Path, Path, dict]:
+    """A copy of the quick report, its Task 2 solver lab's record path and that record (the
+    tests below rewrite it to force the cases the quick lab does not hold)."""
+    root = tmp_path / "report"
+    shutil.copytree(quick_report, root)
+    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
+    return root, path, json.loads(path.read_text(encoding="utf-8"))
+
+
 def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp_path):
     """Readings 198, 236-240, 263-266: the abstract gives slsqp's own counts (Table II's slsqp
     row), then in brackets its counts on the program with the slack eliminated (the lab's
@@ -1391,10 +1400,7 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
-    root = tmp_path / "report"
-    shutil.copytree(quick_report, root)
-    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
-    record = json.loads(path.read_text(encoding="utf-8"))
+    root, path, record = _lab_copy(quick_report, tmp_path)
     lab = record["solvers"]
     lab["slsqp-reduced"] = {**lab["slsqp"], "median_evaluations": 7.0, "median_gradients": 4.0}
     free = next(n for n, r in lab.items() if r["family"] == "gradient-free")
@@ -1422,10 +1428,7 @@ def test_task2_1_says_the_gradient_methods_residual_in_the_loop(quick_report, tm
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
-    root = tmp_path / "report"
-    shutil.copytree(quick_report, root)
-    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
-    record = json.loads(path.read_text(encoding="utf-8"))
+    root, path, record = _lab_copy(quick_report, tmp_path)
     lab = record["solvers"]
 
     def said() -> str:
@@ -1449,10 +1452,7 @@ def test_the_page_tries_the_gradient_free_penalty_smaller(quick_report, tmp_path
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data, render_html
 
-    root = tmp_path / "report"
-    shutil.copytree(quick_report, root)
-    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
-    record = json.loads(path.read_text(encoding="utf-8"))
+    root, path, record = _lab_copy(quick_report, tmp_path)
     checked = [n for n, r in record["solvers"].items() if "penalty_check" in r]
     assert checked, "the quick lab runs a penalised method"
 
@@ -1505,10 +1505,7 @@ def test_the_conclusion_gives_the_solver_verdict_only_while_table_iii_holds_it(
     from emdm.outputs.report.findings import Story
     from emdm.outputs.report.trace import Data
 
-    root = tmp_path / "report"
-    shutil.copytree(quick_report, root)
-    path = root / "data" / "task2-lab-C-EMDM" / "solvers.json"
-    record = json.loads(path.read_text(encoding="utf-8"))
+    root, path, record = _lab_copy(quick_report, tmp_path)
     lab = record["solvers"]
 
     def said() -> str:
