@@ -779,7 +779,7 @@ def test_a_diverging_runs_digits_are_not_printed(report):
     assert a2a[0] == "miss" and a2a[1:4] == ["–", "–", "–"], a2a
     assert a2a[4].isdigit(), a2a  # its scaled steps: a count, exact whatever the rounding
     assert all(c not in ("–", "miss") for c in a2b[:4]), a2b
-    assert "diverges, so its digits (–) depend on rounding" in (root / "index.html").read_text(
+    assert "never settles, so its digits (–) depend on rounding" in (root / "index.html").read_text(
         encoding="utf-8"
     )
 
@@ -1414,7 +1414,7 @@ def test_the_abstract_compares_the_solvers_on_the_same_program(quick_report, tmp
     assert (
         "Offline, on the two-link programs, the gradient-based slsqp finds the exact optimum in a median "
         f"of {own['median_evaluations']:.4g} objective and {own['median_gradients']:.4g} "
-        "gradient evaluations (7 and 4 without the slack); the only exact gradient-free method, "
+        "gradient evaluations (7 and 4 with δ eliminated); the only exact gradient-free method, "
         f"{free}, needs 321 evaluations." in said
     ), said
 

@@ -20,6 +20,7 @@ import markupsafe
 
 from ...core.tolerances import KKT_TOL, STALL_BAND, STALL_TIME
 from ...solvers import registered_solvers
+from ...solvers.nlp import PENALISED
 from .document import Document, roman
 from .findings import Story
 from .findings.base import glossed
@@ -79,6 +80,7 @@ def latex_environment() -> jinja2.Environment:
     env.filters["tex"] = _tex
     env.filters["plain"] = _plain
     env.globals["kkt_tol"] = number_latex(format(KKT_TOL, ".0e"))
+    env.globals["penalised"] = PENALISED  # (282: "unconstrained methods" named)
     env.globals["stall_band_mm"] = format(STALL_BAND * 1e3, "g")
     env.globals["stall_time"] = format(STALL_TIME, "g")
     env.filters["glossed"] = glossed

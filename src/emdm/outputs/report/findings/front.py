@@ -105,9 +105,12 @@ class Front(Goals):
                         self.sn(lab, LIKE_FOR_LIKE, "median_evaluations", ".4g"),
                         " and ",  # (``like`` holds its gradient count)
                         self.sn(lab, LIKE_FOR_LIKE, "median_gradients", ".4g"),
-                        " without the slack); the only exact gradient-free method, "
+                        # (281: "without the slack" read as dropped; it is eliminated)
+                        " with ",
+                        Math(r"\delta", "<i>δ</i>"),
+                        " eliminated); the only exact gradient-free method, "
                         if len(self.exact(rows, "gradient-free")) == 1
-                        else " without the slack); the fastest exact gradient-free method, ",
+                        else " eliminated); the fastest exact gradient-free method, ",
                         free,
                         ", needs ",  # (255: ", cma-es, 522." an elliptical fragment)
                         self.sn(lab, free, "median_evaluations", ".4g"),
@@ -228,10 +231,10 @@ class Front(Goals):
                     ". ",
                     *arrive,
                     # why it stays nominal all the same (280: never said)
-                    "Scaling only buys a straighter tip path; we keep it nominal as, unlike a "
-                    "slack, it changes only ",
+                    # (282: plainer)
+                    "Scaling only buys a straighter tip path; we keep it nominal as it shortens ",
                     Math("v_d", "<i>v</i><sub>d</sub>"),
-                    "'s length. ",
+                    " without turning it. ",
                 )
             else:
                 p += sentence(

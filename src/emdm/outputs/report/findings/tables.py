@@ -206,7 +206,8 @@ class Tables(Claims):
                 Upright(run_label(GRID_MISS)),
                 # (reading 197: "sensitive to rounding" was cryptic; 247: then do not print them)
                 # (265, 266: "(-: digits that depend on rounding)" awkward)
-                " diverges, so its digits (–) depend on rounding.",
+                # (281: "diverges" overclaimed: it stays bounded, misses and never settles)
+                " never settles, so its digits (–) depend on rounding.",
             )
 
         def caption(evidence: bool) -> Sentence:
@@ -485,7 +486,7 @@ class Tables(Claims):
                 Upright(run_label(GRID_MISS)),
                 " is from ",
                 Ref("fig", "pareto"),
-                "'s sweep and diverges (–: digits that depend on rounding); for ",
+                "'s sweep and never settles (–: digits that depend on rounding); for ",
                 Upright(run_label(FINER_STEP)),
                 ", the nominal weights at ",
                 *self.e3_step(),
