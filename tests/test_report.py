@@ -840,7 +840,7 @@ def test_fig2_caption_states_the_swept_ratios_from_the_records(report):
     runs = [r["w_manip"] / r["w_effort"] for r in grid["runs"]]
     count = sum(1 for r in runs if r > 0 and not np.isclose(r, nominal))
     page = (root / "index.html").read_text(encoding="utf-8")
-    caption = page[page.index("Pareto fronts of effort") :].split("</figcaption>", 1)[0]
+    caption = page[page.index("Pareto fronts, effort") :].split("</figcaption>", 1)[0]
     assert "Ratios: 0 and " in caption and f"; 0 and {count} from " in caption
 
 

@@ -347,22 +347,26 @@ class Task1(Claims):
             return sec
         cap = sentence(
             # (two lines, not three: room for the per-controller terms table, 221, 222)
-            "Pareto fronts of effort ",
+            # (283: in sentences, the axes first)
+            "Pareto fronts, effort ",
             E_SYM,
-            # (227, 228: the text calls them convex; on these axes they look concave)
-            # (280: two narrow panels are linear)
-            " (log axes where it spans decades: convex fronts can look concave) and rate ",
+            " against rate ",
             MRATE,
-            " at ",
+            ", at ",
             Math(
                 r"k=0,\lfloor T/3\rfloor,\lfloor 2T/3\rfloor,T",
                 "<i>k</i> = 0, ⌊<i>T</i>/3⌋, ⌊2<i>T</i>/3⌋, <i>T</i>",
             ),
-            ", each point the optimum at the nominal run's ",
+            # (227, 228: the text calls them convex; on these axes they look concave)
+            # (280: two narrow panels are linear)
+            " (log ",
+            E_SYM,
+            " axes, where it spans decades, can make convex fronts look concave). Each point: "
+            "the optimum at the nominal run's ",
             Math("q_k", "<i>q</i><sub>k</sub>"),
             " for one ",
             RATIO,
-            " (colour: its log, ",
+            ", coloured by its log (",
             Math("w_M=0", "<i>w</i><sub>M</sub> = 0"),
             " at the bar's foot; circle: nominal",
             *(  # the nominal ratio, in neither sweep's count (readings took it for missing;
@@ -371,7 +375,7 @@ class Task1(Claims):
                 if self.d.exists(PARETO_RECORD)
                 else ()
             ),
-            "); right: whole runs. Without a slack, only the ratio matters",
+            "). Right: whole runs. Without a slack, only the ratio matters",
         )
         cap += sentence(PageOnly(tuple(self.ratios_swept())))  # the sweeps: on the page
         fronts = self.rec.fronts.get("C-EMDM", [])
