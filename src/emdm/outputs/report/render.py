@@ -23,7 +23,7 @@ from ...solvers import registered_solvers
 from ...solvers.nlp import PENALISED
 from .document import Document, roman
 from .findings import Story
-from .findings.base import glossed
+from .findings.base import glossed, square_box
 from .pitch import Pitch
 from .trace import (
     Cite,
@@ -84,6 +84,7 @@ def latex_environment() -> jinja2.Environment:
     env.globals["stall_band_mm"] = format(STALL_BAND * 1e3, "g")
     env.globals["stall_time"] = format(STALL_TIME, "g")
     env.filters["glossed"] = glossed
+    env.globals["square_box"] = square_box
     env.filters["method"] = lambda name: registered_solvers()[name].method
     return env
 

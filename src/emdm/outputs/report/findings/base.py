@@ -128,6 +128,12 @@ them A1, A2, ..., and the runs of a group A2a, A2b, ... (A for ablation: E is th
 free-slack policy runs are Table II's rows, not ablations)."""
 
 
+def square_box(lo: Sequence[float], hi: Sequence[float]) -> bool:
+    """Whether a slack box is one symmetric interval on every axis, ``[-b, b]^n``: the paper
+    and the page then write it so (the formulation's ``D``, the Task 1 brief-slack run)."""
+    return len(set(hi)) == 1 and all(-float(v) == float(hi[0]) for v in lo)
+
+
 def glossed(solver: str) -> str:
     """A solver's name with what kind of method it is, at its first mention in the paper's
     text ("slsqp (sequential quadratic programming)"); the name alone where the registry says
@@ -501,10 +507,8 @@ class StoryBase:
         if not done:
             return []
         box = self.rec.scenarios["task1"].slack
-        lo, hi = (float(v) for v in box.min), (float(v) for v in box.max)
         out = sentence(" With the brief's slack box ")
-        bounds = set(lo), set(hi)
-        if all(len(b) == 1 for b in bounds) and -min(bounds[0]) == max(bounds[1]):
+        if square_box(list(box.min), list(box.max)):
             out += sentence(
                 Math(
                     r"D=[-\delta_{\max},\delta_{\max}]^2",
